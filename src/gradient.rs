@@ -1,0 +1,217 @@
+//! Per-triangle deformation gradients (ALGORITHMS.md A.1-A.2).
+//!
+//! For a triangle (v1, v2, v3) the frame is `V = [v2-v1, v3-v1, v4-v1]` with the fourth vertex
+//! `v4 = v1 + n / sqrt(|n|)`, `n = (v2-v1) x (v3-v1)` (Sumner & Popovic 2004). The deformation
+//! gradient from pose P0 to pose P1 is `T = V1 V0^-1`, split by polar decomposition `T = R S`
+//! into a proper rotation R and a symmetric stretch S.
+//!
+//! Degenerate input never produces NaN: a zero-area reference triangle is reported as invalid
+//! (it is left out of the solve); a zero-area target triangle gives a rank-deficient T whose
+//! polar factors are still finite; a reflection (det T < 0) keeps R a proper rotation and puts
+//! the sign into the smallest principal stretch of S, as an SVD-based polar decomposition does.
+
+use glam::{DMat3, DQuat, DVec3};
+
+/// A triangle is degenerate when twice its area is below this fraction of the sum of its
+/// squared edge lengths (unitless; about a 1e-10 radian sliver).
+pub const DEGENERATE_RATIO: f64 = 1e-10;
+
+/// The frame matrix `V` of a triangle, or `None` when it is degenerate.
+pub fn frame(a: DVec3, b: DVec3, c: DVec3) -> Option<DMat3> {
+    let e1 = b - a;
+    let e2 = c - a;
+    let n = e1.cross(e2);
+    let len = n.length();
+    let scale = e1.length_squared() + e2.length_squared() + (c - b).length_squared();
+    if len.is_nan() || len <= DEGENERATE_RATIO * scale {
+        return None;
+    }
+    Some(DMat3::from_cols(e1, e2, n / len.sqrt()))
+}
+
+/// The frame of a triangle that may be degenerate (used for the deformed pose only): a
+/// collapsed triangle gets a zero normal column, so T loses rank instead of becoming NaN.
+pub fn frame_any(a: DVec3, b: DVec3, c: DVec3) -> DMat3 {
+    let e1 = b - a;
+    let e2 = c - a;
+    let n = e1.cross(e2);
+    let len = n.length();
+    let col = if len > 0.0 {
+        n / len.sqrt()
+    } else {
+        DVec3::ZERO
+    };
+    DMat3::from_cols(e1, e2, col)
+}
+
+/// In-plane gradient operator of a reference triangle: `g[k]` is the gradient of the linear
+/// function that is 1 at corner k and 0 at the others. A piecewise-linear map x restricted to
+/// the triangle has gradient `sum_k x_k g[k]^T`, and `sum_k g[k] = 0`.
+/// Equals the first two rows of `V^-1` (the fourth vertex eliminated).
+pub fn gradient_operator(v_inv: &DMat3) -> [DVec3; 3] {
+    let t = v_inv.transpose(); // columns of t = rows of V^-1
+    let w1 = t.x_axis;
+    let w2 = t.y_axis;
+    [-(w1 + w2), w1, w2]
+}
+
+/// Polar decomposition `T = R S`: R a proper rotation (as a unit quaternion), S symmetric.
+pub fn polar(t: &DMat3) -> (DQuat, DMat3) {
+    let (sigma2, v) = sym_eigen(&(t.transpose() * *t));
+    // Make V a proper rotation.
+    let v = if v.determinant() < 0.0 {
+        DMat3::from_cols(v.x_axis, v.y_axis, -v.z_axis)
+    } else {
+        v
+    };
+    let s1 = sigma2[0].max(0.0).sqrt();
+    let s2 = sigma2[1].max(0.0).sqrt();
+    let scale = s1.max(1e-300);
+    // U's columns: T v_i / sigma_i, completed to a right-handed basis.
+    let tv1 = *t * v.x_axis;
+    let u1 = if s1 > 1e-12 * scale && s1 > 0.0 {
+        tv1 / s1
+    } else {
+        v.x_axis
+    };
+    let tv2 = *t * v.y_axis;
+    let mut u2 = tv2 - u1 * u1.dot(tv2);
+    if u2.length() <= 1e-12 * scale || s2 <= 1e-12 * scale {
+        u2 = u1.any_orthonormal_vector();
+        // Prefer v.y_axis's direction when it is usable, for continuity.
+        let alt = v.y_axis - u1 * u1.dot(v.y_axis);
+        if alt.length() > 1e-6 {
+            u2 = alt.normalize();
+        }
+    } else {
+        u2 = u2.normalize();
+    }
+    let u1 = u1.normalize();
+    let u3 = u1.cross(u2);
+    let u = DMat3::from_cols(u1, u2, u3);
+    let r = u * v.transpose();
+    // S = R^T T, symmetrized against round-off.
+    let s = r.transpose() * *t;
+    let s = (s + s.transpose()) * 0.5;
+    (DQuat::from_mat3(&r).normalize(), s)
+}
+
+/// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations: eigenvalues in
+/// descending order and the matching eigenvectors as the columns of the returned matrix.
+pub fn sym_eigen(m: &DMat3) -> ([f64; 3], DMat3) {
+    let mut a = m.to_cols_array_2d(); // a[col][row]; symmetric so indices commute
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _sweep in 0..32 {
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if off <= 1e-30 * diag || off == 0.0 {
+            break;
+        }
+        for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
+            let apq = a[p][q];
+            if apq == 0.0 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for col in &mut a {
+                let (akp, akq) = (col[p], col[q]);
+                col[p] = c * akp - s * akq;
+                col[q] = s * akp + c * akq;
+            }
+            let (ap, aq) = (a[p], a[q]);
+            a[p] = std::array::from_fn(|k| c * ap[k] - s * aq[k]);
+            a[q] = std::array::from_fn(|k| s * ap[k] + c * aq[k]);
+            for row in &mut v {
+                let vp = row[p];
+                let vq = row[q];
+                row[p] = c * vp - s * vq;
+                row[q] = s * vp + c * vq;
+            }
+        }
+    }
+    // v[row][col]: column j is eigenvector j.
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&i, &j| a[j][j].total_cmp(&a[i][i]));
+    let vals = order.map(|i| a[i][i]);
+    let col = |j: usize| DVec3::new(v[0][j], v[1][j], v[2][j]);
+    (
+        vals,
+        DMat3::from_cols(col(order[0]), col(order[1]), col(order[2])),
+    )
+}
+
+/// Rotation vector (axis times angle, angle in [0, pi]) of a unit quaternion.
+pub fn quat_log(q: DQuat) -> DVec3 {
+    let q = if q.w < 0.0 { -q } else { q };
+    let xyz = DVec3::new(q.x, q.y, q.z);
+    let s = xyz.length();
+    if s < 1e-300 {
+        return DVec3::ZERO;
+    }
+    let angle = 2.0 * s.atan2(q.w);
+    xyz * (angle / s)
+}
+
+/// Rotation matrix of a rotation vector (Rodrigues).
+pub fn rotvec_matrix(r: DVec3) -> DMat3 {
+    let angle = r.length();
+    if angle < 1e-300 {
+        return DMat3::IDENTITY;
+    }
+    DMat3::from_axis_angle(r / angle, angle)
+}
+
+/// Deformation gradient of a triangle from a reference frame inverse to a deformed triangle.
+pub fn deformation(v_inv: &DMat3, a: DVec3, b: DVec3, c: DVec3) -> DMat3 {
+    frame_any(a, b, c) * *v_inv
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: &DMat3, b: &DMat3, tol: f64) -> bool {
+        a.to_cols_array()
+            .iter()
+            .zip(b.to_cols_array())
+            .all(|(x, y)| (x - y).abs() <= tol)
+    }
+
+    #[test]
+    fn polar_recovers_rotation_and_stretch() {
+        let r = DMat3::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), 2.7);
+        let s = DMat3::from_cols(
+            DVec3::new(1.5, 0.2, 0.0),
+            DVec3::new(0.2, 0.7, 0.1),
+            DVec3::new(0.0, 0.1, 1.1),
+        );
+        let (q, s2) = polar(&(r * s));
+        assert!(close(&DMat3::from_quat(q), &r, 1e-10));
+        assert!(close(&s2, &s, 1e-10));
+    }
+
+    #[test]
+    fn polar_of_reflection_and_collapse_is_finite() {
+        let refl = DMat3::from_diagonal(DVec3::new(1.0, 1.0, -1.0));
+        let (q, s) = polar(&refl);
+        assert!(q.is_finite() && s.is_finite());
+        assert!(close(&(DMat3::from_quat(q) * s), &refl, 1e-12));
+        let flat = DMat3::from_cols(DVec3::X, DVec3::ZERO, DVec3::ZERO);
+        let (q, s) = polar(&flat);
+        assert!(q.is_finite() && s.is_finite());
+        assert!(close(&(DMat3::from_quat(q) * s), &flat, 1e-12));
+        let (q, s) = polar(&DMat3::ZERO);
+        assert!(q.is_finite() && s.is_finite());
+    }
+
+    #[test]
+    fn log_and_exp_invert() {
+        let r = DVec3::new(0.3, -1.2, 2.0);
+        let q = DQuat::from_mat3(&rotvec_matrix(r));
+        assert!((quat_log(q) - r).length() < 1e-12);
+    }
+}

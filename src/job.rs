@@ -1,0 +1,99 @@
+//! The `tween` command from file to file: read, keyframes, tween, write, summary.
+
+use crate::interpolate::Method;
+use crate::keyframes::{find_morph_meshes, KeyOptions, KeySource};
+use crate::progress::Progress;
+use crate::read::Document;
+use crate::tween::{schedule, tween_mesh, Timing, TweenOptions};
+use crate::write;
+use anyhow::Result;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Everything `inbetween tween` was asked to do.
+#[derive(Clone, Debug)]
+pub struct TweenJob {
+    pub input: PathBuf,
+    pub output: PathBuf,
+    pub method: Method,
+    pub keys: KeySource,
+    pub animation: Option<String>,
+    pub timing: Timing,
+    pub quiet: bool,
+}
+
+/// What was done, for the summary line.
+#[derive(Clone, Debug, Default)]
+pub struct Summary {
+    pub meshes: Vec<crate::tween::MeshStats>,
+    pub seconds: f64,
+}
+
+impl Summary {
+    pub fn line(&self, job: &TweenJob) -> String {
+        let frames: usize = self.meshes.iter().map(|m| m.frames).sum();
+        let tris: usize = self.meshes.iter().map(|m| m.triangles).sum();
+        let keys: usize = self.meshes.iter().map(|m| m.keys).sum();
+        let setup: f64 = self.meshes.iter().map(|m| m.setup.as_secs_f64()).sum();
+        let solve: f64 = self.meshes.iter().map(|m| m.solve.as_secs_f64()).sum();
+        format!(
+            "{}: {} mesh{} ({} triangles), {} keys -> {} frames by the {} method; {:.3} s (set-up {:.3} s, frames {:.3} s)",
+            job.output.display(),
+            self.meshes.len(),
+            if self.meshes.len() == 1 { "" } else { "es" },
+            tris,
+            keys,
+            frames,
+            job.method.name(),
+            self.seconds,
+            setup,
+            solve,
+        )
+    }
+}
+
+/// Run the tween job. Nothing is written unless every step succeeds.
+pub fn run_tween(job: &TweenJob) -> Result<Summary> {
+    let started = Instant::now();
+    let container = write::container_for(&job.output)?;
+    if let Timing::Fps(f) = job.timing {
+        anyhow::ensure!(
+            f.is_finite() && f > 0.0,
+            "--fps must be a positive number (got {f})"
+        );
+    }
+    let doc = Document::open(&job.input)?;
+    let meshes = find_morph_meshes(
+        &doc,
+        &KeyOptions {
+            source: job.keys,
+            animation: job.animation.as_deref(),
+        },
+    )?;
+    let total: usize = meshes
+        .iter()
+        .flat_map(|m| {
+            m.tracks
+                .iter()
+                .map(|t| schedule(&t.times, job.timing).len())
+        })
+        .sum();
+    let progress = Progress::new(total as u64, "tween", job.quiet);
+    let opts = TweenOptions {
+        method: job.method,
+        timing: job.timing,
+    };
+    let mut results = Vec::new();
+    for m in &meshes {
+        progress.message(m.name.clone());
+        results.push(tween_mesh(m, &opts, &|| progress.inc())?);
+    }
+    progress.finish();
+    let mut out = write::begin(&doc, container, &job.output)?;
+    write::apply_frames(&mut out, &results)?;
+    write::finish(out, container, &job.output)?;
+    Ok(Summary {
+        meshes: results.into_iter().map(|r| r.stats).collect(),
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}

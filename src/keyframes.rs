@@ -1,0 +1,461 @@
+//! Keyframes stage: find every mesh with morph targets and the key poses that drive it.
+//!
+//! A *track* is one sequence of keys for one mesh: the keys of a weights animation channel
+//! (`--keys animation`), or the base mesh followed by each target at weight 1 (`--keys targets`).
+//! A key pose is `base + sum_i w_i * delta_i` over the mesh's targets.
+
+use crate::read::{arr, Document};
+use anyhow::{bail, Result};
+use glam::DVec3;
+use serde_json::Value;
+
+/// Where the keys come from (`--keys`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum KeySource {
+    /// `animation` when the file animates the mesh's weights, else `targets`.
+    Auto,
+    /// Key 0 = base mesh, key k = base + target k at weight 1; key times 0, 1, 2, ... s.
+    Targets,
+    /// The key times of the weights channel that animates the mesh's node.
+    Animation,
+}
+
+/// Geometry of one primitive of a morph mesh, in the mesh's own space.
+pub struct Primitive {
+    /// Index of the primitive in `mesh.primitives`.
+    pub index: usize,
+    pub base: Vec<DVec3>,
+    pub normals: Option<Vec<DVec3>>,
+    /// TANGENT xyzw; only the xyz part is morphed.
+    pub tangents: Option<Vec<[f64; 4]>>,
+    /// POSITION deltas per target.
+    pub target_pos: Vec<Vec<DVec3>>,
+    /// NORMAL deltas per target, when the target has them.
+    pub target_nrm: Vec<Option<Vec<DVec3>>>,
+    /// Triangles in local vertex indices.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// One key sequence for a mesh.
+pub struct Track {
+    pub origin: TrackOrigin,
+    /// Key times in seconds, non-decreasing.
+    pub times: Vec<f64>,
+    /// `weights[k][i]`: weight of target i at key k.
+    pub weights: Vec<Vec<f64>>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum TrackOrigin {
+    /// Keys made from the targets; a new animation will drive these nodes.
+    Targets { nodes: Vec<usize> },
+    /// Keys of sampler `sampler` of animation `animation`, used by these channels.
+    Animation {
+        animation: usize,
+        sampler: usize,
+        channels: Vec<usize>,
+    },
+}
+
+/// A mesh to process, with all of its tracks.
+pub struct MorphMesh {
+    pub mesh: usize,
+    pub name: String,
+    pub primitives: Vec<Primitive>,
+    pub target_count: usize,
+    pub tracks: Vec<Track>,
+    /// Weight channels on this mesh's nodes that no track keeps (dropped from the output).
+    pub dropped_channels: Vec<(usize, usize)>,
+}
+
+impl MorphMesh {
+    pub fn vertex_count(&self) -> usize {
+        self.primitives.iter().map(|p| p.base.len()).sum()
+    }
+
+    /// Key pose for weights `w`, all primitives concatenated.
+    pub fn pose(&self, w: &[f64]) -> Vec<DVec3> {
+        let mut out = Vec::with_capacity(self.vertex_count());
+        for p in &self.primitives {
+            let start = out.len();
+            out.extend_from_slice(&p.base);
+            for (i, &wi) in w.iter().enumerate() {
+                if wi != 0.0 {
+                    for (o, d) in out[start..].iter_mut().zip(&p.target_pos[i]) {
+                        *o += wi * *d;
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Normals for weights `w` (base + weighted NORMAL deltas, normalized), when every
+    /// primitive has normals.
+    pub fn pose_normals(&self, w: &[f64]) -> Option<Vec<DVec3>> {
+        let mut out = Vec::with_capacity(self.vertex_count());
+        for p in &self.primitives {
+            let start = out.len();
+            out.extend_from_slice(p.normals.as_ref()?);
+            for (i, &wi) in w.iter().enumerate() {
+                if let (true, Some(d)) = (wi != 0.0, &p.target_nrm[i]) {
+                    for (o, d) in out[start..].iter_mut().zip(d) {
+                        *o += wi * *d;
+                    }
+                }
+            }
+            for o in &mut out[start..] {
+                *o = o.normalize_or_zero();
+            }
+        }
+        Some(out)
+    }
+}
+
+/// Options of the keyframes stage.
+pub struct KeyOptions<'a> {
+    pub source: KeySource,
+    /// `--animation NAME|INDEX`.
+    pub animation: Option<&'a str>,
+}
+
+/// Find every mesh with morph targets, its geometry and its tracks.
+pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphMesh>> {
+    let json = &doc.json;
+    let selected_anim = match opts.animation {
+        None => None,
+        Some(sel) => Some(find_animation(doc, sel)?),
+    };
+    let mut out = Vec::new();
+    for (mi, mesh) in arr(json, "meshes").iter().enumerate() {
+        let prims = arr(mesh, "primitives");
+        let target_count = prims.first().map(|p| arr(p, "targets").len()).unwrap_or(0);
+        if target_count == 0 {
+            continue;
+        }
+        let name = mesh["name"]
+            .as_str()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("mesh {mi}"));
+        let mut primitives = Vec::new();
+        for (pi, p) in prims.iter().enumerate() {
+            primitives.push(read_primitive(doc, &name, pi, p, target_count)?);
+        }
+        let nodes: Vec<usize> = arr(json, "nodes")
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n["mesh"].as_u64() == Some(mi as u64))
+            .map(|(i, _)| i)
+            .collect();
+        // Every weights channel aimed at a node of this mesh.
+        let mut channels = Vec::new();
+        for (ai, anim) in arr(json, "animations").iter().enumerate() {
+            for (ci, ch) in arr(anim, "channels").iter().enumerate() {
+                let t = &ch["target"];
+                let node = t["node"].as_u64().map(|n| n as usize);
+                if t["path"].as_str() == Some("weights") && node.is_some_and(|n| nodes.contains(&n))
+                {
+                    channels.push((ai, ci, ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize));
+                }
+            }
+        }
+        let use_animation = match opts.source {
+            KeySource::Targets => false,
+            KeySource::Animation => true,
+            KeySource::Auto => channels
+                .iter()
+                .any(|&(a, _, _)| selected_anim.is_none_or(|s| s == a)),
+        };
+        let mut tracks = Vec::new();
+        let mut dropped = Vec::new();
+        if use_animation {
+            for &(ai, ci, si) in &channels {
+                if selected_anim.is_some_and(|s| s != ai) {
+                    dropped.push((ai, ci));
+                    continue;
+                }
+                if let Some(t) = tracks.iter_mut().find(|t: &&mut Track| {
+                    matches!(&t.origin, TrackOrigin::Animation { animation, sampler, .. } if *animation == ai && *sampler == si)
+                }) {
+                    if let TrackOrigin::Animation { channels, .. } = &mut t.origin {
+                        channels.push(ci);
+                    }
+                    continue;
+                }
+                let (times, weights) = read_weight_keys(doc, ai, si, target_count)?;
+                tracks.push(Track {
+                    origin: TrackOrigin::Animation {
+                        animation: ai,
+                        sampler: si,
+                        channels: vec![ci],
+                    },
+                    times,
+                    weights,
+                });
+            }
+            if tracks.is_empty() {
+                if opts.source == KeySource::Animation {
+                    bail!(doc.err(format!(
+                        "--keys animation: no animation{} drives the weights of mesh {name:?}",
+                        opts.animation
+                            .map(|a| format!(" {a:?}"))
+                            .unwrap_or_default()
+                    )));
+                }
+                continue;
+            }
+        } else {
+            dropped.extend(channels.iter().map(|&(a, c, _)| (a, c)));
+            let mut weights = vec![vec![0.0; target_count]];
+            for k in 0..target_count {
+                let mut w = vec![0.0; target_count];
+                w[k] = 1.0;
+                weights.push(w);
+            }
+            tracks.push(Track {
+                origin: TrackOrigin::Targets {
+                    nodes: nodes.clone(),
+                },
+                times: (0..=target_count).map(|k| k as f64).collect(),
+                weights,
+            });
+        }
+        let mm = MorphMesh {
+            mesh: mi,
+            name,
+            primitives,
+            target_count,
+            tracks,
+            dropped_channels: dropped,
+        };
+        if mm.tracks.iter().any(|t| has_distinct_keys(&mm, t)) {
+            out.push(mm);
+        }
+    }
+    if out.is_empty() {
+        bail!(doc.err("no mesh with morph targets and at least two distinct keys"));
+    }
+    Ok(out)
+}
+
+/// True when at least two keys of the track give different poses.
+fn has_distinct_keys(mesh: &MorphMesh, track: &Track) -> bool {
+    let first = &track.weights[0];
+    track.weights.iter().any(|w| {
+        w.iter().zip(first).enumerate().any(|(i, (a, b))| {
+            a != b
+                && mesh
+                    .primitives
+                    .iter()
+                    .any(|p| p.target_pos[i].iter().any(|d| *d != DVec3::ZERO))
+        })
+    })
+}
+
+fn find_animation(doc: &Document, sel: &str) -> Result<usize> {
+    let anims = arr(&doc.json, "animations");
+    if let Some(i) = anims.iter().position(|a| a["name"].as_str() == Some(sel)) {
+        return Ok(i);
+    }
+    match sel.parse::<usize>() {
+        Ok(i) if i < anims.len() => Ok(i),
+        _ => {
+            let names: Vec<String> = anims
+                .iter()
+                .enumerate()
+                .map(|(i, a)| {
+                    a["name"]
+                        .as_str()
+                        .map(|s| format!("{s:?}"))
+                        .unwrap_or(i.to_string())
+                })
+                .collect();
+            bail!(doc.err(format!(
+                "no animation {sel:?} (the file has: {})",
+                names.join(", ")
+            )))
+        }
+    }
+}
+
+fn attr(p: &Value, name: &str) -> Option<usize> {
+    p["attributes"][name].as_u64().map(|v| v as usize)
+}
+
+fn read_vec3(doc: &Document, acc: usize, what: &str) -> Result<Vec<DVec3>> {
+    let (v, n) = doc.read_f64(acc)?;
+    if n != 3 {
+        bail!(doc.err(format!("{what} (accessor {acc}) is not VEC3")));
+    }
+    let out: Vec<DVec3> = v
+        .chunks_exact(3)
+        .map(|c| DVec3::new(c[0], c[1], c[2]))
+        .collect();
+    if let Some(i) = out.iter().position(|p| !p.is_finite()) {
+        bail!(doc.err(format!(
+            "{what} (accessor {acc}) has a NaN or infinite value at element {i}"
+        )));
+    }
+    Ok(out)
+}
+
+fn read_primitive(
+    doc: &Document,
+    mesh: &str,
+    pi: usize,
+    p: &Value,
+    target_count: usize,
+) -> Result<Primitive> {
+    let what = |s: &str| format!("mesh {mesh:?} primitive {pi} {s}");
+    let pos = attr(p, "POSITION").ok_or_else(|| doc.err(what("has no POSITION")))?;
+    let base = read_vec3(doc, pos, &what("POSITION"))?;
+    let n = base.len();
+    let normals = match attr(p, "NORMAL") {
+        Some(a) => Some(read_vec3(doc, a, &what("NORMAL"))?),
+        None => None,
+    };
+    let tangents = match attr(p, "TANGENT") {
+        Some(a) => {
+            let (v, c) = doc.read_f64(a)?;
+            if c != 4 {
+                bail!(doc.err(what("TANGENT is not VEC4")));
+            }
+            Some(
+                v.chunks_exact(4)
+                    .map(|c| [c[0], c[1], c[2], c[3]])
+                    .collect(),
+            )
+        }
+        None => None,
+    };
+    let targets = arr(p, "targets");
+    if targets.len() != target_count {
+        bail!(doc.err(what(&format!(
+            "has {} morph targets but primitive 0 has {target_count}",
+            targets.len()
+        ))));
+    }
+    let mut target_pos = Vec::new();
+    let mut target_nrm = Vec::new();
+    for (ti, t) in targets.iter().enumerate() {
+        let d = match t["POSITION"].as_u64() {
+            Some(a) => read_vec3(doc, a as usize, &what(&format!("target {ti} POSITION")))?,
+            None => vec![DVec3::ZERO; n],
+        };
+        if d.len() != n {
+            bail!(doc.err(what(&format!(
+                "target {ti} has {} POSITION deltas but the base has {n} vertices",
+                d.len()
+            ))));
+        }
+        target_pos.push(d);
+        let nd = match t["NORMAL"].as_u64() {
+            Some(a) => {
+                let d = read_vec3(doc, a as usize, &what(&format!("target {ti} NORMAL")))?;
+                if d.len() != n {
+                    bail!(doc.err(what(&format!(
+                        "target {ti} has {} NORMAL deltas but the base has {n} vertices",
+                        d.len()
+                    ))));
+                }
+                Some(d)
+            }
+            None => None,
+        };
+        target_nrm.push(nd);
+    }
+    let mode = p["mode"].as_u64().unwrap_or(4);
+    let indices: Vec<u32> = match p["indices"].as_u64() {
+        Some(a) => doc.read_indices(a as usize)?,
+        None => (0..n as u32).collect(),
+    };
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
+        bail!(doc.err(what(&format!("has index {bad} but only {n} vertices"))));
+    }
+    let triangles = match mode {
+        4 => {
+            if !indices.len().is_multiple_of(3) {
+                bail!(doc.err(what(
+                    "has a TRIANGLES index count that is not a multiple of 3"
+                )));
+            }
+            indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect()
+        }
+        5 => (2..indices.len())
+            .map(|i| {
+                if i % 2 == 0 {
+                    [indices[i - 2], indices[i - 1], indices[i]]
+                } else {
+                    [indices[i - 1], indices[i - 2], indices[i]]
+                }
+            })
+            .collect(),
+        6 => (2..indices.len())
+            .map(|i| [indices[0], indices[i - 1], indices[i]])
+            .collect(),
+        m => {
+            let kind = ["POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"]
+                .get(m as usize)
+                .copied()
+                .unwrap_or("unknown");
+            bail!(doc.err(what(&format!(
+                "is not made of triangles (mode {m}, {kind}); morph tweening needs a triangle mesh"
+            ))))
+        }
+    };
+    Ok(Primitive {
+        index: pi,
+        base,
+        normals,
+        tangents,
+        target_pos,
+        target_nrm,
+        triangles,
+    })
+}
+
+/// Key times and weights of sampler `si` of animation `ai`.
+fn read_weight_keys(
+    doc: &Document,
+    ai: usize,
+    si: usize,
+    target_count: usize,
+) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
+    let s = &doc.json["animations"][ai]["samplers"][si];
+    let what = format!("animation {ai} sampler {si}");
+    let (input, output) = match (s["input"].as_u64(), s["output"].as_u64()) {
+        (Some(i), Some(o)) => (i as usize, o as usize),
+        _ => bail!(doc.err(format!("{what} has no input or output accessor"))),
+    };
+    let (times, _) = doc.read_f64(input)?;
+    let (values, _) = doc.read_f64(output)?;
+    let k = times.len();
+    if k == 0 {
+        bail!(doc.err(format!("{what} has no keys")));
+    }
+    if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
+        bail!(doc.err(format!("{what} key times are not increasing")));
+    }
+    let cubic = s["interpolation"].as_str() == Some("CUBICSPLINE");
+    let per_key = if cubic {
+        3 * target_count
+    } else {
+        target_count
+    };
+    if values.len() != k * per_key {
+        bail!(doc.err(format!(
+            "{what} has {} weight values for {k} keys and {target_count} targets",
+            values.len()
+        )));
+    }
+    let weights = (0..k)
+        .map(|i| {
+            let at = i * per_key + if cubic { target_count } else { 0 };
+            values[at..at + target_count].to_vec()
+        })
+        .collect();
+    Ok((times, weights))
+}

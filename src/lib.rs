@@ -1,0 +1,17 @@
+//! inbetween: tween frames for glTF morph keyframes by the deformation-gradient method.
+//!
+//! The pipeline, one module per stage:
+//! [`read`] -> [`keyframes`] -> [`weld`] -> [`interpolate`] (with [`gradient`] and [`solve`])
+//! -> [`normals`] -> [`write`]; [`tween`] runs it for one mesh and [`job`] from file to file.
+
+pub mod gradient;
+pub mod interpolate;
+pub mod job;
+pub mod keyframes;
+pub mod normals;
+pub mod progress;
+pub mod read;
+pub mod solve;
+pub mod tween;
+pub mod weld;
+pub mod write;

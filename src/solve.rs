@@ -1,0 +1,236 @@
+//! Solve stage: the sparse least-squares (Poisson) reconstruction of ALGORITHMS.md A.4.
+//!
+//! The seed minimises `sum_j |X_j V_j^-1 - T_j|^2` over all vertices *and* one fourth vertex per
+//! triangle. The fourth vertices appear only in their own triangle's terms, so they are
+//! eliminated exactly: with `g` the in-plane gradient operator of a reference triangle
+//! ([`crate::gradient::gradient_operator`]) the normal equations become
+//!
+//! ```text
+//!   A x = b,   A_ab = sum_j g_ja . g_jb,   b_a = sum_j T_j g_ja
+//! ```
+//!
+//! on the n mesh vertices only: A has the sparsity of the mesh (a cotangent-Laplacian-like
+//! matrix) and three right-hand sides (x, y, z) share one factorization. The minimiser is the
+//! same as the seed's 3(n+m)-unknown system.
+//!
+//! `A` is singular: one translation per connected component. Each component's first vertex is
+//! pinned to 0 (a Dirichlet row), and the component is translated afterwards onto its centroid
+//! path. Vertices that no valid triangle touches are pinned too and placed by the caller.
+//! Pins are rows of the fixed pattern, so the symbolic analysis (fill-reducing AMD ordering,
+//! elimination tree, supernodes) is done once per mesh and only the numeric factorization is
+//! redone for each reference pose.
+
+use anyhow::{anyhow, Result};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+use glam::DVec3;
+
+/// The sparsity pattern of a welded mesh's system, analysed once.
+pub struct Pattern {
+    pub n: usize,
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
+    /// For each triangle, the value slots of (a,a), (b,b), (c,c), (a,b), (b,c), (c,a) in the
+    /// upper-triangular CSC arrays.
+    slots: Vec<[u32; 6]>,
+    symbolic: SymbolicCholesky<u32>,
+}
+
+impl Pattern {
+    /// Analyse the pattern of `triangles` over `n` vertices.
+    pub fn new(n: usize, triangles: &[[u32; 3]]) -> Result<Pattern> {
+        // Upper-triangular entries (row <= col), column by column.
+        let mut cols: Vec<Vec<u32>> = (0..n as u32).map(|i| vec![i]).collect();
+        for t in triangles {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                let (r, c) = if a < b { (a, b) } else { (b, a) };
+                cols[c as usize].push(r);
+            }
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0u32);
+        for c in &mut cols {
+            c.sort_unstable();
+            c.dedup();
+            row_idx.extend_from_slice(c);
+            col_ptr.push(row_idx.len() as u32);
+        }
+        drop(cols);
+        let slot = |r: u32, c: u32| -> u32 {
+            let (r, c) = if r <= c { (r, c) } else { (c, r) };
+            let s = col_ptr[c as usize] as usize;
+            let e = col_ptr[c as usize + 1] as usize;
+            s as u32 + row_idx[s..e].binary_search(&r).expect("entry in pattern") as u32
+        };
+        let slots = triangles
+            .iter()
+            .map(|&[a, b, c]| {
+                [
+                    slot(a, a),
+                    slot(b, b),
+                    slot(c, c),
+                    slot(a, b),
+                    slot(b, c),
+                    slot(c, a),
+                ]
+            })
+            .collect();
+        let sym =
+            SymbolicSparseColMat::<u32>::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
+        let symbolic = factorize_symbolic_cholesky(
+            sym.as_ref(),
+            Side::Upper,
+            Default::default(),
+            Default::default(),
+        )
+        .map_err(|e| anyhow!("symbolic factorization failed: {e:?}"))?;
+        Ok(Pattern {
+            n,
+            col_ptr,
+            row_idx,
+            slots,
+            symbolic,
+        })
+    }
+
+    fn symbolic_matrix(&self) -> SymbolicSparseColMatRef<'_, u32> {
+        // SAFETY: the arrays were checked by `new_checked` when the pattern was built.
+        unsafe {
+            SymbolicSparseColMatRef::new_unchecked(
+                self.n,
+                self.n,
+                &self.col_ptr,
+                None,
+                &self.row_idx,
+            )
+        }
+    }
+
+    /// Nonzeros of the Cholesky factor L.
+    pub fn factor_nonzeros(&self) -> usize {
+        self.symbolic.len_val()
+    }
+}
+
+/// A numeric factorization for one reference pose.
+pub struct Factor<'p> {
+    pattern: &'p Pattern,
+    values: Vec<f64>,
+    /// Vertices held at 0 by a Dirichlet row.
+    pub pinned: Vec<bool>,
+}
+
+impl<'p> Factor<'p> {
+    /// Assemble `A` from per-triangle gradient operators (`None` for a triangle left out) and
+    /// factor it. `pinned[v]` marks vertices fixed at 0.
+    pub fn new(
+        pattern: &'p Pattern,
+        grads: &[Option<[DVec3; 3]>],
+        pinned: Vec<bool>,
+    ) -> Result<Factor<'p>> {
+        let mut a = vec![0.0f64; pattern.row_idx.len()];
+        for (g, s) in grads.iter().zip(&pattern.slots) {
+            let Some(g) = g else { continue };
+            for k in 0..3 {
+                a[s[k] as usize] += g[k].length_squared();
+            }
+            for (k, (i, j)) in [(0usize, 1usize), (1, 2), (2, 0)].into_iter().enumerate() {
+                a[s[3 + k] as usize] += g[i].dot(g[j]);
+            }
+        }
+        // Dirichlet rows: zero the row and column of a pinned vertex, 1 on its diagonal.
+        for c in 0..pattern.n {
+            let range = pattern.col_ptr[c] as usize..pattern.col_ptr[c + 1] as usize;
+            for (value, &r) in a[range.clone()].iter_mut().zip(&pattern.row_idx[range]) {
+                let r = r as usize;
+                if pinned[r] || pinned[c] {
+                    *value = if r == c { 1.0 } else { 0.0 };
+                }
+            }
+        }
+        let sym = pattern.symbolic_matrix();
+        let mat = SparseColMatRef::new(sym, &a);
+        let mut values = vec![0.0f64; pattern.symbolic.len_val()];
+        let mut mem = MemBuffer::try_new(
+            pattern
+                .symbolic
+                .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+        )
+        .map_err(|_| anyhow!("out of memory for the factorization"))?;
+        pattern
+            .symbolic
+            .factorize_numeric_llt(
+                &mut values,
+                mat,
+                Side::Upper,
+                LltRegularization::default(),
+                Par::Seq,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| anyhow!("the system is not positive definite ({e:?})"))?;
+        Ok(Factor {
+            pattern,
+            values,
+            pinned,
+        })
+    }
+
+    /// Solve `A x = b` in place for three right-hand sides stored column-major (`n` x 3).
+    pub fn solve(&self, rhs: &mut [f64]) {
+        let n = self.pattern.n;
+        let mut mem = MemBuffer::new(
+            self.pattern
+                .symbolic
+                .solve_in_place_scratch::<f64>(3, Par::Seq),
+        );
+        let llt = LltRef::new(&self.pattern.symbolic, &self.values);
+        let mat = MatMut::from_column_major_slice_mut(rhs, n, 3);
+        llt.solve_in_place_with_conj(Conj::No, mat, Par::Seq, MemStack::new(&mut mem));
+    }
+}
+
+/// Connected components of `triangles` over `n` vertices (union-find); vertices touched by no
+/// triangle get `u32::MAX`. Components are numbered in order of their smallest vertex.
+pub fn components(n: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, usize) {
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    let mut touched = vec![false; n];
+    for t in triangles {
+        for &v in t {
+            touched[v as usize] = true;
+        }
+        for (a, b) in [(t[0], t[1]), (t[1], t[2])] {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra != rb {
+                let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+                parent[hi as usize] = lo;
+            }
+        }
+    }
+    let mut label = vec![u32::MAX; n];
+    let mut root_label = vec![u32::MAX; n];
+    let mut count = 0usize;
+    for v in 0..n {
+        if !touched[v] {
+            continue;
+        }
+        let r = find(&mut parent, v as u32) as usize;
+        if root_label[r] == u32::MAX {
+            root_label[r] = count as u32;
+            count += 1;
+        }
+        label[v] = root_label[r];
+    }
+    (label, count)
+}

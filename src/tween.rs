@@ -1,0 +1,383 @@
+//! The `tween` job: keyframes -> weld -> interpolate/solve -> per-frame deltas for the writer.
+
+use crate::interpolate::{Method, Segment};
+use crate::keyframes::{MorphMesh, Track, TrackOrigin};
+use crate::normals::{arc, carry, Smoothing};
+use crate::solve::Pattern;
+use crate::weld::Welded;
+use anyhow::Result;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// How output frames are placed in time.
+#[derive(Clone, Copy, Debug)]
+pub enum Timing {
+    /// N frames inserted evenly between each pair of consecutive keys.
+    Tweens(usize),
+    /// Frames at a fixed rate (per second) over the keys' time span.
+    Fps(f64),
+}
+
+/// One output frame of a track: the time and where it falls between keys.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameAt {
+    pub time: f64,
+    /// The segment's start and end keys (equal for a track with a single key time).
+    pub key_a: usize,
+    pub key_b: usize,
+    /// Position within the segment, 0 at `key_a`, 1 at `key_b`.
+    pub t: f64,
+}
+
+/// Frame times for keys at `times` (non-decreasing).
+pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
+    // Segments of positive duration, in order.
+    let segments: Vec<(usize, usize)> = (0..times.len().saturating_sub(1))
+        .filter(|&k| times[k + 1] > times[k])
+        .map(|k| (k, k + 1))
+        .collect();
+    let Some(&(_, last_b)) = segments.last() else {
+        return vec![FrameAt {
+            time: times[0],
+            key_a: 0,
+            key_b: 0,
+            t: 0.0,
+        }];
+    };
+    let mut out = Vec::new();
+    match timing {
+        Timing::Tweens(n) => {
+            for &(a, b) in &segments {
+                for j in 0..=n {
+                    let t = j as f64 / (n + 1) as f64;
+                    out.push(FrameAt {
+                        time: times[a] + (times[b] - times[a]) * t,
+                        key_a: a,
+                        key_b: b,
+                        t,
+                    });
+                }
+            }
+            let (a, b) = segments[segments.len() - 1];
+            out.push(FrameAt {
+                time: times[last_b],
+                key_a: a,
+                key_b: b,
+                t: 1.0,
+            });
+        }
+        Timing::Fps(fps) => {
+            let start = times[segments[0].0];
+            let span = times[last_b] - start;
+            let count = (span * fps + 1e-9).floor() as usize;
+            let mut seg = 0;
+            for i in 0..=count {
+                let time = start + i as f64 / fps;
+                while seg + 1 < segments.len() && time >= times[segments[seg].1] {
+                    seg += 1;
+                }
+                let (a, b) = segments[seg];
+                let t = ((time - times[a]) / (times[b] - times[a])).min(1.0);
+                out.push(FrameAt {
+                    time,
+                    key_a: a,
+                    key_b: b,
+                    t,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Options of the tween job.
+#[derive(Clone, Copy, Debug)]
+pub struct TweenOptions {
+    pub method: Method,
+    pub timing: Timing,
+}
+
+/// Output of one track: its frames occupy `first..first + frames.len()` of the mesh's targets.
+pub struct TrackFrames {
+    pub origin: TrackOrigin,
+    pub first: usize,
+    pub frames: Vec<FrameAt>,
+}
+
+/// Per-primitive morph target deltas, one entry per output frame.
+pub struct PrimitiveFrames {
+    pub index: usize,
+    pub positions: Vec<Vec<[f32; 3]>>,
+    pub normals: Option<Vec<Vec<[f32; 3]>>>,
+    pub tangents: Option<Vec<Vec<[f32; 3]>>>,
+}
+
+/// Everything the writer needs for one processed mesh.
+pub struct MeshFrames {
+    pub mesh: usize,
+    pub name: String,
+    pub tracks: Vec<TrackFrames>,
+    pub primitives: Vec<PrimitiveFrames>,
+    pub dropped_channels: Vec<(usize, usize)>,
+    pub stats: MeshStats,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct MeshStats {
+    pub vertices: usize,
+    pub welded_vertices: usize,
+    pub triangles: usize,
+    pub keys: usize,
+    pub frames: usize,
+    pub factor_nonzeros: usize,
+    pub setup: Duration,
+    pub solve: Duration,
+}
+
+impl MeshFrames {
+    pub fn frame_count(&self) -> usize {
+        self.primitives.first().map_or(0, |p| p.positions.len())
+    }
+}
+
+/// Key poses of a track, in input vertex order.
+pub fn key_poses(mesh: &MorphMesh, track: &Track) -> Vec<Vec<DVec3>> {
+    track.weights.iter().map(|w| mesh.pose(w)).collect()
+}
+
+/// Normals data of a mesh for one track, when every primitive has NORMAL.
+struct NormalKeys {
+    smoothing: Smoothing,
+    recomputed: Vec<Vec<DVec3>>,
+    authored: Vec<Vec<DVec3>>,
+}
+
+/// Compute every frame of every track of `mesh`. `progress` is called once per frame done.
+pub fn tween_mesh(
+    mesh: &MorphMesh,
+    opts: &TweenOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Result<MeshFrames> {
+    let welded = Welded::build(mesh);
+    let mut stats = MeshStats {
+        vertices: mesh.vertex_count(),
+        welded_vertices: welded.n,
+        triangles: welded.input_triangles.len(),
+        ..Default::default()
+    };
+    let started = Instant::now();
+    let pattern = match opts.method {
+        Method::Seed => Some(Pattern::new(welded.n, &welded.triangles)?),
+        Method::Linear => None,
+    };
+    stats.factor_nonzeros = pattern.as_ref().map_or(0, Pattern::factor_nonzeros);
+    stats.setup += started.elapsed();
+    let base_normals: Option<Vec<DVec3>> = mesh.pose_normals(&vec![0.0; mesh.target_count]);
+    let has_normal_targets = mesh
+        .primitives
+        .iter()
+        .any(|p| p.target_nrm.iter().any(Option::is_some));
+    let base_tangents: Option<Vec<[f64; 4]>> = mesh
+        .primitives
+        .iter()
+        .map(|p| p.tangents.clone())
+        .collect::<Option<Vec<_>>>()
+        .map(|v| v.concat());
+    let base: Vec<DVec3> = mesh.pose(&vec![0.0; mesh.target_count]);
+
+    let mut tracks = Vec::new();
+    let mut frames_out: Vec<Vec<DVec3>> = Vec::new(); // positions per frame (input order)
+    let mut normals_out: Vec<Vec<DVec3>> = Vec::new();
+    for track in &mesh.tracks {
+        let keys = key_poses(mesh, track);
+        stats.keys += keys.len();
+        let welded_keys: Vec<Vec<DVec3>> = keys.iter().map(|k| welded.weld(k)).collect();
+        let normal_keys = base_normals.as_ref().map(|bn| {
+            let smoothing = Smoothing::new(&welded.of_vertex, bn);
+            let rec_base = smoothing.normals(&base, &welded.input_triangles);
+            let recomputed: Vec<Vec<DVec3>> = keys
+                .iter()
+                .map(|k| smoothing.normals(k, &welded.input_triangles))
+                .collect();
+            let authored = track
+                .weights
+                .iter()
+                .zip(&recomputed)
+                .map(|(w, rec)| match has_normal_targets {
+                    true => mesh.pose_normals(w).expect("normals present"),
+                    false => (0..bn.len())
+                        .map(|v| arc(rec_base[v], rec[v]) * bn[v])
+                        .collect(),
+                })
+                .collect();
+            NormalKeys {
+                smoothing,
+                recomputed,
+                authored,
+            }
+        });
+        let frames = schedule(&track.times, opts.timing);
+        tracks.push(TrackFrames {
+            origin: track.origin.clone(),
+            first: frames_out.len(),
+            frames: frames.clone(),
+        });
+        // Frames grouped by segment, each segment prepared once.
+        let mut i = 0;
+        while i < frames.len() {
+            let (a, b) = (frames[i].key_a, frames[i].key_b);
+            let j = i + frames[i..]
+                .iter()
+                .take_while(|f| f.key_a == a && f.key_b == b)
+                .count();
+            let t0 = Instant::now();
+            let segment = Segment::new(
+                opts.method,
+                welded_keys[a].clone(),
+                welded_keys[b].clone(),
+                pattern.as_ref(),
+                &welded.triangles,
+            )?;
+            stats.setup += t0.elapsed();
+            let t0 = Instant::now();
+            let computed: Vec<(Vec<DVec3>, Option<Vec<DVec3>>)> = frames[i..j]
+                .par_iter()
+                .map(|f| {
+                    let w = segment.frame(f.t);
+                    let positions: Vec<DVec3> =
+                        welded.of_vertex.iter().map(|&k| w[k as usize]).collect();
+                    let normals = normal_keys.as_ref().map(|nk| {
+                        let rec = nk.smoothing.normals(&positions, &welded.input_triangles);
+                        (0..positions.len())
+                            .map(|v| {
+                                carry(
+                                    nk.authored[a][v],
+                                    nk.recomputed[a][v],
+                                    nk.authored[b][v],
+                                    nk.recomputed[b][v],
+                                    rec[v],
+                                    f.t,
+                                )
+                            })
+                            .collect()
+                    });
+                    progress();
+                    (positions, normals)
+                })
+                .collect();
+            stats.solve += t0.elapsed();
+            for (p, n) in computed {
+                frames_out.push(p);
+                if let Some(n) = n {
+                    normals_out.push(n);
+                }
+            }
+            i = j;
+        }
+    }
+    stats.frames = frames_out.len();
+
+    // Deltas per primitive.
+    let mut primitives = Vec::new();
+    let mut offset = 0;
+    for p in &mesh.primitives {
+        let range = offset..offset + p.base.len();
+        offset += p.base.len();
+        let delta = |vals: &[DVec3], reference: &[DVec3]| -> Vec<[f32; 3]> {
+            vals.iter()
+                .zip(reference)
+                .map(|(v, r)| (*v - *r).as_vec3().to_array())
+                .collect()
+        };
+        let positions = frames_out
+            .par_iter()
+            .map(|f| delta(&f[range.clone()], &p.base))
+            .collect();
+        let normals = p
+            .normals
+            .as_ref()
+            .filter(|_| !normals_out.is_empty())
+            .map(|bn| {
+                normals_out
+                    .par_iter()
+                    .map(|n| delta(&n[range.clone()], bn))
+                    .collect()
+            });
+        let tangents = match (&p.tangents, &p.normals, &base_tangents) {
+            (Some(tan), Some(bn), Some(_)) if !normals_out.is_empty() => Some(
+                normals_out
+                    .par_iter()
+                    .map(|n| {
+                        n[range.clone()]
+                            .iter()
+                            .zip(bn)
+                            .zip(tan)
+                            .map(|((nf, nb), t)| {
+                                let t3 = DVec3::new(t[0], t[1], t[2]);
+                                let rotated = arc(nb.normalize_or_zero(), *nf) * t3;
+                                // Keep the tangent orthogonal to the frame's normal.
+                                let ortho = (rotated - *nf * nf.dot(rotated))
+                                    .try_normalize()
+                                    .unwrap_or(rotated);
+                                (ortho * t3.length() - t3).as_vec3().to_array()
+                            })
+                            .collect()
+                    })
+                    .collect(),
+            ),
+            _ => None,
+        };
+        primitives.push(PrimitiveFrames {
+            index: p.index,
+            positions,
+            normals,
+            tangents,
+        });
+    }
+    Ok(MeshFrames {
+        mesh: mesh.mesh,
+        name: mesh.name.clone(),
+        tracks,
+        primitives,
+        dropped_channels: mesh.dropped_channels.clone(),
+        stats,
+    })
+}
+
+/// Welded positions of every frame of one track (for tests and benchmarks).
+pub fn track_frames_welded(
+    mesh: &MorphMesh,
+    track: &Track,
+    opts: &TweenOptions,
+) -> Result<(Welded, Vec<Vec<DVec3>>)> {
+    let welded = Welded::build(mesh);
+    let pattern = match opts.method {
+        Method::Seed => Some(Pattern::new(welded.n, &welded.triangles)?),
+        Method::Linear => None,
+    };
+    let keys: Vec<Vec<DVec3>> = key_poses(mesh, track)
+        .iter()
+        .map(|k| welded.weld(k))
+        .collect();
+    let mut out = Vec::new();
+    let frames = schedule(&track.times, opts.timing);
+    let mut current: Option<((usize, usize), Segment)> = None;
+    for f in &frames {
+        if current
+            .as_ref()
+            .is_none_or(|(ab, _)| *ab != (f.key_a, f.key_b))
+        {
+            let s = Segment::new(
+                opts.method,
+                keys[f.key_a].clone(),
+                keys[f.key_b].clone(),
+                pattern.as_ref(),
+                &welded.triangles,
+            )?;
+            current = Some(((f.key_a, f.key_b), s));
+        }
+        out.push(current.as_ref().unwrap().1.frame(f.t));
+    }
+    Ok((welded, out))
+}
