@@ -12,6 +12,7 @@ pub mod normals;
 pub mod progress;
 pub mod read;
 pub mod solve;
+pub mod synth;
 pub mod tween;
 pub mod weld;
 pub mod write;

@@ -28,10 +28,17 @@ pub enum Container {
 /// Binary data being assembled for the single output buffer.
 pub struct BinBuilder {
     pub bytes: Vec<u8>,
-    views: Vec<Value>,
+    pub(crate) views: Vec<Value>,
 }
 
 impl BinBuilder {
+    pub fn new() -> BinBuilder {
+        BinBuilder {
+            bytes: Vec::new(),
+            views: Vec::new(),
+        }
+    }
+
     /// Append `data` as a new buffer view (4-byte aligned) and return its index.
     pub fn push_view(&mut self, data: &[u8], target: Option<u32>) -> usize {
         while !self.bytes.len().is_multiple_of(4) {

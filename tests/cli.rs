@@ -1,0 +1,460 @@
+//! `inbetween tween` from file to file: outputs validate, read back, keep the rest of the file;
+//! bad input fails cleanly.
+
+mod common;
+
+use common::*;
+use glam::DVec3;
+use inbetween::interpolate::Method;
+use inbetween::keyframes::{find_morph_meshes, KeyOptions, KeySource};
+use inbetween::read::Document;
+use inbetween::tween::{track_frames_welded, Timing, TweenOptions};
+use std::path::{Path, PathBuf};
+
+fn out_in(dir: &tempfile::TempDir, name: &str) -> PathBuf {
+    dir.path().join(name)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn samples_tween_to_valid_files_with_the_computed_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, tweens) in [
+        ("bar_twist.glb", 4),
+        ("tube_bend.glb", 6),
+        ("flag_wave.glb", 3),
+    ] {
+        for ext in ["glb", "gltf"] {
+            let out = out_in(&dir, &format!("{name}.{ext}"));
+            let input = sample(name);
+            run_ok(&[
+                "tween",
+                s(&input),
+                "-o",
+                s(&out),
+                "--tweens",
+                &tweens.to_string(),
+                "--quiet",
+            ]);
+            assert_valid(&out);
+            // Frames from the library, expanded to input vertices.
+            let doc = Document::open(&input).unwrap();
+            let meshes = find_morph_meshes(
+                &doc,
+                &KeyOptions {
+                    source: KeySource::Auto,
+                    animation: None,
+                },
+            )
+            .unwrap();
+            let opts = TweenOptions {
+                method: Method::Seed,
+                timing: Timing::Tweens(tweens),
+            };
+            let (welded, frames) =
+                track_frames_welded(&meshes[0], &meshes[0].tracks[0], &opts).unwrap();
+            let (base, targets) = read_targets(&out, 0, 0);
+            assert_eq!(targets.len(), frames.len(), "{name}: one target per frame");
+            let keys = meshes[0].tracks[0].times.len();
+            assert_eq!(frames.len(), (keys - 1) * (tweens + 1) + 1);
+            let d = diag(&meshes[0].primitives[0].base);
+            for (f, t) in frames.iter().zip(&targets) {
+                for (v, (b, dlt)) in base.iter().zip(t).enumerate() {
+                    let got = DVec3::new(
+                        (b[0] + dlt[0]) as f64,
+                        (b[1] + dlt[1]) as f64,
+                        (b[2] + dlt[2]) as f64,
+                    );
+                    let want = f[welded.of_vertex[v] as usize];
+                    assert!(
+                        (got - want).length() <= 1e-6 * d,
+                        "{name} vertex {v}: {got} vs {want}"
+                    );
+                }
+            }
+            // The weights animation: one key per frame, one-hot.
+            let (gdoc, buffers, _) = gltf::import(&out).unwrap();
+            let anim = gdoc
+                .animations()
+                .find(|a| {
+                    a.channels().any(|c| {
+                        c.target().property() == gltf::animation::Property::MorphTargetWeights
+                    })
+                })
+                .unwrap();
+            let ch = anim
+                .channels()
+                .find(|c| c.target().property() == gltf::animation::Property::MorphTargetWeights)
+                .unwrap();
+            let r = ch.reader(|b| Some(&buffers[b.index()]));
+            let times: Vec<f32> = r.read_inputs().unwrap().collect();
+            assert_eq!(times.len(), frames.len());
+            assert!(times.windows(2).all(|w| w[1] > w[0]));
+            let gltf::animation::util::ReadOutputs::MorphTargetWeights(w) =
+                r.read_outputs().unwrap()
+            else {
+                panic!()
+            };
+            let w: Vec<f32> = w.into_f32().collect();
+            for (i, row) in w.chunks(frames.len()).enumerate() {
+                for (j, x) in row.iter().enumerate() {
+                    assert_eq!(*x, if i == j { 1.0 } else { 0.0 });
+                }
+            }
+            let names = gdoc
+                .meshes()
+                .next()
+                .unwrap()
+                .extras()
+                .as_ref()
+                .map(|e| e.get().to_string())
+                .unwrap();
+            assert!(names.contains("targetNames"), "{names}");
+        }
+    }
+}
+
+#[test]
+fn fps_and_tweens_set_the_frame_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = out_in(&dir, "flag.glb");
+    // Keys at 0, 0.5, ..., 2.0 s.
+    run_ok(&[
+        "tween",
+        s(&sample("flag_wave.glb")),
+        "-o",
+        s(&out),
+        "--fps",
+        "30",
+        "-q",
+    ]);
+    assert_eq!(read_targets(&out, 0, 0).1.len(), 61);
+    run_ok(&[
+        "tween",
+        s(&sample("flag_wave.glb")),
+        "-o",
+        s(&out),
+        "--tweens",
+        "0",
+        "-q",
+    ]);
+    assert_eq!(read_targets(&out, 0, 0).1.len(), 5);
+    // --keys targets ignores the animation: base + 4 targets at 0..4 s, 2 tweens between.
+    run_ok(&[
+        "tween",
+        s(&sample("flag_wave.glb")),
+        "-o",
+        s(&out),
+        "--keys",
+        "targets",
+        "--tweens",
+        "2",
+        "-q",
+    ]);
+    assert_eq!(read_targets(&out, 0, 0).1.len(), 13);
+    assert_valid(&out);
+}
+
+#[test]
+fn everything_else_comes_through() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("flag_wave.glb");
+    let out = out_in(&dir, "flag.glb");
+    run_ok(&["tween", s(&input), "-o", s(&out), "-q"]);
+    let a = Document::open(&input).unwrap();
+    let b = Document::open(&out).unwrap();
+    for key in ["materials", "nodes", "scenes", "scene", "asset"] {
+        assert_eq!(a.json[key], b.json[key], "{key} changed");
+    }
+    // The pole (mesh 1) is untouched, and its data reads the same.
+    assert_eq!(a.json["meshes"][1]["name"], b.json["meshes"][1]["name"]);
+    let pa = a.json["meshes"][1]["primitives"][0]["attributes"]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    let pb = b.json["meshes"][1]["primitives"][0]["attributes"]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    assert_eq!(a.read_f64(pa).unwrap(), b.read_f64(pb).unwrap());
+    assert_eq!(b.json["animations"][0]["name"], "keys");
+    assert_eq!(
+        b.json["meshes"][0]["extras"]["targetNames"]
+            .as_array()
+            .unwrap()
+            .len(),
+        21
+    );
+}
+
+#[test]
+fn output_is_deterministic_for_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = out_in(&dir, "a.glb");
+    let b = out_in(&dir, "b.glb");
+    run_ok(&[
+        "tween",
+        s(&sample("tube_bend.glb")),
+        "-o",
+        s(&a),
+        "--threads",
+        "1",
+        "-q",
+    ]);
+    run_ok(&[
+        "tween",
+        s(&sample("tube_bend.glb")),
+        "-o",
+        s(&b),
+        "--threads",
+        "2",
+        "-q",
+    ]);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
+
+#[test]
+fn summary_unless_quiet() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = out_in(&dir, "a.glb");
+    let r = run_ok(&["tween", s(&sample("bar_twist.glb")), "-o", s(&out)]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("6 frames") && err.contains("seed"), "{err}");
+    let r = run_ok(&[
+        "tween",
+        s(&sample("bar_twist.glb")),
+        "-o",
+        s(&out),
+        "--quiet",
+    ]);
+    assert!(r.stderr.is_empty() && r.stdout.is_empty());
+    let help = run_ok(&["tween", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    for word in [
+        "--tweens",
+        "--fps",
+        "--method",
+        "--keys",
+        "--animation",
+        "--quiet",
+    ] {
+        assert!(help.contains(word), "--help lacks {word}");
+    }
+}
+
+/// Write a copy of `input` with its JSON changed by `edit` (GLB in, GLB out).
+fn edited_glb(input: &Path, out: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let doc = Document::open(input).unwrap();
+    let mut json = doc.json.clone();
+    edit(&mut json);
+    let mut js = serde_json::to_vec(&json).unwrap();
+    while js.len() % 4 != 0 {
+        js.push(b' ');
+    }
+    let bin = &doc.buffers[0];
+    let total = 12 + 8 + js.len() + 8 + bin.len();
+    let mut f = b"glTF".to_vec();
+    f.extend(2u32.to_le_bytes());
+    f.extend((total as u32).to_le_bytes());
+    f.extend((js.len() as u32).to_le_bytes());
+    f.extend(0x4E4F534Au32.to_le_bytes());
+    f.extend(&js);
+    f.extend((bin.len() as u32).to_le_bytes());
+    f.extend(0x004E4942u32.to_le_bytes());
+    f.extend(bin);
+    std::fs::write(out, f).unwrap();
+}
+
+#[test]
+fn bad_input_fails_with_one_line_exit_2_and_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = sample("bar_twist.glb");
+    let p = |n: &str| dir.path().join(n);
+    std::fs::write(p("not.glb"), b"hello, not a gltf").unwrap();
+    let mut short = std::fs::read(&good).unwrap();
+    short.truncate(short.len() - 100);
+    std::fs::write(p("short.glb"), &short).unwrap();
+    // .gltf whose buffer file is missing.
+    std::fs::write(
+        p("nobuf.gltf"),
+        r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"missing.bin","byteLength":12}]}"#,
+    )
+    .unwrap();
+    std::fs::write(
+        p("nomorph.gltf"),
+        r#"{"asset":{"version":"2.0"},"meshes":[]}"#,
+    )
+    .unwrap();
+    edited_glb(&good, &p("count.glb"), |j| {
+        // The target's accessor is one element short.
+        let acc = j["meshes"][0]["primitives"][0]["targets"][0]["POSITION"]
+            .as_u64()
+            .unwrap() as usize;
+        let count = j["accessors"][acc]["count"].as_u64().unwrap();
+        j["accessors"][acc]["count"] = (count - 1).into();
+    });
+    edited_glb(&good, &p("lines.glb"), |j| {
+        j["meshes"][0]["primitives"][0]["mode"] = 1.into()
+    });
+    edited_glb(&good, &p("draco.glb"), |j| {
+        j["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+        j["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+    });
+    edited_glb(&good, &p("meshopt.glb"), |j| {
+        j["extensionsUsed"] = serde_json::json!(["EXT_meshopt_compression"]);
+        j["extensionsRequired"] = serde_json::json!(["EXT_meshopt_compression"]);
+    });
+    // NaN positions: overwrite the first base position with NaN bytes.
+    let doc = Document::open(&good).unwrap();
+    let acc = doc.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    let view = doc.json["accessors"][acc]["bufferView"].as_u64().unwrap() as usize;
+    let off = doc.json["bufferViews"][view]["byteOffset"]
+        .as_u64()
+        .unwrap_or(0) as usize;
+    let mut bytes = std::fs::read(&good).unwrap();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let bin_start = 20 + json_len + 8;
+    bytes[bin_start + off..bin_start + off + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    std::fs::write(p("nan.glb"), &bytes).unwrap();
+
+    let cases = [
+        ("not.glb", "not a glTF"),
+        ("short.glb", "GLB header says"),
+        ("nobuf.gltf", "missing.bin"),
+        ("nomorph.gltf", "no mesh with morph targets"),
+        ("count.glb", "deltas but the base has"),
+        ("lines.glb", "not made of triangles"),
+        ("draco.glb", "KHR_draco_mesh_compression"),
+        ("meshopt.glb", "EXT_meshopt_compression"),
+        ("nan.glb", "NaN or infinite"),
+        ("does-not-exist.glb", "cannot read"),
+    ];
+    for (file, what) in cases {
+        for out_name in ["fresh.glb", "existing.glb"] {
+            let out = p(out_name);
+            if out_name == "existing.glb" {
+                std::fs::write(&out, b"previous").unwrap();
+            }
+            let r = inbetween(&["tween", s(&p(file)), "-o", s(&out)]);
+            let err = String::from_utf8_lossy(&r.stderr);
+            assert_eq!(r.status.code(), Some(2), "{file}: {err}");
+            assert_eq!(err.trim_end().lines().count(), 1, "{file}: one line: {err}");
+            assert!(
+                err.contains(file),
+                "{file}: the message names the file: {err}"
+            );
+            assert!(err.contains(what), "{file}: expected {what:?} in {err}");
+            if out_name == "fresh.glb" {
+                assert!(!out.exists(), "{file}: no output file");
+            } else {
+                assert_eq!(
+                    std::fs::read(&out).unwrap(),
+                    b"previous",
+                    "{file}: existing output untouched"
+                );
+            }
+        }
+    }
+    // No temporary file left behind.
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+#[test]
+fn usd_outputs_and_unknown_extensions_are_refused_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["a.obj", "b", "missing-dir/c.glb"] {
+        let out = dir.path().join(name);
+        let r = inbetween(&["tween", s(&sample("bar_twist.glb")), "-o", s(&out)]);
+        assert_eq!(r.status.code(), Some(2), "{name}");
+        assert_eq!(
+            String::from_utf8_lossy(&r.stderr)
+                .trim_end()
+                .lines()
+                .count(),
+            1
+        );
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn fixtures_tween_to_valid_files() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for sub in ["morph-keyframes", "morph-khronos"] {
+        for entry in walk(&fx.join(sub)) {
+            let ext = entry.extension().and_then(|e| e.to_str()).unwrap_or("");
+            if ext == "glb" || ext == "gltf" {
+                files.push(entry);
+            }
+        }
+    }
+    files.sort();
+    assert!(files.len() >= 9, "found {files:?}");
+    for (i, f) in files.iter().enumerate() {
+        for ext in ["glb", "gltf"] {
+            let out = dir.path().join(format!("{i}.{ext}"));
+            run_ok(&["tween", s(f), "-o", s(&out), "-q"]);
+            if let Some((e, w, line)) = validate(&out) {
+                assert!(e == 0 && w == 0, "{}: {line}", f.display());
+            }
+        }
+    }
+}
+
+#[test]
+fn external_images_are_embedded_or_copied() {
+    let Some(fx) = fixtures() else { return };
+    let input = fx.join("morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf");
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("m.glb");
+    run_ok(&["tween", s(&input), "-o", s(&glb), "-q"]);
+    let doc = Document::open(&glb).unwrap();
+    for img in doc.json["images"].as_array().unwrap() {
+        assert!(
+            img.get("uri").is_none() && img.get("bufferView").is_some(),
+            "{img}"
+        );
+    }
+    let gltf_out = dir.path().join("sub/m.gltf");
+    std::fs::create_dir_all(gltf_out.parent().unwrap()).unwrap();
+    run_ok(&["tween", s(&input), "-o", s(&gltf_out), "-q"]);
+    for img in Document::open(&gltf_out).unwrap().json["images"]
+        .as_array()
+        .unwrap()
+    {
+        assert!(dir
+            .path()
+            .join("sub")
+            .join(img["uri"].as_str().unwrap())
+            .exists());
+    }
+    assert_valid(&gltf_out);
+    // Three clips animate the mesh: each keeps its channel, over its own frames.
+    let (gdoc, _, _) = gltf::import(&gltf_out).unwrap();
+    assert_eq!(gdoc.animations().count(), 3);
+}
+
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                out.extend(walk(&p));
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,126 @@
+//! Shared helpers of the integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+pub fn sample(name: &str) -> PathBuf {
+    root().join("samples").join(name)
+}
+
+/// `../shared/fixtures`, or `None` (with the reason printed) when it is not there.
+pub fn fixtures() -> Option<PathBuf> {
+    let dir = root().join("../shared/fixtures");
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipped: {} is missing (real-file fixtures are optional)",
+            dir.display()
+        );
+        None
+    }
+}
+
+fn require_tools() -> bool {
+    std::env::var_os("INBETWEEN_REQUIRE_TOOLS").is_some()
+}
+
+/// Announce a missing test tool: fail when tools are required, else skip with the reason.
+pub fn missing_tool(what: &str) -> bool {
+    if require_tools() {
+        panic!("{what} is missing; run scripts/setup-tools.sh");
+    }
+    eprintln!("skipped: {what} is missing (run scripts/setup-tools.sh)");
+    true
+}
+
+pub fn inbetween(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_inbetween"))
+        .args(args)
+        .output()
+        .expect("run inbetween")
+}
+
+/// Run inbetween and insist on success.
+pub fn run_ok(args: &[&str]) -> Output {
+    let out = inbetween(args);
+    assert!(
+        out.status.success(),
+        "inbetween {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// The validator report of a file: (errors, warnings, full JSON line); `None` if the validator
+/// is not installed and tools are not required.
+pub fn validate(file: &Path) -> Option<(u64, u64, String)> {
+    let dir = root().join("tools/validator");
+    if !dir.join("node_modules/gltf-validator").is_dir()
+        && missing_tool("the glTF validator (tools/validator/node_modules)")
+    {
+        return None;
+    }
+    let out = Command::new("node")
+        .arg(dir.join("validate.mjs"))
+        .arg(file)
+        .output()
+        .expect("run node");
+    let line = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    let v: serde_json::Value = serde_json::from_str(&line).unwrap_or_else(|e| {
+        panic!(
+            "validator output for {}: {e}: {line} {}",
+            file.display(),
+            String::from_utf8_lossy(&out.stderr)
+        )
+    });
+    Some((
+        v["errors"].as_u64().unwrap(),
+        v["warnings"].as_u64().unwrap(),
+        line,
+    ))
+}
+
+/// Assert that the validator finds no error and no warning.
+pub fn assert_valid(file: &Path) {
+    if let Some((e, w, line)) = validate(file) {
+        assert!(
+            e == 0 && w == 0,
+            "validator: {e} errors, {w} warnings: {line}"
+        );
+    }
+}
+
+/// The project's python (numpy, scipy, usd-core), if installed.
+pub fn python() -> Option<PathBuf> {
+    let p = root().join(".venv/bin/python");
+    if p.exists() {
+        Some(p)
+    } else {
+        missing_tool("the python venv (.venv)");
+        None
+    }
+}
+
+/// Morph target POSITION deltas of mesh `mesh` primitive `prim`, read back with the gltf crate.
+pub fn read_targets(path: &Path, mesh: usize, prim: usize) -> (Vec<[f32; 3]>, Vec<Vec<[f32; 3]>>) {
+    let (doc, buffers, _) = gltf::import(path).expect("gltf crate reads the output");
+    let m = doc.meshes().nth(mesh).unwrap();
+    let p = m.primitives().nth(prim).unwrap();
+    let reader = p.reader(|b| Some(&buffers[b.index()]));
+    let base: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+    let targets = reader
+        .read_morph_targets()
+        .map(|(pos, _, _)| pos.expect("POSITION delta").collect())
+        .collect();
+    (base, targets)
+}
+
+pub fn diag(points: &[glam::DVec3]) -> f64 {
+    inbetween::weld::bbox_diagonal(points)
+}
