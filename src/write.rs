@@ -26,6 +26,7 @@ pub enum Container {
 }
 
 /// Binary data being assembled for the single output buffer.
+#[derive(Default)]
 pub struct BinBuilder {
     pub bytes: Vec<u8>,
     pub(crate) views: Vec<Value>,
@@ -33,10 +34,7 @@ pub struct BinBuilder {
 
 impl BinBuilder {
     pub fn new() -> BinBuilder {
-        BinBuilder {
-            bytes: Vec::new(),
-            views: Vec::new(),
-        }
+        BinBuilder::default()
     }
 
     /// Append `data` as a new buffer view (4-byte aligned) and return its index.

@@ -249,7 +249,7 @@ fn edited_glb(input: &Path, out: &Path, edit: impl FnOnce(&mut serde_json::Value
     let mut json = doc.json.clone();
     edit(&mut json);
     let mut js = serde_json::to_vec(&json).unwrap();
-    while js.len() % 4 != 0 {
+    while !js.len().is_multiple_of(4) {
         js.push(b' ');
     }
     let bin = &doc.buffers[0];
