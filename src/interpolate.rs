@@ -6,7 +6,7 @@
 //!   component translated so its vertex centroid follows the straight line between the keys'.
 //! * [`Method::Linear`] is vertex lerp (the BlendShape baseline).
 
-use crate::gradient::{deformation, frame, gradient_operator, polar, quat_log, rotvec_matrix};
+use crate::gradient::{deformation, frame, gradient_operator, polar, quat_log};
 use crate::solve::{components, Factor, Pattern};
 use anyhow::Result;
 use glam::{DMat3, DVec3};
@@ -33,8 +33,9 @@ impl Method {
 /// What a seed segment keeps per valid triangle to assemble a frame's right-hand side.
 struct TriangleTween {
     corners: [u32; 3],
-    /// log of the rotation factor R (axis times angle, angle in [0, pi]).
-    rotation: DVec3,
+    /// Unit rotation axis of R and its angle in [0, pi] (shortest arc, as the seed's slerp).
+    axis: DVec3,
+    angle: f64,
     /// Gradient operator of the reference triangle.
     g: [DVec3; 3],
     /// S applied to each g.
@@ -42,32 +43,32 @@ struct TriangleTween {
 }
 
 /// The tween of one pair of keys, ready to produce frames.
-pub enum Segment<'p> {
+pub enum Segment {
     Linear { x0: Vec<DVec3>, x1: Vec<DVec3> },
-    Seed(Box<SeedSegment<'p>>),
+    Seed(Box<SeedSegment>),
 }
 
-pub struct SeedSegment<'p> {
+pub struct SeedSegment {
     x0: Vec<DVec3>,
     x1: Vec<DVec3>,
     triangles: Vec<TriangleTween>,
-    factor: Factor<'p>,
+    factor: Factor,
     component: Vec<u32>,
     centroid0: Vec<DVec3>,
     centroid1: Vec<DVec3>,
     component_size: Vec<usize>,
 }
 
-impl<'p> Segment<'p> {
+impl Segment {
     /// Prepare the tween from `x0` to `x1` (welded positions). `pattern` is the mesh's
     /// analysed system and `triangles` its welded triangles (same order as the pattern's).
     pub fn new(
         method: Method,
         x0: Vec<DVec3>,
         x1: Vec<DVec3>,
-        pattern: Option<&'p Pattern>,
+        pattern: Option<&Pattern>,
         triangles: &[[u32; 3]],
-    ) -> Result<Segment<'p>> {
+    ) -> Result<Segment> {
         match method {
             Method::Linear => Ok(Segment::Linear { x0, x1 }),
             Method::Seed => {
@@ -86,28 +87,39 @@ impl<'p> Segment<'p> {
             Segment::Seed(s) => s.frame(t),
         }
     }
+
+    /// Nonzeros of the Cholesky factor used by the solves (0 for `linear`).
+    pub fn factor_nonzeros(&self) -> usize {
+        match self {
+            Segment::Linear { .. } => 0,
+            Segment::Seed(s) => s.factor.nonzeros(),
+        }
+    }
 }
 
-impl<'p> SeedSegment<'p> {
+impl SeedSegment {
     fn new(
         x0: Vec<DVec3>,
         x1: Vec<DVec3>,
-        pattern: &'p Pattern,
+        pattern: &Pattern,
         triangles: &[[u32; 3]],
     ) -> Result<Self> {
         let n = x0.len();
         let per_triangle: Vec<Option<TriangleTween>> = triangles
             .par_iter()
             .map(|&[a, b, c]| {
-                let (pa, pb, pc) = (x0[a as usize], x0[b as usize], x0[c as usize]);
-                let v = frame(pa, pb, pc)?;
+                let v = frame(x0[a as usize], x0[b as usize], x0[c as usize])?;
                 let v_inv = v.inverse();
                 let g = gradient_operator(&v_inv);
                 let t = deformation(&v_inv, x1[a as usize], x1[b as usize], x1[c as usize]);
                 let (q, s) = polar(&t);
+                let r = quat_log(q);
+                let angle = r.length();
+                let axis = if angle > 0.0 { r / angle } else { DVec3::X };
                 Some(TriangleTween {
                     corners: [a, b, c],
-                    rotation: quat_log(q),
+                    axis,
+                    angle,
                     g,
                     sg: g.map(|gk| s * gk),
                 })
@@ -123,10 +135,10 @@ impl<'p> SeedSegment<'p> {
         let mut pinned = vec![false; n];
         let mut seen = vec![false; count];
         for v in 0..n {
-            match component[v] {
-                u32::MAX => pinned[v] = true,
-                c if !seen[c as usize] => {
-                    seen[c as usize] = true;
+            match label(&component, v) {
+                None => pinned[v] = true,
+                Some(c) if !seen[c] => {
+                    seen[c] = true;
                     pinned[v] = true;
                 }
                 _ => {}
@@ -160,30 +172,25 @@ impl<'p> SeedSegment<'p> {
     }
 
     fn frame(&self, t: f64) -> Vec<DVec3> {
-        let n = self.x0.len();
-        let mut rhs = vec![0.0f64; 3 * n];
+        let mut rhs = vec![[0.0f64; 3]; self.x0.len()];
         for tri in &self.triangles {
-            let r: DMat3 = rotvec_matrix(tri.rotation * t);
+            let r = axis_angle_matrix(tri.axis, tri.angle * t);
             for k in 0..3 {
                 // T(t) g = R(t) ((1-t) g + t S g)
                 let v = r * (tri.g[k] * (1.0 - t) + tri.sg[k] * t);
-                let i = tri.corners[k] as usize;
-                rhs[i] += v.x;
-                rhs[n + i] += v.y;
-                rhs[2 * n + i] += v.z;
+                let b = &mut rhs[tri.corners[k] as usize];
+                b[0] += v.x;
+                b[1] += v.y;
+                b[2] += v.z;
             }
         }
-        for (v, &p) in self.factor.pinned.iter().enumerate() {
+        for (b, &p) in rhs.iter_mut().zip(&self.factor.pinned) {
             if p {
-                rhs[v] = 0.0;
-                rhs[n + v] = 0.0;
-                rhs[2 * n + v] = 0.0;
+                *b = [0.0; 3];
             }
         }
         self.factor.solve(&mut rhs);
-        let mut out: Vec<DVec3> = (0..n)
-            .map(|i| DVec3::new(rhs[i], rhs[n + i], rhs[2 * n + i]))
-            .collect();
+        let mut out: Vec<DVec3> = rhs.iter().map(|b| DVec3::from_array(*b)).collect();
         // Centroid path per component; untouched vertices follow the straight line.
         let mut sum = vec![DVec3::ZERO; self.centroid0.len()];
         for (v, p) in out.iter().enumerate() {
@@ -211,5 +218,80 @@ fn label(component: &[u32], v: usize) -> Option<usize> {
     match component[v] {
         u32::MAX => None,
         c => Some(c as usize),
+    }
+}
+
+/// Rotation matrix about a unit axis by an angle, through the half-angle quaternion.
+#[inline]
+pub fn axis_angle_matrix(axis: DVec3, angle: f64) -> DMat3 {
+    let (s, c) = sin_cos(0.5 * angle);
+    let (x, y, z, w) = (axis.x * s, axis.y * s, axis.z * s, c);
+    let (x2, y2, z2) = (x + x, y + y, z + z);
+    let (xx, yy, zz) = (x * x2, y * y2, z * z2);
+    let (xy, xz, yz) = (x * y2, x * z2, y * z2);
+    let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    DMat3::from_cols(
+        DVec3::new(1.0 - (yy + zz), xy + wz, xz - wy),
+        DVec3::new(xy - wz, 1.0 - (xx + zz), yz + wx),
+        DVec3::new(xz + wy, yz - wx, 1.0 - (xx + yy)),
+    )
+}
+
+/// sin and cos together, inlined: Cody-Waite reduction by pi/2 and the fdlibm kernel
+/// polynomials on [-pi/4, pi/4] (error about 1 ulp for |x| < 1e5).
+#[inline]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    const PIO2_HI: f64 = 1.570_796_326_734_125_6;
+    const PIO2_LO: f64 = 6.077_100_506_506_192e-11;
+    // Round to nearest by the 1.5 * 2^52 trick (|x| < 2^50): no libm call.
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    let k = (x * std::f64::consts::FRAC_2_PI + ROUND) - ROUND;
+    let r = (x - k * PIO2_HI) - k * PIO2_LO;
+    let z = r * r;
+    let s = r + r
+        * z
+        * (-1.666_666_666_666_663_2e-1
+            + z * (8.333_333_333_322_49e-3
+                + z * (-1.984_126_982_985_795e-4
+                    + z * (2.755_731_370_707_006_8e-6
+                        + z * (-2.505_076_025_340_686_3e-8 + z * 1.589_690_995_211_55e-10)))));
+    let c = 1.0 - 0.5 * z
+        + z * z
+            * (4.166_666_666_666_66e-2
+                + z * (-1.388_888_888_887_411e-3
+                    + z * (2.480_158_728_947_673e-5
+                        + z * (-2.755_731_435_139_066_3e-7
+                            + z * (2.087_572_321_298_175e-9 + z * -1.135_964_755_778_819_5e-11)))));
+    match (k as i64).rem_euclid(4) {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sin_cos_matches_libm() {
+        let mut worst = 0.0f64;
+        for i in -20000..=20000 {
+            let x = i as f64 * 1.7e-3;
+            let (s, c) = sin_cos(x);
+            worst = worst.max((s - x.sin()).abs()).max((c - x.cos()).abs());
+        }
+        assert!(worst < 4e-16, "{worst}");
+    }
+
+    #[test]
+    fn axis_angle_matrix_matches_glam() {
+        let axis = DVec3::new(0.3, -0.5, 0.8).normalize();
+        for angle in [0.0, 0.4, 2.0, 3.1, -1.0, 7.5] {
+            let a = axis_angle_matrix(axis, angle);
+            let b = DMat3::from_axis_angle(axis, angle);
+            assert!(a.abs_diff_eq(b, 1e-15), "{angle}");
+        }
     }
 }

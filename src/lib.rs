@@ -4,6 +4,7 @@
 //! [`read`] -> [`keyframes`] -> [`weld`] -> [`interpolate`] (with [`gradient`] and [`solve`])
 //! -> [`normals`] -> [`write`]; [`tween`] runs it for one mesh and [`job`] from file to file.
 
+pub mod bench;
 pub mod gradient;
 pub mod interpolate;
 pub mod job;

@@ -1,6 +1,7 @@
 //! Command-line parsing only; the work is in the library.
 
 use clap::{Parser, Subcommand};
+use inbetween::bench::{self, BenchOptions};
 use inbetween::interpolate::Method;
 use inbetween::job::{run_tween, TweenJob};
 use inbetween::keyframes::KeySource;
@@ -57,11 +58,103 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Print speed figures on generated meshes (set-up, per-frame time, throughput, memory),
+    /// side by side with the numpy/scipy peer when python3 with numpy and scipy is available.
+    Bench {
+        /// Triangle counts to generate (comma-separated).
+        #[arg(long, value_delimiter = ',', default_values_t = vec![16020, 100_000, 1_000_000])]
+        sizes: Vec<usize>,
+        /// Frames timed per method and size (the median is reported).
+        #[arg(long, default_value_t = 20)]
+        frames: usize,
+        /// Python with numpy and scipy for the peer (default: .venv/bin/python, else python3).
+        #[arg(long)]
+        python: Option<PathBuf>,
+        /// Folder holding ref_tween.py.
+        #[arg(long, default_value = "../shared/peers")]
+        peers: PathBuf,
+        /// Skip the peer above this many triangles (its set-up takes minutes at 1M).
+        #[arg(long, default_value_t = 100_000)]
+        peer_max_triangles: usize,
+        /// Worker threads for the all-threads figure (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print the rows as JSON lines instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn set_threads(threads: Option<usize>) {
+    if let Some(n) = threads {
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global();
+    }
+}
+
+fn fail(e: anyhow::Error) -> ExitCode {
+    eprintln!("inbetween: error: {}", format!("{e:#}").replace('\n', " "));
+    ExitCode::from(2)
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Bench {
+            sizes,
+            frames,
+            python,
+            peers,
+            peer_max_triangles,
+            threads,
+            json,
+        } => {
+            set_threads(threads);
+            let python = python.or_else(|| {
+                let venv = PathBuf::from(".venv/bin/python");
+                Some(if venv.exists() {
+                    venv
+                } else {
+                    PathBuf::from("python3")
+                })
+            });
+            let peer = python.filter(|p| {
+                peers.join("ref_tween.py").exists()
+                    && std::process::Command::new(p)
+                        .args(["-c", "import numpy, scipy"])
+                        .output()
+                        .is_ok_and(|o| o.status.success())
+            });
+            if peer.is_none() {
+                eprintln!(
+                    "bench: no python with numpy+scipy or no {}: peer columns left empty",
+                    peers.display()
+                );
+            }
+            let opts = BenchOptions {
+                sizes,
+                frames: frames.max(1),
+                peer: peer.map(|p| (p, peers)),
+                peer_max_triangles,
+            };
+            let result = bench::run(&opts, &mut |row| {
+                if json {
+                    println!("{}", serde_json::to_string(row).unwrap_or_default());
+                } else {
+                    eprintln!("bench: {} triangles done", row.triangles);
+                }
+            });
+            match result {
+                Ok(rows) => {
+                    if !json {
+                        print!("{}", bench::table(&rows));
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
         Command::Tween {
             input,
             output,
@@ -94,10 +187,7 @@ fn main() -> ExitCode {
                     }
                     ExitCode::SUCCESS
                 }
-                Err(e) => {
-                    eprintln!("inbetween: error: {}", format!("{e:#}").replace('\n', " "));
-                    ExitCode::from(2)
-                }
+                Err(e) => fail(e),
             }
         }
     }

@@ -23,9 +23,11 @@
 use anyhow::{anyhow, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, SymbolicCholesky, SymbolicCholeskyRaw,
+};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Par, Side};
 use glam::DVec3;
 
 /// The sparsity pattern of a welded mesh's system, analysed once.
@@ -116,22 +118,28 @@ impl Pattern {
     }
 }
 
-/// A numeric factorization for one reference pose.
-pub struct Factor<'p> {
-    pattern: &'p Pattern,
-    values: Vec<f64>,
+/// A numeric factorization for one reference pose: `P A P^T = L L^T`, with L kept as its
+/// diagonal plus a strictly-lower CSC copy (explicit zeros of the supernodal blocks dropped) so
+/// a frame's three right-hand sides are solved together in one pass over L per direction.
+pub struct Factor {
+    /// `perm[i]`: the original row placed at position i.
+    perm: Vec<u32>,
+    diag: Vec<f64>,
+    col_ptr: Vec<usize>,
+    rows: Vec<u32>,
+    vals: Vec<f64>,
     /// Vertices held at 0 by a Dirichlet row.
     pub pinned: Vec<bool>,
 }
 
-impl<'p> Factor<'p> {
+impl Factor {
     /// Assemble `A` from per-triangle gradient operators (`None` for a triangle left out) and
     /// factor it. `pinned[v]` marks vertices fixed at 0.
     pub fn new(
-        pattern: &'p Pattern,
+        pattern: &Pattern,
         grads: &[Option<[DVec3; 3]>],
         pinned: Vec<bool>,
-    ) -> Result<Factor<'p>> {
+    ) -> Result<Factor> {
         let mut a = vec![0.0f64; pattern.row_idx.len()];
         for (g, s) in grads.iter().zip(&pattern.slots) {
             let Some(g) = g else { continue };
@@ -154,15 +162,13 @@ impl<'p> Factor<'p> {
         }
         let sym = pattern.symbolic_matrix();
         let mat = SparseColMatRef::new(sym, &a);
-        let mut values = vec![0.0f64; pattern.symbolic.len_val()];
+        let symbolic = &pattern.symbolic;
+        let mut values = vec![0.0f64; symbolic.len_val()];
         let mut mem = MemBuffer::try_new(
-            pattern
-                .symbolic
-                .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
         )
         .map_err(|_| anyhow!("out of memory for the factorization"))?;
-        pattern
-            .symbolic
+        symbolic
             .factorize_numeric_llt(
                 &mut values,
                 mat,
@@ -173,24 +179,126 @@ impl<'p> Factor<'p> {
                 Default::default(),
             )
             .map_err(|e| anyhow!("the system is not positive definite ({e:?})"))?;
+        drop(mem);
+        let n = pattern.n;
+        let perm: Vec<u32> = match symbolic.perm() {
+            Some(p) => p.arrays().0.iter().map(|&i| i as u32).collect(),
+            None => (0..n as u32).collect(),
+        };
+        let mut diag = vec![0.0; n];
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut rows = Vec::new();
+        let mut vals = Vec::new();
+        col_ptr.push(0);
+        match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let (cp, ri) = (s.col_ptr(), s.row_idx());
+                for j in 0..n {
+                    for k in cp[j] as usize..cp[j + 1] as usize {
+                        let (r, v) = (ri[k] as usize, values[k]);
+                        if r == j {
+                            diag[j] = v;
+                        } else if v != 0.0 {
+                            rows.push(r as u32);
+                            vals.push(v);
+                        }
+                    }
+                    col_ptr.push(rows.len());
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let begin = s.supernode_begin();
+                let end = s.supernode_end();
+                for sn in 0..s.n_supernodes() {
+                    let (start, stop) = (begin[sn] as usize, end[sn] as usize);
+                    let pattern_rows = s.supernode(sn).pattern();
+                    let ncols = stop - start;
+                    let nrows = ncols + pattern_rows.len();
+                    let block = &values
+                        [s.col_ptr_for_val()[sn] as usize..s.col_ptr_for_val()[sn + 1] as usize];
+                    for c in 0..ncols {
+                        let col = &block[c * nrows..(c + 1) * nrows];
+                        diag[start + c] = col[c];
+                        for (r, &v) in col.iter().enumerate().skip(c + 1) {
+                            if v != 0.0 {
+                                let row = if r < ncols {
+                                    start + r
+                                } else {
+                                    pattern_rows[r - ncols] as usize
+                                };
+                                rows.push(row as u32);
+                                vals.push(v);
+                            }
+                        }
+                        col_ptr.push(rows.len());
+                    }
+                }
+            }
+        }
+        rows.shrink_to_fit();
+        vals.shrink_to_fit();
         Ok(Factor {
-            pattern,
-            values,
+            perm,
+            diag,
+            col_ptr,
+            rows,
+            vals,
             pinned,
         })
     }
 
-    /// Solve `A x = b` in place for three right-hand sides stored column-major (`n` x 3).
-    pub fn solve(&self, rhs: &mut [f64]) {
-        let n = self.pattern.n;
-        let mut mem = MemBuffer::new(
-            self.pattern
-                .symbolic
-                .solve_in_place_scratch::<f64>(3, Par::Seq),
+    /// Nonzeros of L kept for the solves (diagonal included).
+    pub fn nonzeros(&self) -> usize {
+        self.diag.len() + self.vals.len()
+    }
+
+    /// Solve `A x = b` in place for three right-hand sides stored as rows `[x, y, z]`.
+    pub fn solve(&self, b: &mut [[f64; 3]]) {
+        let n = self.diag.len();
+        assert_eq!(b.len(), n);
+        assert_eq!(self.col_ptr.len(), n + 1);
+        assert_eq!(self.rows.len(), self.vals.len());
+        assert!(self.col_ptr[n] <= self.rows.len());
+        assert!(
+            self.rows.iter().all(|&r| (r as usize) < n)
+                && self.perm.iter().all(|&p| (p as usize) < n)
         );
-        let llt = LltRef::new(&self.pattern.symbolic, &self.values);
-        let mat = MatMut::from_column_major_slice_mut(rhs, n, 3);
-        llt.solve_in_place_with_conj(Conj::No, mat, Par::Seq, MemStack::new(&mut mem));
+        let mut y: Vec<[f64; 3]> = self.perm.iter().map(|&p| b[p as usize]).collect();
+        // SAFETY (all unchecked accesses below): col_ptr is non-decreasing and bounded by
+        // rows.len() == vals.len(), and every row index is below n (checked above; the
+        // arrays are immutable after construction).
+        unsafe {
+            // L z = P b
+            for j in 0..n {
+                let d = 1.0 / *self.diag.get_unchecked(j);
+                let yj = *y.get_unchecked(j);
+                let yj = [yj[0] * d, yj[1] * d, yj[2] * d];
+                *y.get_unchecked_mut(j) = yj;
+                for k in *self.col_ptr.get_unchecked(j)..*self.col_ptr.get_unchecked(j + 1) {
+                    let v = *self.vals.get_unchecked(k);
+                    let t = y.get_unchecked_mut(*self.rows.get_unchecked(k) as usize);
+                    t[0] -= v * yj[0];
+                    t[1] -= v * yj[1];
+                    t[2] -= v * yj[2];
+                }
+            }
+            // L^T w = z
+            for j in (0..n).rev() {
+                let mut s = *y.get_unchecked(j);
+                for k in *self.col_ptr.get_unchecked(j)..*self.col_ptr.get_unchecked(j + 1) {
+                    let v = *self.vals.get_unchecked(k);
+                    let t = *y.get_unchecked(*self.rows.get_unchecked(k) as usize);
+                    s[0] -= v * t[0];
+                    s[1] -= v * t[1];
+                    s[2] -= v * t[2];
+                }
+                let d = 1.0 / *self.diag.get_unchecked(j);
+                *y.get_unchecked_mut(j) = [s[0] * d, s[1] * d, s[2] * d];
+            }
+        }
+        for (i, &p) in self.perm.iter().enumerate() {
+            b[p as usize] = y[i];
+        }
     }
 }
 

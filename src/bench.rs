@@ -1,0 +1,249 @@
+//! `inbetween bench`: speed figures on generated meshes (never a timed test).
+//!
+//! For each size, a closed tube bent 150 degrees and twisted 60 degrees between two keys:
+//! * symbolic analysis (weld, pattern, AMD ordering) once per mesh;
+//! * set-up of a key pair: per-triangle polar decomposition plus the numeric factorization;
+//! * per-frame time of `seed` and `linear` on one thread (median over frames at t in (0,1));
+//! * frames per second with every thread;
+//! * peak resident memory of the process so far;
+//! * where python3 with numpy/scipy is available, the same workload through
+//!   `../shared/peers/ref_tween.py` (set-up and per-frame median) and the ratios.
+
+use crate::interpolate::{Method, Segment};
+use crate::solve::Pattern;
+use crate::synth;
+use anyhow::{Context, Result};
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    /// Triangle counts to generate.
+    pub sizes: Vec<usize>,
+    /// Frames timed per method and size.
+    pub frames: usize,
+    /// Python with numpy and scipy for the peer, and the peers folder.
+    pub peer: Option<(PathBuf, PathBuf)>,
+    /// Largest mesh given to the peer (its set-up takes minutes at 1M triangles).
+    pub peer_max_triangles: usize,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BenchRow {
+    pub triangles: usize,
+    pub vertices: usize,
+    pub factor_nonzeros: usize,
+    pub symbolic_s: f64,
+    pub setup_s: f64,
+    pub seed_frame_ms: f64,
+    pub linear_frame_ms: f64,
+    pub threads: usize,
+    pub seed_fps_all_threads: f64,
+    pub peak_rss_mib: f64,
+    pub peer_setup_s: Option<f64>,
+    pub peer_frame_ms: Option<f64>,
+}
+
+/// Tube dimensions (segments, rings) giving exactly `triangles = 2 * segments * rings`
+/// for the standard sizes, close to it otherwise.
+pub fn tube_for(triangles: usize) -> (usize, usize) {
+    match triangles {
+        16020 => (90, 89),
+        100_000 => (250, 200),
+        1_000_000 => (1000, 500),
+        t => {
+            let s = ((t as f64 / 4.0).sqrt().round() as usize).max(3);
+            (s, (t / (2 * s)).max(2))
+        }
+    }
+}
+
+/// The two keys of the benchmark: a tube and the tube bent 150 degrees and twisted 60.
+pub fn bench_keys(triangles: usize) -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
+    let (segments, rings) = tube_for(triangles);
+    let s = synth::tube(rings, segments, 6.0, 1.0, 1.0);
+    let twisted = synth::twist(&s.positions, 60f64.to_radians(), 6.0);
+    let key = synth::bend(&twisted, 3.0, 150f64.to_radians(), 0.8);
+    (s.positions, key, s.triangles)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Peak resident set size of this process (VmHWM), in MiB.
+pub fn peak_rss_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .and_then(|k| k.parse::<f64>().ok())
+            })
+        })
+        .map_or(0.0, |kib| kib / 1024.0)
+}
+
+pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec<BenchRow>> {
+    let mut rows = Vec::new();
+    for &size in &opts.sizes {
+        let (x0, x1, triangles) = bench_keys(size);
+        let mut row = BenchRow {
+            triangles: triangles.len(),
+            vertices: x0.len(),
+            ..Default::default()
+        };
+        let t = Instant::now();
+        let pattern = Pattern::new(x0.len(), &triangles)?;
+        row.symbolic_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let seed = Segment::new(
+            Method::Seed,
+            x0.clone(),
+            x1.clone(),
+            Some(&pattern),
+            &triangles,
+        )?;
+        row.setup_s = t.elapsed().as_secs_f64();
+        row.factor_nonzeros = seed.factor_nonzeros();
+        let ts: Vec<f64> = (0..opts.frames)
+            .map(|i| (i as f64 + 0.5) / opts.frames as f64)
+            .collect();
+        let time_frames = |s: &Segment| -> f64 {
+            median(
+                ts.iter()
+                    .map(|&t| {
+                        let start = Instant::now();
+                        std::hint::black_box(s.frame(t));
+                        start.elapsed().as_secs_f64() * 1e3
+                    })
+                    .collect(),
+            )
+        };
+        row.seed_frame_ms = time_frames(&seed);
+        let linear = Segment::new(Method::Linear, x0.clone(), x1.clone(), None, &triangles)?;
+        row.linear_frame_ms = time_frames(&linear);
+        row.threads = rayon::current_num_threads();
+        let count = (4 * row.threads).max(opts.frames);
+        let start = Instant::now();
+        (0..count).into_par_iter().for_each(|i| {
+            std::hint::black_box(seed.frame((i as f64 + 0.5) / count as f64));
+        });
+        row.seed_fps_all_threads = count as f64 / start.elapsed().as_secs_f64();
+        drop(seed);
+        row.peak_rss_mib = peak_rss_mib();
+        if let Some((python, peers)) = &opts.peer {
+            if row.triangles <= opts.peer_max_triangles {
+                let (setup, frame) =
+                    run_peer(python, peers, &x0, &x1, &triangles, opts.frames.min(10))?;
+                row.peer_setup_s = Some(setup);
+                row.peer_frame_ms = Some(frame);
+            }
+        }
+        report(&row);
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+const PEER_SCRIPT: &str = r#"
+import json, sys, time
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from ref_tween import SeedTweener
+d = sys.argv[2]
+meta = json.load(open(d + "/meta.json"))
+n, m = meta["n"], meta["m"]
+x0 = np.fromfile(d + "/x0.bin", dtype="<f8").reshape(n, 3)
+x1 = np.fromfile(d + "/x1.bin", dtype="<f8").reshape(n, 3)
+tris = np.fromfile(d + "/tris.bin", dtype="<u4").reshape(m, 3).astype(np.int64)
+t = time.perf_counter(); tw = SeedTweener(x0, x1, tris); setup = time.perf_counter() - t
+times = []
+for i in range(meta["frames"]):
+    t = time.perf_counter(); tw.frame((i + 0.5) / meta["frames"]); times.append(time.perf_counter() - t)
+print(json.dumps({"setup_s": setup, "frame_ms": 1e3 * sorted(times)[len(times) // 2]}))
+"#;
+
+fn run_peer(
+    python: &PathBuf,
+    peers: &PathBuf,
+    x0: &[DVec3],
+    x1: &[DVec3],
+    tris: &[[u32; 3]],
+    frames: usize,
+) -> Result<(f64, f64)> {
+    let dir = std::env::temp_dir().join(format!("inbetween-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let f64s = |v: &[DVec3]| -> Vec<u8> {
+        v.iter()
+            .flat_map(|p| p.to_array())
+            .flat_map(f64::to_le_bytes)
+            .collect()
+    };
+    std::fs::write(dir.join("x0.bin"), f64s(x0))?;
+    std::fs::write(dir.join("x1.bin"), f64s(x1))?;
+    std::fs::write(
+        dir.join("tris.bin"),
+        tris.iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect::<Vec<u8>>(),
+    )?;
+    std::fs::write(
+        dir.join("meta.json"),
+        serde_json::json!({ "n": x0.len(), "m": tris.len(), "frames": frames.max(1) }).to_string(),
+    )?;
+    let out = std::process::Command::new(python)
+        .arg("-c")
+        .arg(PEER_SCRIPT)
+        .arg(peers)
+        .arg(&dir)
+        .output()
+        .context("running the python peer")?;
+    let _ = std::fs::remove_dir_all(&dir);
+    anyhow::ensure!(
+        out.status.success(),
+        "peer failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout)?;
+    Ok((
+        v["setup_s"].as_f64().unwrap_or(f64::NAN),
+        v["frame_ms"].as_f64().unwrap_or(f64::NAN),
+    ))
+}
+
+/// A markdown table of the rows.
+pub fn table(rows: &[BenchRow]) -> String {
+    let mut s = String::from(
+        "| triangles | vertices | nnz(L) | symbolic s | set-up s | seed ms/frame (1 thread) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let opt = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));
+        let ratio =
+            |p: Option<f64>, ours: f64| p.map_or("-".to_string(), |p| format!("{:.0}x", p / ours));
+        s += &format!(
+            "| {} | {} | {} | {:.3} | {:.3} | {:.2} | {:.3} | {:.0} ({} threads) | {:.0} | {} | {} | {} | {} |\n",
+            r.triangles,
+            r.vertices,
+            r.factor_nonzeros,
+            r.symbolic_s,
+            r.setup_s,
+            r.seed_frame_ms,
+            r.linear_frame_ms,
+            r.seed_fps_all_threads,
+            r.threads,
+            r.peak_rss_mib,
+            opt(r.peer_setup_s, 2),
+            opt(r.peer_frame_ms, 1),
+            ratio(r.peer_setup_s, r.symbolic_s + r.setup_s),
+            ratio(r.peer_frame_ms, r.seed_frame_ms),
+        );
+    }
+    s
+}
