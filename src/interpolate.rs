@@ -134,12 +134,12 @@ impl SeedSegment {
         // Pin the first vertex of every component, and every vertex no valid triangle touches.
         let mut pinned = vec![false; n];
         let mut seen = vec![false; count];
-        for v in 0..n {
+        for (v, pin) in pinned.iter_mut().enumerate() {
             match label(&component, v) {
-                None => pinned[v] = true,
+                None => *pin = true,
                 Some(c) if !seen[c] => {
                     seen[c] = true;
-                    pinned[v] = true;
+                    *pin = true;
                 }
                 _ => {}
             }

@@ -182,7 +182,7 @@ impl Factor {
         drop(mem);
         let n = pattern.n;
         let perm: Vec<u32> = match symbolic.perm() {
-            Some(p) => p.arrays().0.iter().map(|&i| i as u32).collect(),
+            Some(p) => p.arrays().0.to_vec(),
             None => (0..n as u32).collect(),
         };
         let mut diag = vec![0.0; n];
