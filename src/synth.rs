@@ -140,6 +140,58 @@ pub struct KeyedMesh {
     /// Normals of each target, when the base has normals.
     pub target_normals: Vec<Vec<DVec3>>,
     pub color: [f64; 4],
+    /// Write the triangles from this index on as a second primitive (with its own copy of the
+    /// vertices it uses), to test meshes whose primitives share a border.
+    pub split: Option<usize>,
+}
+
+impl KeyedMesh {
+    pub fn new(name: &str, surface: Surface, targets: Vec<Vec<DVec3>>) -> KeyedMesh {
+        KeyedMesh {
+            name: name.into(),
+            surface,
+            targets,
+            target_normals: vec![],
+            color: [0.8, 0.8, 0.8, 1.0],
+            split: None,
+        }
+    }
+}
+
+/// The part of a keyed mesh made of `triangles`, re-indexed over the vertices it uses.
+fn sub_mesh(m: &KeyedMesh, triangles: &[[u32; 3]]) -> KeyedMesh {
+    let mut map = vec![u32::MAX; m.surface.positions.len()];
+    let mut used = Vec::new();
+    let tris = triangles
+        .iter()
+        .map(|t| {
+            t.map(|v| {
+                if map[v as usize] == u32::MAX {
+                    map[v as usize] = used.len() as u32;
+                    used.push(v as usize);
+                }
+                map[v as usize]
+            })
+        })
+        .collect();
+    let pick = |v: &Vec<DVec3>| used.iter().map(|&i| v[i]).collect::<Vec<_>>();
+    let s = &m.surface;
+    KeyedMesh {
+        name: m.name.clone(),
+        surface: Surface {
+            positions: pick(&s.positions),
+            normals: s.normals.as_ref().map(pick),
+            uvs: s
+                .uvs
+                .as_ref()
+                .map(|uv| used.iter().map(|&i| uv[i]).collect()),
+            triangles: tris,
+        },
+        targets: m.targets.iter().map(pick).collect(),
+        target_normals: m.target_normals.iter().map(pick).collect(),
+        color: m.color,
+        split: None,
+    }
 }
 
 /// A keyframe file: meshes (each on its own node) and optionally a one-hot weights animation
@@ -159,58 +211,75 @@ impl KeyframeFile {
         let mut meshes = Vec::new();
         let mut nodes = Vec::new();
         let mut materials = Vec::new();
-        for (mi, m) in self.meshes.iter().enumerate() {
-            let s = &m.surface;
-            let f = |v: &[DVec3]| -> Vec<f32> {
-                v.iter().flat_map(|p| p.as_vec3().to_array()).collect()
+        for (mi, whole) in self.meshes.iter().enumerate() {
+            let parts: Vec<KeyedMesh> = match whole.split {
+                Some(at) => vec![
+                    sub_mesh(whole, &whole.surface.triangles[..at]),
+                    sub_mesh(whole, &whole.surface.triangles[at..]),
+                ],
+                None => vec![sub_mesh(whole, &whole.surface.triangles)],
             };
-            let mut attributes =
-                json!({ "POSITION": out.push_f32(&f(&s.positions), "VEC3", 3, true, Some(34962)) });
-            if let Some(n) = &s.normals {
-                attributes["NORMAL"] = json!(out.push_f32(&f(n), "VEC3", 3, false, Some(34962)));
-            }
-            if let Some(uv) = &s.uvs {
-                let d: Vec<f32> = uv.iter().flat_map(|t| [t[0] as f32, t[1] as f32]).collect();
-                attributes["TEXCOORD_0"] = json!(out.push_f32(&d, "VEC2", 2, false, Some(34962)));
-            }
-            let idx: Vec<u8> = s
-                .triangles
-                .iter()
-                .flatten()
-                .flat_map(|i| i.to_le_bytes())
-                .collect();
-            let view = out.bin.push_view(&idx, Some(34963));
-            let indices = push_accessor(
-                &mut out.json,
-                json!({ "bufferView": view, "componentType": 5125, "count": s.triangles.len() * 3, "type": "SCALAR" }),
-            );
-            let mut targets = Vec::new();
-            for (k, t) in m.targets.iter().enumerate() {
-                let d: Vec<DVec3> = t.iter().zip(&s.positions).map(|(a, b)| *a - *b).collect();
-                let mut target =
-                    json!({ "POSITION": out.push_f32(&f(&d), "VEC3", 3, true, Some(34962)) });
-                if let (Some(bn), Some(tn)) = (&s.normals, m.target_normals.get(k)) {
-                    let d: Vec<DVec3> = tn.iter().zip(bn).map(|(a, b)| *a - *b).collect();
-                    target["NORMAL"] = json!(out.push_f32(&f(&d), "VEC3", 3, false, Some(34962)));
+            let mut prims = Vec::new();
+            for m in &parts {
+                let s = &m.surface;
+                let f = |v: &[DVec3]| -> Vec<f32> {
+                    v.iter().flat_map(|p| p.as_vec3().to_array()).collect()
+                };
+                let mut attributes = json!({ "POSITION": out.push_f32(&f(&s.positions), "VEC3", 3, true, Some(34962)) });
+                if let Some(n) = &s.normals {
+                    attributes["NORMAL"] =
+                        json!(out.push_f32(&f(n), "VEC3", 3, false, Some(34962)));
                 }
-                targets.push(target);
+                if let Some(uv) = &s.uvs {
+                    let d: Vec<f32> = uv.iter().flat_map(|t| [t[0] as f32, t[1] as f32]).collect();
+                    attributes["TEXCOORD_0"] =
+                        json!(out.push_f32(&d, "VEC2", 2, false, Some(34962)));
+                }
+                let idx: Vec<u8> = s
+                    .triangles
+                    .iter()
+                    .flatten()
+                    .flat_map(|i| i.to_le_bytes())
+                    .collect();
+                let view = out.bin.push_view(&idx, Some(34963));
+                let indices = push_accessor(
+                    &mut out.json,
+                    json!({ "bufferView": view, "componentType": 5125, "count": s.triangles.len() * 3, "type": "SCALAR" }),
+                );
+                let mut targets = Vec::new();
+                for (k, t) in m.targets.iter().enumerate() {
+                    let d: Vec<DVec3> = t.iter().zip(&s.positions).map(|(a, b)| *a - *b).collect();
+                    let mut target =
+                        json!({ "POSITION": out.push_f32(&f(&d), "VEC3", 3, true, Some(34962)) });
+                    if let (Some(bn), Some(tn)) = (&s.normals, m.target_normals.get(k)) {
+                        let d: Vec<DVec3> = tn.iter().zip(bn).map(|(a, b)| *a - *b).collect();
+                        target["NORMAL"] =
+                            json!(out.push_f32(&f(&d), "VEC3", 3, false, Some(34962)));
+                    }
+                    targets.push(target);
+                }
+                let mut prim =
+                    json!({ "attributes": attributes, "indices": indices, "material": mi });
+                if !targets.is_empty() {
+                    prim["targets"] = json!(targets);
+                }
+                prims.push(prim);
             }
             materials.push(json!({
-                "name": format!("{}_material", m.name),
-                "pbrMetallicRoughness": { "baseColorFactor": m.color, "metallicFactor": 0.0, "roughnessFactor": 0.6 },
+                "name": format!("{}_material", whole.name),
+                "pbrMetallicRoughness": { "baseColorFactor": whole.color, "metallicFactor": 0.0, "roughnessFactor": 0.6 },
                 "doubleSided": true,
             }));
-            let mut prim = json!({ "attributes": attributes, "indices": indices, "material": mi });
-            let mut mesh = json!({ "name": m.name });
-            if !targets.is_empty() {
-                prim["targets"] = json!(targets);
-                mesh["weights"] = json!(vec![0.0; targets.len()]);
-                let names: Vec<String> = (1..=targets.len()).map(|k| format!("key{k}")).collect();
+            let mut mesh = json!({ "name": whole.name });
+            let targets = whole.targets.len();
+            if targets > 0 {
+                mesh["weights"] = json!(vec![0.0; targets]);
+                let names: Vec<String> = (1..=targets).map(|k| format!("key{k}")).collect();
                 mesh["extras"] = json!({ "targetNames": names });
             }
-            mesh["primitives"] = json!([prim]);
+            mesh["primitives"] = json!(prims);
             meshes.push(mesh);
-            nodes.push(json!({ "name": m.name, "mesh": mi }));
+            nodes.push(json!({ "name": whole.name, "mesh": mi }));
         }
         let node_count = nodes.len();
         out.json["meshes"] = json!(meshes);
@@ -260,11 +329,8 @@ pub fn samples() -> Vec<(&'static str, KeyframeFile)> {
         let s = tube(41, 4, 4.0, 0.5, 0.5);
         let key = twist(&s.positions, PI / 2.0, 4.0);
         KeyedMesh {
-            name: "bar".into(),
-            surface: s,
-            targets: vec![key],
-            target_normals: vec![],
             color: [0.8, 0.5, 0.2, 1.0],
+            ..KeyedMesh::new("bar", s, vec![key])
         }
     };
     // A round tube bent 150 degrees at a joint in the middle.
@@ -272,11 +338,8 @@ pub fn samples() -> Vec<(&'static str, KeyframeFile)> {
         let s = tube(61, 24, 6.0, 0.4, 0.4);
         let key = bend(&s.positions, 3.0, 150f64.to_radians(), 0.5);
         KeyedMesh {
-            name: "tube".into(),
-            surface: s,
-            targets: vec![key],
-            target_normals: vec![],
             color: [0.3, 0.6, 0.9, 1.0],
+            ..KeyedMesh::new("tube", s, vec![key])
         }
     };
     // A flag on a pole, waving through five keys (a weights animation), with normals and UVs.
@@ -306,11 +369,9 @@ pub fn samples() -> Vec<(&'static str, KeyframeFile)> {
             .map(|k| smooth_normals(k, &s.triangles))
             .collect();
         KeyedMesh {
-            name: "flag".into(),
-            surface: s,
-            targets: keys,
             target_normals: normals,
             color: [0.9, 0.1, 0.1, 1.0],
+            ..KeyedMesh::new("flag", s, keys)
         }
     };
     let pole = {
@@ -323,11 +384,8 @@ pub fn samples() -> Vec<(&'static str, KeyframeFile)> {
         let mut s = Surface { positions, ..s };
         s.normals = Some(smooth_normals(&s.positions, &s.triangles));
         KeyedMesh {
-            name: "pole".into(),
-            surface: s,
-            targets: vec![],
-            target_normals: vec![],
             color: [0.6, 0.6, 0.6, 1.0],
+            ..KeyedMesh::new("pole", s, vec![])
         }
     };
     vec![

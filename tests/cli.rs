@@ -458,3 +458,153 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+#[test]
+fn samples_are_current() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, file) in inbetween::synth::samples() {
+        let fresh = dir.path().join(name);
+        file.write(&fresh).unwrap();
+        assert_eq!(
+            std::fs::read(&fresh).unwrap(),
+            std::fs::read(sample(name)).unwrap(),
+            "samples/{name} is stale: run cargo run --release --example make-samples"
+        );
+        assert_valid(&sample(name));
+    }
+}
+
+/// A tube bent 150 degrees, written as two primitives that share the middle ring.
+fn split_tube(dir: &Path, normals: bool) -> PathBuf {
+    use inbetween::synth::{bend, smooth_normals, tube, KeyedMesh, KeyframeFile};
+    let mut s = tube(31, 16, 6.0, 0.4, 0.4);
+    let key = bend(&s.positions, 3.0, 150f64.to_radians(), 0.5);
+    let mut m = KeyedMesh::new("split", s.clone(), vec![key.clone()]);
+    if normals {
+        s.normals = Some(smooth_normals(&s.positions, &s.triangles));
+        m = KeyedMesh {
+            target_normals: vec![smooth_normals(&key, &s.triangles)],
+            ..KeyedMesh::new("split", s, vec![key])
+        };
+    }
+    m.split = Some(2 * 16 * 15); // rings 0..15 in the first primitive
+    let path = dir.join("split.glb");
+    KeyframeFile {
+        meshes: vec![m],
+        key_times: None,
+    }
+    .write(&path)
+    .unwrap();
+    path
+}
+
+#[test]
+fn primitives_sharing_a_border_do_not_crack() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = split_tube(dir.path(), true);
+    let out = dir.path().join("out.glb");
+    run_ok(&["tween", s(&input), "-o", s(&out), "--tweens", "5", "-q"]);
+    assert_valid(&out);
+    let (b0, t0) = read_targets(&out, 0, 0);
+    let (b1, t1) = read_targets(&out, 0, 1);
+    let pairs: Vec<(usize, usize)> = b0
+        .iter()
+        .enumerate()
+        .flat_map(|(i, p)| {
+            b1.iter()
+                .enumerate()
+                .filter(move |(_, q)| *q == p)
+                .map(move |(j, _)| (i, j))
+        })
+        .collect();
+    // Ring 15 (the split) and ring 0 (its cap is in the second primitive).
+    assert_eq!(pairs.len(), 32, "the shared rings");
+    for (f, (a, b)) in t0.iter().zip(&t1).enumerate() {
+        for &(i, j) in &pairs {
+            let pa = [b0[i][0] + a[i][0], b0[i][1] + a[i][1], b0[i][2] + a[i][2]];
+            let pb = [b1[j][0] + b[j][0], b1[j][1] + b[j][1], b1[j][2] + b[j][2]];
+            assert_eq!(pa, pb, "frame {f}: border vertex {i}/{j} cracked");
+        }
+    }
+}
+
+#[test]
+fn hard_edges_stay_hard_and_key_normals_are_kept() {
+    use inbetween::synth::{bend, tube, KeyedMesh, KeyframeFile, Surface};
+    // A tube whose caps have their own vertices and flat normals: the rim is a hard edge.
+    let t = tube(21, 12, 4.0, 0.5, 0.5);
+    let ring = |i: usize| -> Vec<u32> { (0..12).map(|j| (i * 12 + j) as u32).collect() };
+    let mut positions = t.positions[..21 * 12].to_vec();
+    let mut normals: Vec<DVec3> = positions
+        .iter()
+        .map(|p| DVec3::new(0.0, p.y, p.z).normalize())
+        .collect();
+    let mut triangles: Vec<[u32; 3]> = t.triangles[..2 * 12 * 20].to_vec();
+    for (end, x, nx) in [(0usize, 0.0, -1.0), (20, 4.0, 1.0)] {
+        let start = positions.len() as u32;
+        for &v in &ring(end) {
+            positions.push(positions[v as usize]);
+            normals.push(DVec3::new(nx, 0.0, 0.0));
+        }
+        let c = positions.len() as u32;
+        positions.push(DVec3::new(x, 0.0, 0.0));
+        normals.push(DVec3::new(nx, 0.0, 0.0));
+        for j in 0..12u32 {
+            let (a, b) = (start + j, start + (j + 1) % 12);
+            triangles.push(if nx < 0.0 { [c, b, a] } else { [c, a, b] });
+        }
+    }
+    let surface = Surface {
+        positions: positions.clone(),
+        normals: Some(normals.clone()),
+        uvs: None,
+        triangles,
+    };
+    let key = bend(&positions, 2.0, 120f64.to_radians(), 0.5);
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("hard.glb");
+    KeyframeFile {
+        meshes: vec![KeyedMesh::new("hard", surface, vec![key])],
+        key_times: None,
+    }
+    .write(&input)
+    .unwrap();
+    let out = dir.path().join("out.glb");
+    run_ok(&["tween", s(&input), "-o", s(&out), "--tweens", "3", "-q"]);
+    assert_valid(&out);
+    let (doc, buffers, _) = gltf::import(&out).unwrap();
+    let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+    let r = prim.reader(|b| Some(&buffers[b.index()]));
+    let base: Vec<[f32; 3]> = r.read_normals().unwrap().collect();
+    let frames: Vec<Vec<[f32; 3]>> = r
+        .read_morph_targets()
+        .map(|(_, n, _)| n.unwrap().collect())
+        .collect();
+    let pos: Vec<[f32; 3]> = r.read_positions().unwrap().collect();
+    let rim_pairs: Vec<(usize, usize)> = (0..pos.len())
+        .flat_map(|i| (i + 1..pos.len()).map(move |j| (i, j)))
+        .filter(|&(i, j)| pos[i] == pos[j])
+        .collect();
+    assert_eq!(rim_pairs.len(), 24);
+    let add = |a: [f32; 3], b: [f32; 3]| {
+        DVec3::new(
+            (a[0] + b[0]) as f64,
+            (a[1] + b[1]) as f64,
+            (a[2] + b[2]) as f64,
+        )
+    };
+    for (f, d) in frames.iter().enumerate() {
+        for &(i, j) in &rim_pairs {
+            let (ni, nj) = (add(base[i], d[i]), add(base[j], d[j]));
+            assert!((ni.length() - 1.0).abs() < 1e-5 && (nj.length() - 1.0).abs() < 1e-5);
+            assert!(
+                ni.dot(nj).abs() < 0.2,
+                "frame {f}: rim normals {ni} {nj} were smoothed together"
+            );
+        }
+    }
+    // Frame 0 is key 0: the authored normals exactly.
+    for (v, d) in frames[0].iter().enumerate() {
+        assert!(d.iter().all(|x| x.abs() < 1e-6), "vertex {v}: {d:?}");
+    }
+}
