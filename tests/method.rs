@@ -25,13 +25,7 @@ fn write_keys(surface: Surface, keys: Vec<Vec<DVec3>>) -> (tempfile::TempDir, st
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("keys.glb");
     KeyframeFile {
-        meshes: vec![KeyedMesh {
-            name: "m".into(),
-            surface,
-            targets: keys,
-            target_normals: vec![],
-            color: [1.0; 4],
-        }],
+        meshes: vec![KeyedMesh::new("m", surface, keys)],
         key_times: None,
     }
     .write(&path)
