@@ -247,3 +247,92 @@ pub fn table(rows: &[BenchRow]) -> String {
     }
     s
 }
+
+/// Figures of one end-to-end `inbetween tween` run on a generated file.
+#[derive(Clone, Debug, Serialize)]
+pub struct EndToEnd {
+    pub triangles: usize,
+    pub keys: usize,
+    pub tweens: usize,
+    pub input_mib: f64,
+    pub output_mib: f64,
+    pub wall_s: f64,
+    pub summary: String,
+}
+
+/// Write a tube of `triangles` with three keys (straight, bent 90, bent 150 and twisted 60) to
+/// a temporary .glb, run `inbetween tween --tweens N` on it in a child process, and time it.
+pub fn end_to_end(
+    triangles: usize,
+    tweens: usize,
+    keep: Option<&std::path::Path>,
+) -> Result<EndToEnd> {
+    let (segments, rings) = tube_for(triangles);
+    let s = synth::tube(rings, segments, 6.0, 1.0, 1.0);
+    let k1 = synth::bend(&s.positions, 3.0, 90f64.to_radians(), 0.8);
+    let (_, k2, _) = bench_keys(triangles);
+    let dir = std::env::temp_dir().join(format!("inbetween-e2e-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let input = dir.join("keys.glb");
+    let output = keep
+        .map(|p| p.to_path_buf())
+        .unwrap_or_else(|| dir.join("tween.glb"));
+    let tri_count = s.triangles.len();
+    synth::KeyframeFile {
+        meshes: vec![synth::KeyedMesh::new("tube", s, vec![k1, k2])],
+        key_times: None,
+    }
+    .write(&input)?;
+    let exe = std::env::current_exe()?;
+    let start = Instant::now();
+    let out = std::process::Command::new(exe)
+        .args([
+            "tween",
+            input.to_str().unwrap_or(""),
+            "-o",
+            output.to_str().unwrap_or(""),
+            "--tweens",
+            &tweens.to_string(),
+        ])
+        .output()?;
+    let wall_s = start.elapsed().as_secs_f64();
+    anyhow::ensure!(
+        out.status.success(),
+        "tween failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mib = |p: &std::path::Path| {
+        std::fs::metadata(p)
+            .map(|m| m.len() as f64 / 1048576.0)
+            .unwrap_or(0.0)
+    };
+    let r = EndToEnd {
+        triangles: tri_count,
+        keys: 3,
+        tweens,
+        input_mib: mib(&input),
+        output_mib: mib(&output),
+        wall_s,
+        summary: String::from_utf8_lossy(&out.stderr).trim().to_string(),
+    };
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(r)
+}
+
+/// Least-squares slope of log(per-frame seed time) against log(triangles): how per-frame
+/// time grows with mesh size (1 = linear). `None` with fewer than two sizes.
+pub fn fitted_exponent(rows: &[BenchRow]) -> Option<f64> {
+    if rows.len() < 2 {
+        return None;
+    }
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| ((r.triangles as f64).ln(), r.seed_frame_ms.ln()))
+        .collect();
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    Some(sxy / sxx)
+}

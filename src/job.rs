@@ -27,6 +27,8 @@ pub struct TweenJob {
 pub struct Summary {
     pub meshes: Vec<crate::tween::MeshStats>,
     pub seconds: f64,
+    /// Peak resident memory of the process, MiB (Linux; 0 elsewhere).
+    pub peak_rss_mib: f64,
 }
 
 impl Summary {
@@ -37,7 +39,7 @@ impl Summary {
         let setup: f64 = self.meshes.iter().map(|m| m.setup.as_secs_f64()).sum();
         let solve: f64 = self.meshes.iter().map(|m| m.solve.as_secs_f64()).sum();
         format!(
-            "{}: {} mesh{} ({} triangles), {} keys -> {} frames by the {} method; {:.3} s (set-up {:.3} s, frames {:.3} s)",
+            "{}: {} mesh{} ({} triangles), {} keys -> {} frames by the {} method; {:.3} s (set-up {:.3} s, frames {:.3} s), peak memory {:.0} MiB",
             job.output.display(),
             self.meshes.len(),
             if self.meshes.len() == 1 { "" } else { "es" },
@@ -48,6 +50,7 @@ impl Summary {
             self.seconds,
             setup,
             solve,
+            self.peak_rss_mib,
         )
     }
 }
@@ -95,5 +98,6 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     Ok(Summary {
         meshes: results.into_iter().map(|r| r.stats).collect(),
         seconds: started.elapsed().as_secs_f64(),
+        peak_rss_mib: crate::bench::peak_rss_mib(),
     })
 }

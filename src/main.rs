@@ -82,6 +82,10 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
         /// Print the rows as JSON lines instead of a table.
         #[arg(long)]
         json: bool,
+        /// Instead: write a 3-key tube of this many triangles and time `inbetween tween
+        /// --tweens 10` on it end to end, in a child process (e.g. 1000000).
+        #[arg(long, value_name = "TRIANGLES")]
+        end_to_end: Option<usize>,
     },
 }
 
@@ -109,8 +113,18 @@ fn main() -> ExitCode {
             peer_max_triangles,
             threads,
             json,
+            end_to_end,
         } => {
             set_threads(threads);
+            if let Some(triangles) = end_to_end {
+                return match bench::end_to_end(triangles, 10, None) {
+                    Ok(r) => {
+                        println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => fail(e),
+                };
+            }
             let python = python.or_else(|| {
                 let venv = PathBuf::from(".venv/bin/python");
                 Some(if venv.exists() {
@@ -149,6 +163,9 @@ fn main() -> ExitCode {
                 Ok(rows) => {
                     if !json {
                         print!("{}", bench::table(&rows));
+                        if let Some(x) = bench::fitted_exponent(&rows) {
+                            println!("\nper-frame seed time grows as triangles^{x:.2} (least-squares fit over these sizes)");
+                        }
                     }
                     ExitCode::SUCCESS
                 }

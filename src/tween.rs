@@ -178,17 +178,21 @@ pub fn tween_mesh(
         .primitives
         .iter()
         .any(|p| p.target_nrm.iter().any(Option::is_some));
-    let base_tangents: Option<Vec<[f64; 4]>> = mesh
-        .primitives
-        .iter()
-        .map(|p| p.tangents.clone())
-        .collect::<Option<Vec<_>>>()
-        .map(|v| v.concat());
+    let all_tangents = mesh.primitives.iter().all(|p| p.tangents.is_some());
     let base: Vec<DVec3> = mesh.pose(&vec![0.0; mesh.target_count]);
 
     let mut tracks = Vec::new();
-    let mut frames_out: Vec<Vec<DVec3>> = Vec::new(); // positions per frame (input order)
-    let mut normals_out: Vec<Vec<DVec3>> = Vec::new();
+    let with_normals = base_normals.is_some();
+    let mut primitives: Vec<PrimitiveFrames> = mesh
+        .primitives
+        .iter()
+        .map(|p| PrimitiveFrames {
+            index: p.index,
+            positions: Vec::new(),
+            normals: with_normals.then(Vec::new),
+            tangents: (with_normals && all_tangents).then(Vec::new),
+        })
+        .collect();
     for track in &mesh.tracks {
         let keys = key_poses(mesh, track);
         stats.keys += keys.len();
@@ -220,7 +224,7 @@ pub fn tween_mesh(
         let frames = schedule(&track.times, opts.timing);
         tracks.push(TrackFrames {
             origin: track.origin.clone(),
-            first: frames_out.len(),
+            first: stats.frames,
             frames: frames.clone(),
         });
         // Frames grouped by segment, each segment prepared once.
@@ -241,12 +245,13 @@ pub fn tween_mesh(
             )?;
             stats.setup += t0.elapsed();
             let t0 = Instant::now();
-            let computed: Vec<(Vec<DVec3>, Option<Vec<DVec3>>)> = frames[i..j]
+            let computed: Vec<Vec<PrimitiveDelta>> = frames[i..j]
                 .par_iter()
                 .map(|f| {
                     let w = segment.frame(f.t);
                     let positions: Vec<DVec3> =
                         welded.of_vertex.iter().map(|&k| w[k as usize]).collect();
+                    drop(w);
                     let normals = normal_keys.as_ref().map(|nk| {
                         let rec = nk.smoothing.normals(&positions, &welded.input_triangles);
                         (0..positions.len())
@@ -260,80 +265,28 @@ pub fn tween_mesh(
                                     f.t,
                                 )
                             })
-                            .collect()
+                            .collect::<Vec<DVec3>>()
                     });
+                    let deltas = frame_deltas(mesh, &positions, normals.as_deref());
                     progress();
-                    (positions, normals)
+                    deltas
                 })
                 .collect();
             stats.solve += t0.elapsed();
-            for (p, n) in computed {
-                frames_out.push(p);
-                if let Some(n) = n {
-                    normals_out.push(n);
+            for frame in computed {
+                for (out, d) in primitives.iter_mut().zip(frame) {
+                    out.positions.push(d.positions);
+                    if let (Some(all), Some(n)) = (&mut out.normals, d.normals) {
+                        all.push(n);
+                    }
+                    if let (Some(all), Some(t)) = (&mut out.tangents, d.tangents) {
+                        all.push(t);
+                    }
                 }
+                stats.frames += 1;
             }
             i = j;
         }
-    }
-    stats.frames = frames_out.len();
-
-    // Deltas per primitive.
-    let mut primitives = Vec::new();
-    let mut offset = 0;
-    for p in &mesh.primitives {
-        let range = offset..offset + p.base.len();
-        offset += p.base.len();
-        let delta = |vals: &[DVec3], reference: &[DVec3]| -> Vec<[f32; 3]> {
-            vals.iter()
-                .zip(reference)
-                .map(|(v, r)| (*v - *r).as_vec3().to_array())
-                .collect()
-        };
-        let positions = frames_out
-            .par_iter()
-            .map(|f| delta(&f[range.clone()], &p.base))
-            .collect();
-        let normals = p
-            .normals
-            .as_ref()
-            .filter(|_| !normals_out.is_empty())
-            .map(|bn| {
-                normals_out
-                    .par_iter()
-                    .map(|n| delta(&n[range.clone()], bn))
-                    .collect()
-            });
-        let tangents = match (&p.tangents, &p.normals, &base_tangents) {
-            (Some(tan), Some(bn), Some(_)) if !normals_out.is_empty() => Some(
-                normals_out
-                    .par_iter()
-                    .map(|n| {
-                        n[range.clone()]
-                            .iter()
-                            .zip(bn)
-                            .zip(tan)
-                            .map(|((nf, nb), t)| {
-                                let t3 = DVec3::new(t[0], t[1], t[2]);
-                                let rotated = arc(nb.normalize_or_zero(), *nf) * t3;
-                                // Keep the tangent orthogonal to the frame's normal.
-                                let ortho = (rotated - *nf * nf.dot(rotated))
-                                    .try_normalize()
-                                    .unwrap_or(rotated);
-                                (ortho * t3.length() - t3).as_vec3().to_array()
-                            })
-                            .collect()
-                    })
-                    .collect(),
-            ),
-            _ => None,
-        };
-        primitives.push(PrimitiveFrames {
-            index: p.index,
-            positions,
-            normals,
-            tangents,
-        });
     }
     Ok(MeshFrames {
         mesh: mesh.mesh,
@@ -343,6 +296,63 @@ pub fn tween_mesh(
         dropped_channels: mesh.dropped_channels.clone(),
         stats,
     })
+}
+
+/// One frame of one primitive, as morph target deltas.
+struct PrimitiveDelta {
+    positions: Vec<[f32; 3]>,
+    normals: Option<Vec<[f32; 3]>>,
+    tangents: Option<Vec<[f32; 3]>>,
+}
+
+/// Split a frame (input vertex order) into per-primitive deltas from the base. Tangents are
+/// the base tangents turned by the rotation of the base normal onto the frame's normal, kept
+/// orthogonal to it.
+fn frame_deltas(
+    mesh: &MorphMesh,
+    positions: &[DVec3],
+    normals: Option<&[DVec3]>,
+) -> Vec<PrimitiveDelta> {
+    let delta = |vals: &[DVec3], reference: &[DVec3]| -> Vec<[f32; 3]> {
+        vals.iter()
+            .zip(reference)
+            .map(|(v, r)| (*v - *r).as_vec3().to_array())
+            .collect()
+    };
+    let mut offset = 0;
+    mesh.primitives
+        .iter()
+        .map(|p| {
+            let range = offset..offset + p.base.len();
+            offset += p.base.len();
+            let frame_normals = normals.map(|n| &n[range.clone()]);
+            let tangents = match (&p.tangents, &p.normals, frame_normals) {
+                (Some(tan), Some(bn), Some(nf)) => Some(
+                    nf.iter()
+                        .zip(bn)
+                        .zip(tan)
+                        .map(|((nf, nb), t)| {
+                            let t3 = DVec3::new(t[0], t[1], t[2]);
+                            let rotated = arc(nb.normalize_or_zero(), *nf) * t3;
+                            let ortho = (rotated - *nf * nf.dot(rotated))
+                                .try_normalize()
+                                .unwrap_or(rotated);
+                            (ortho * t3.length() - t3).as_vec3().to_array()
+                        })
+                        .collect(),
+                ),
+                _ => None,
+            };
+            PrimitiveDelta {
+                positions: delta(&positions[range.clone()], &p.base),
+                normals: match (&p.normals, frame_normals) {
+                    (Some(bn), Some(nf)) => Some(delta(nf, bn)),
+                    _ => None,
+                },
+                tangents,
+            }
+        })
+        .collect()
 }
 
 /// Welded positions of every frame of one track (for tests and benchmarks).
