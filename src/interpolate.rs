@@ -175,9 +175,10 @@ impl SeedSegment {
         let mut rhs = vec![[0.0f64; 3]; self.x0.len()];
         for tri in &self.triangles {
             let r = axis_angle_matrix(tri.axis, tri.angle * t);
-            for k in 0..3 {
-                // T(t) g = R(t) ((1-t) g + t S g)
-                let v = r * (tri.g[k] * (1.0 - t) + tri.sg[k] * t);
+            // T(t) g = R(t) ((1-t) g + t S g); the three g sum to zero, so do two.
+            let v1 = r * (tri.g[1] * (1.0 - t) + tri.sg[1] * t);
+            let v2 = r * (tri.g[2] * (1.0 - t) + tri.sg[2] * t);
+            for (k, v) in [(0, -(v1 + v2)), (1, v1), (2, v2)] {
                 let b = &mut rhs[tri.corners[k] as usize];
                 b[0] += v.x;
                 b[1] += v.y;
