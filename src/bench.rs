@@ -115,6 +115,10 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
             .map(|i| (i as f64 + 0.5) / opts.frames as f64)
             .collect();
         let time_frames = |s: &Segment| -> f64 {
+            // Warm caches and clocks on a few frames first.
+            for &t in ts.iter().take(5) {
+                std::hint::black_box(s.frame(t));
+            }
             median(
                 ts.iter()
                     .map(|&t| {
