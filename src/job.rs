@@ -58,7 +58,7 @@ impl Summary {
 /// Run the tween job. Nothing is written unless every step succeeds.
 pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let started = Instant::now();
-    let container = write::container_for(&job.output)?;
+    let format = write::format_for(&job.output)?;
     if let Timing::Fps(f) = job.timing {
         anyhow::ensure!(
             f.is_finite() && f > 0.0,
@@ -92,9 +92,21 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         results.push(tween_mesh(m, &opts, &|| progress.inc())?);
     }
     progress.finish();
-    let mut out = write::begin(&doc, container, &job.output)?;
-    write::apply_frames(&mut out, &results)?;
-    write::finish(out, container, &job.output)?;
+    match format {
+        write::OutputFormat::Gltf(container) => {
+            let mut out = write::begin(&doc, container, &job.output)?;
+            write::apply_frames(&mut out, &results)?;
+            write::finish(out, container, &job.output)?;
+        }
+        write::OutputFormat::Usd(usd_format) => {
+            let fps = match job.timing {
+                Timing::Fps(f) => Some(f),
+                Timing::Tweens(_) => None,
+            };
+            let stage = crate::usd::build_stage(&doc, &results, fps)?;
+            crate::usd::write_file(&stage, usd_format, &job.output)?;
+        }
+    }
     Ok(Summary {
         meshes: results.into_iter().map(|r| r.stats).collect(),
         seconds: started.elapsed().as_secs_f64(),

@@ -282,7 +282,7 @@ fn attr(p: &Value, name: &str) -> Option<usize> {
     p["attributes"][name].as_u64().map(|v| v as usize)
 }
 
-fn read_vec3(doc: &Document, acc: usize, what: &str) -> Result<Vec<DVec3>> {
+pub fn read_vec3(doc: &Document, acc: usize, what: &str) -> Result<Vec<DVec3>> {
     let (v, n) = doc.read_f64(acc)?;
     if n != 3 {
         bail!(doc.err(format!("{what} (accessor {acc}) is not VEC3")));
@@ -364,19 +364,35 @@ fn read_primitive(
         };
         target_nrm.push(nd);
     }
+    let triangles = read_triangles(doc, p, n, &what(""))?;
+    Ok(Primitive {
+        index: pi,
+        base,
+        normals,
+        tangents,
+        target_pos,
+        target_nrm,
+        triangles,
+    })
+}
+
+/// Triangles of a primitive with `n` vertices (TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN;
+/// other modes are an error naming `what`).
+pub fn read_triangles(doc: &Document, p: &Value, n: usize, what: &str) -> Result<Vec<[u32; 3]>> {
+    let what = what.trim_end();
     let mode = p["mode"].as_u64().unwrap_or(4);
     let indices: Vec<u32> = match p["indices"].as_u64() {
         Some(a) => doc.read_indices(a as usize)?,
         None => (0..n as u32).collect(),
     };
     if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
-        bail!(doc.err(what(&format!("has index {bad} but only {n} vertices"))));
+        bail!(doc.err(format!("{what} has index {bad} but only {n} vertices")));
     }
-    let triangles = match mode {
+    Ok(match mode {
         4 => {
             if !indices.len().is_multiple_of(3) {
-                bail!(doc.err(what(
-                    "has a TRIANGLES index count that is not a multiple of 3"
+                bail!(doc.err(format!(
+                    "{what} has a TRIANGLES index count that is not a multiple of 3"
                 )));
             }
             indices
@@ -401,19 +417,10 @@ fn read_primitive(
                 .get(m as usize)
                 .copied()
                 .unwrap_or("unknown");
-            bail!(doc.err(what(&format!(
-                "is not made of triangles (mode {m}, {kind}); morph tweening needs a triangle mesh"
-            ))))
+            bail!(doc.err(format!(
+                "{what} is not made of triangles (mode {m}, {kind}); morph tweening needs a triangle mesh"
+            )))
         }
-    };
-    Ok(Primitive {
-        index: pi,
-        base,
-        normals,
-        tangents,
-        target_pos,
-        target_nrm,
-        triangles,
     })
 }
 

@@ -15,5 +15,6 @@ pub mod read;
 pub mod solve;
 pub mod synth;
 pub mod tween;
+pub mod usd;
 pub mod weld;
 pub mod write;

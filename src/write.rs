@@ -99,25 +99,44 @@ impl Output {
     }
 }
 
-/// Container chosen by the output extension; USD and others are refused with a clear message.
-pub fn container_for(path: &Path) -> Result<Container> {
+/// Output format, chosen by the output file's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    Gltf(Container),
+    Usd(crate::usd::UsdFormat),
+}
+
+/// The output format for `path`, or an error naming it. The directory must exist.
+pub fn format_for(path: &Path) -> Result<OutputFormat> {
+    use crate::usd::UsdFormat;
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    match ext.as_str() {
-        "glb" => Ok(Container::Glb),
-        "gltf" => Ok(Container::Gltf),
-        "usda" | "usdc" | "usdz" | "usd" => bail!(
-            "{}: USD output (.{ext}) is not available in this build yet; write .glb or .gltf",
-            path.display()
-        ),
+    let format = match ext.as_str() {
+        "glb" => OutputFormat::Gltf(Container::Glb),
+        "gltf" => OutputFormat::Gltf(Container::Gltf),
+        "usda" => OutputFormat::Usd(UsdFormat::Usda),
+        "usdc" | "usd" => OutputFormat::Usd(UsdFormat::Usdc),
+        "usdz" => OutputFormat::Usd(UsdFormat::Usdz),
         _ => bail!(
-            "{}: unknown output extension {ext:?} (use .glb or .gltf)",
+            "{}: unknown output extension {ext:?} (use .glb, .gltf, .usda, .usdc or .usdz)",
             path.display()
         ),
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!(
+            "{}: cannot write: directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
     }
+    Ok(format)
 }
 
 /// Start an output from the input: all buffer views copied into one buffer.
@@ -677,6 +696,35 @@ fn encode_uri(name: &str) -> String {
             _ => format!("%{b:02X}"),
         })
         .collect()
+}
+
+/// Stream one file through `fill` into a temporary file beside `path`, renamed on success;
+/// on failure the temporary file is removed and `path` is not touched.
+pub fn atomic_write_with(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn std::io::Write) -> Result<()>,
+) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| -> Result<()> {
+        let file = std::fs::File::create(&tmp)
+            .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+        let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+        fill(&mut w)?;
+        use std::io::Write;
+        w.flush()
+            .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+        std::fs::rename(&tmp, path)
+            .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
 }
 
 /// Write every file under a temporary name in its own directory, then rename them all; on any

@@ -1,0 +1,591 @@
+//! Write stage for USD point caches: the glTF scene as a USD stage whose animated meshes carry
+//! time-sampled `points`, `extent` and `normals`, one sample per output frame.
+//!
+//! Conventions (the README repeats them):
+//! * stage metadata: `defaultPrim` (a root Xform named after the glTF scene, else the file),
+//!   `upAxis = "Y"`, `metersPerUnit = 1`, `timeCodesPerSecond = framesPerSecond` = the output
+//!   frame rate, start and end time codes covering every frame;
+//! * time code of a frame = its time in seconds times the frame rate; when one mesh has several
+//!   clips they follow one another on the timeline, one frame apart;
+//! * each glTF node is an Xform (with `xformOp:transform` when it is not the identity), each
+//!   triangle primitive a Mesh (`subdivisionScheme = "none"`, `faceVertexCounts` of 3,
+//!   `faceVertexIndices`), `primvars:st` from TEXCOORD_0 with V flipped (`1 - v`),
+//!   `primvars:displayColor` from the material's base colour, `doubleSided` from the material;
+//! * meshes that are not animated are written once, without time samples;
+//! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
+//!   `_1`, `_2`, ... suffix, deterministically.
+
+use crate::keyframes::{read_triangles, read_vec3};
+use crate::read::{arr, Document};
+use crate::tween::MeshFrames;
+use anyhow::{bail, Result};
+use glam::{DMat4, DQuat, DVec3};
+use serde_json::Value;
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::Path;
+
+/// The three USD file formats, by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UsdFormat {
+    Usda,
+    Usdc,
+    Usdz,
+}
+
+/// One Mesh prim to write.
+pub struct MeshPrim {
+    pub name: String,
+    pub points: Vec<[f32; 3]>,
+    pub normals: Option<Vec<[f32; 3]>>,
+    pub st: Option<Vec<[f32; 2]>>,
+    pub indices: Vec<u32>,
+    pub color: Option<[f32; 3]>,
+    pub double_sided: bool,
+    /// Per-frame deltas (points, normals) of an animated primitive, with each frame's time code.
+    pub animation: Option<Animation>,
+}
+
+pub struct Animation {
+    pub times: Vec<f64>,
+    pub points: Vec<Vec<[f32; 3]>>,
+    pub normals: Option<Vec<Vec<[f32; 3]>>>,
+}
+
+impl MeshPrim {
+    /// Points of frame `f` (base + delta, in f32 as a glTF viewer adds them).
+    pub fn frame_points(&self, f: usize) -> Vec<[f32; 3]> {
+        let a = self.animation.as_ref().expect("animated");
+        add(&self.points, &a.points[f])
+    }
+
+    pub fn frame_normals(&self, f: usize) -> Option<Vec<[f32; 3]>> {
+        let a = self.animation.as_ref()?;
+        Some(add(self.normals.as_ref()?, &a.normals.as_ref()?[f]))
+    }
+}
+
+fn add(base: &[[f32; 3]], delta: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    base.iter()
+        .zip(delta)
+        .map(|(b, d)| [b[0] + d[0], b[1] + d[1], b[2] + d[2]])
+        .collect()
+}
+
+/// A prim of the stage tree.
+pub enum Prim {
+    Xform {
+        name: String,
+        matrix: Option<[f64; 16]>,
+        children: Vec<Prim>,
+    },
+    Mesh(Box<MeshPrim>),
+}
+
+/// The whole stage.
+pub struct Stage {
+    pub root: String,
+    pub rate: f64,
+    pub start: f64,
+    pub end: f64,
+    pub children: Vec<Prim>,
+}
+
+/// Make `s` a valid USD identifier.
+pub fn identifier(s: &str) -> String {
+    let mut out: String = s
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit()) {
+        out.insert(0, '_');
+    }
+    out
+}
+
+/// Unique names among siblings: the first keeps its name, later ones get `_1`, `_2`, ...
+fn unique(name: String, taken: &mut HashMap<String, usize>) -> String {
+    let mut candidate = name.clone();
+    while let Some(n) = taken.get_mut(&candidate) {
+        *n += 1;
+        candidate = format!("{name}_{n}");
+    }
+    taken.insert(candidate.clone(), 0);
+    candidate
+}
+
+/// Frame rate and time codes of every processed mesh's frames (`codes[mesh][frame]`).
+fn timeline(meshes: &[MeshFrames], fps: Option<f64>) -> (f64, Vec<Vec<f64>>) {
+    let rate = fps.unwrap_or_else(|| {
+        let spacing = meshes
+            .iter()
+            .flat_map(|m| m.tracks.iter())
+            .flat_map(|t| t.frames.windows(2).map(|w| w[1].time - w[0].time))
+            .filter(|d| *d > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        if spacing.is_finite() {
+            ((1.0 / spacing) * 1e6).round() / 1e6
+        } else {
+            24.0
+        }
+    });
+    let round = |x: f64| (x * 1e9).round() / 1e9;
+    let codes = meshes
+        .iter()
+        .map(|m| {
+            let mut codes = Vec::new();
+            let mut next_start: Option<f64> = None;
+            for t in &m.tracks {
+                let first = t.frames.first().map_or(0.0, |f| f.time) * rate;
+                let offset = match next_start {
+                    Some(s) if s > first => s - first,
+                    _ => 0.0,
+                };
+                for f in &t.frames {
+                    codes.push(round(f.time * rate + offset));
+                }
+                next_start = codes.last().map(|c| c + 1.0);
+            }
+            codes
+        })
+        .collect();
+    (rate, codes)
+}
+
+/// Build the stage from the glTF document and the processed meshes' frames.
+pub fn build_stage(doc: &Document, meshes: &[MeshFrames], fps: Option<f64>) -> Result<Stage> {
+    let json = &doc.json;
+    let (rate, codes) = timeline(meshes, fps);
+    let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
+    let scene = arr(json, "scenes").get(scene_index);
+    let roots: Vec<usize> = match scene {
+        Some(s) => arr(s, "nodes")
+            .iter()
+            .filter_map(Value::as_u64)
+            .map(|n| n as usize)
+            .collect(),
+        None => {
+            let mut is_child = vec![false; arr(json, "nodes").len()];
+            for n in arr(json, "nodes") {
+                for c in arr(n, "children").iter().filter_map(Value::as_u64) {
+                    if let Some(x) = is_child.get_mut(c as usize) {
+                        *x = true;
+                    }
+                }
+            }
+            (0..is_child.len()).filter(|&i| !is_child[i]).collect()
+        }
+    };
+    let root_name = scene
+        .and_then(|s| s["name"].as_str())
+        .filter(|s| !s.is_empty())
+        .map(str::to_owned)
+        .unwrap_or_else(|| {
+            doc.path
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("scene")
+                .to_owned()
+        });
+    let ctx = Ctx {
+        doc,
+        meshes,
+        codes: &codes,
+    };
+    let mut taken = HashMap::new();
+    let mut children = Vec::new();
+    for n in roots {
+        children.push(ctx.node(n, &mut taken, 0)?);
+    }
+    let all: Vec<f64> = codes.iter().flatten().copied().collect();
+    let start = all.iter().copied().fold(f64::INFINITY, f64::min);
+    let end = all.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (start, end) = if start.is_finite() {
+        (start, end)
+    } else {
+        (0.0, 0.0)
+    };
+    Ok(Stage {
+        root: identifier(&root_name),
+        rate,
+        start,
+        end,
+        children,
+    })
+}
+
+struct Ctx<'a> {
+    doc: &'a Document,
+    meshes: &'a [MeshFrames],
+    codes: &'a [Vec<f64>],
+}
+
+impl Ctx<'_> {
+    fn node(&self, index: usize, taken: &mut HashMap<String, usize>, depth: usize) -> Result<Prim> {
+        let json = &self.doc.json;
+        let node = &json["nodes"][index];
+        if depth > 256 {
+            bail!(self
+                .doc
+                .err("the node hierarchy is deeper than 256 levels (a cycle?)"));
+        }
+        let name = unique(
+            identifier(node["name"].as_str().unwrap_or(&format!("node{index}"))),
+            taken,
+        );
+        let matrix = node_matrix(node);
+        let mut kids = HashMap::new();
+        let mut children = Vec::new();
+        if let Some(mi) = node["mesh"].as_u64() {
+            children.extend(self.mesh(mi as usize, &mut kids)?);
+        }
+        for c in arr(node, "children").iter().filter_map(Value::as_u64) {
+            children.push(self.node(c as usize, &mut kids, depth + 1)?);
+        }
+        Ok(Prim::Xform {
+            name,
+            matrix,
+            children,
+        })
+    }
+
+    fn mesh(&self, mi: usize, taken: &mut HashMap<String, usize>) -> Result<Vec<Prim>> {
+        let doc = self.doc;
+        let mesh = &doc.json["meshes"][mi];
+        let mesh_name = mesh["name"]
+            .as_str()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("mesh{mi}"));
+        let processed = self.meshes.iter().position(|m| m.mesh == mi);
+        let prims = arr(mesh, "primitives");
+        let mut out = Vec::new();
+        for (pi, p) in prims.iter().enumerate() {
+            if !matches!(p["mode"].as_u64().unwrap_or(4), 4..=6) {
+                continue; // points and lines have no Mesh form
+            }
+            let what = format!("mesh {mesh_name:?} primitive {pi}");
+            let Some(pos) = p["attributes"]["POSITION"].as_u64() else {
+                continue;
+            };
+            let points = read_vec3(doc, pos as usize, &format!("{what} POSITION"))?;
+            let n = points.len();
+            let normals = match p["attributes"]["NORMAL"].as_u64() {
+                Some(a) => Some(read_vec3(doc, a as usize, &format!("{what} NORMAL"))?),
+                None => None,
+            };
+            let st = match p["attributes"]["TEXCOORD_0"].as_u64() {
+                Some(a) => {
+                    let (v, c) = doc.read_f64(a as usize)?;
+                    (c == 2).then(|| {
+                        v.chunks_exact(2)
+                            .map(|t| [t[0] as f32, 1.0 - t[1] as f32])
+                            .collect()
+                    })
+                }
+                None => None,
+            };
+            let indices: Vec<u32> = read_triangles(doc, p, n, &what)?
+                .into_iter()
+                .flatten()
+                .collect();
+            let material = p["material"]
+                .as_u64()
+                .map(|m| &doc.json["materials"][m as usize]);
+            let color = material.and_then(|m| {
+                let c = m["pbrMetallicRoughness"]["baseColorFactor"].as_array()?;
+                Some([0, 1, 2].map(|i| c.get(i).and_then(Value::as_f64).unwrap_or(1.0) as f32))
+            });
+            let color = color.or(material.map(|_| [1.0, 1.0, 1.0]));
+            let double_sided = material.is_some_and(|m| m["doubleSided"].as_bool() == Some(true));
+            let animation = processed.and_then(|k| {
+                let frames = &self.meshes[k];
+                let pf = frames.primitives.iter().find(|x| x.index == pi)?;
+                Some(Animation {
+                    times: self.codes[k].clone(),
+                    points: pf.positions.clone(),
+                    normals: pf.normals.clone(),
+                })
+            });
+            let base_name = if prims.len() == 1 {
+                identifier(&mesh_name)
+            } else {
+                identifier(&format!("{mesh_name}_{pi}"))
+            };
+            let f32s = |v: Vec<DVec3>| -> Vec<[f32; 3]> {
+                v.into_iter().map(|p| p.as_vec3().to_array()).collect()
+            };
+            out.push(Prim::Mesh(Box::new(MeshPrim {
+                name: unique(base_name, taken),
+                points: f32s(points),
+                normals: normals.map(f32s),
+                st,
+                indices,
+                color,
+                double_sided,
+                animation,
+            })));
+        }
+        Ok(out)
+    }
+}
+
+/// Local transform of a glTF node as a column-major 4x4 (USD's row-vector matrix4d reads the
+/// same 16 numbers row by row); `None` for the identity.
+fn node_matrix(node: &Value) -> Option<[f64; 16]> {
+    let nums = |k: &str| -> Option<Vec<f64>> {
+        node[k]
+            .as_array()
+            .map(|a| a.iter().filter_map(Value::as_f64).collect())
+    };
+    let m = if let Some(m) = nums("matrix").filter(|m| m.len() == 16) {
+        DMat4::from_cols_slice(&m)
+    } else {
+        let t = nums("translation")
+            .filter(|v| v.len() == 3)
+            .map_or(DVec3::ZERO, |v| DVec3::new(v[0], v[1], v[2]));
+        let r = nums("rotation")
+            .filter(|v| v.len() == 4)
+            .map_or(DQuat::IDENTITY, |v| {
+                DQuat::from_xyzw(v[0], v[1], v[2], v[3]).normalize()
+            });
+        let s = nums("scale")
+            .filter(|v| v.len() == 3)
+            .map_or(DVec3::ONE, |v| DVec3::new(v[0], v[1], v[2]));
+        DMat4::from_scale_rotation_translation(s, r, t)
+    };
+    (m != DMat4::IDENTITY).then(|| m.to_cols_array())
+}
+
+/// Minimum and maximum corner of `points`.
+pub fn extent(points: &[[f32; 3]]) -> [[f32; 3]; 2] {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in points {
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    if points.is_empty() {
+        return [[0.0; 3]; 2];
+    }
+    [lo, hi]
+}
+
+// ---------------------------------------------------------------------------------------------
+// .usda
+// ---------------------------------------------------------------------------------------------
+
+/// Write the stage as USDA text.
+pub fn write_usda(stage: &Stage, out: &mut dyn Write) -> Result<()> {
+    writeln!(out, "#usda 1.0")?;
+    writeln!(out, "(")?;
+    writeln!(out, "    defaultPrim = \"{}\"", stage.root)?;
+    writeln!(
+        out,
+        "    doc = \"Written by inbetween {}\"",
+        env!("CARGO_PKG_VERSION")
+    )?;
+    writeln!(out, "    endTimeCode = {}", stage.end)?;
+    writeln!(out, "    framesPerSecond = {}", stage.rate)?;
+    writeln!(out, "    metersPerUnit = 1")?;
+    writeln!(out, "    startTimeCode = {}", stage.start)?;
+    writeln!(out, "    timeCodesPerSecond = {}", stage.rate)?;
+    writeln!(out, "    upAxis = \"Y\"")?;
+    writeln!(out, ")")?;
+    writeln!(out)?;
+    writeln!(out, "def Xform \"{}\"", stage.root)?;
+    writeln!(out, "{{")?;
+    for c in &stage.children {
+        write_prim(c, out, 1)?;
+    }
+    writeln!(out, "}}")?;
+    Ok(())
+}
+
+fn write_prim(prim: &Prim, out: &mut dyn Write, depth: usize) -> Result<()> {
+    let pad = "    ".repeat(depth);
+    match prim {
+        Prim::Xform {
+            name,
+            matrix,
+            children,
+        } => {
+            writeln!(out, "{pad}def Xform \"{name}\"")?;
+            writeln!(out, "{pad}{{")?;
+            if let Some(m) = matrix {
+                let rows: Vec<String> = m
+                    .chunks(4)
+                    .map(|r| format!("({}, {}, {}, {})", r[0], r[1], r[2], r[3]))
+                    .collect();
+                writeln!(
+                    out,
+                    "{pad}    matrix4d xformOp:transform = ( {} )",
+                    rows.join(", ")
+                )?;
+                writeln!(
+                    out,
+                    "{pad}    uniform token[] xformOpOrder = [\"xformOp:transform\"]"
+                )?;
+            }
+            for c in children {
+                write_prim(c, out, depth + 1)?;
+            }
+            writeln!(out, "{pad}}}")?;
+        }
+        Prim::Mesh(m) => write_mesh(m, out, &pad)?,
+    }
+    Ok(())
+}
+
+/// A float in its shortest round-trip form, in exponent notation when that is shorter
+/// (USD parses both back to the same f32).
+struct F(f32);
+
+impl std::fmt::Display for F {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a != 0.0 && !(1e-4..1e7).contains(&a) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
+fn write_vec3s(out: &mut dyn Write, v: &[[f32; 3]]) -> std::io::Result<()> {
+    out.write_all(b"[")?;
+    for (i, p) in v.iter().enumerate() {
+        if i > 0 {
+            out.write_all(b", ")?;
+        }
+        write!(out, "({}, {}, {})", F(p[0]), F(p[1]), F(p[2]))?;
+    }
+    out.write_all(b"]")
+}
+
+fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str) -> Result<()> {
+    writeln!(out, "{pad}def Mesh \"{}\"", m.name)?;
+    writeln!(out, "{pad}{{")?;
+    let p = format!("{pad}    ");
+    if m.double_sided {
+        writeln!(out, "{p}uniform bool doubleSided = 1")?;
+    }
+    match &m.animation {
+        None => {
+            let e = extent(&m.points);
+            write!(out, "{p}float3[] extent = ")?;
+            write_vec3s(out, &e)?;
+            writeln!(out)?;
+        }
+        Some(a) => {
+            writeln!(out, "{p}float3[] extent.timeSamples = {{")?;
+            for (f, t) in a.times.iter().enumerate() {
+                write!(out, "{p}    {t}: ")?;
+                write_vec3s(out, &extent(&m.frame_points(f)))?;
+                writeln!(out, ",")?;
+            }
+            writeln!(out, "{p}}}")?;
+        }
+    }
+    write!(out, "{p}int[] faceVertexCounts = [")?;
+    for i in 0..m.indices.len() / 3 {
+        out.write_all(if i == 0 { b"3" } else { b", 3" })?;
+    }
+    writeln!(out, "]")?;
+    write!(out, "{p}int[] faceVertexIndices = [")?;
+    for (i, v) in m.indices.iter().enumerate() {
+        if i > 0 {
+            out.write_all(b", ")?;
+        }
+        write!(out, "{v}")?;
+    }
+    writeln!(out, "]")?;
+    if let Some(n) = &m.normals {
+        match &m.animation {
+            Some(a) if a.normals.is_some() => {
+                writeln!(out, "{p}normal3f[] normals (")?;
+                writeln!(out, "{p}    interpolation = \"vertex\"")?;
+                writeln!(out, "{p})")?;
+                writeln!(out, "{p}normal3f[] normals.timeSamples = {{")?;
+                for (f, t) in a.times.iter().enumerate() {
+                    write!(out, "{p}    {t}: ")?;
+                    write_vec3s(out, &m.frame_normals(f).unwrap_or_default())?;
+                    writeln!(out, ",")?;
+                }
+                writeln!(out, "{p}}}")?;
+            }
+            _ => {
+                write!(out, "{p}normal3f[] normals = ")?;
+                write_vec3s(out, n)?;
+                writeln!(out, " (")?;
+                writeln!(out, "{p}    interpolation = \"vertex\"")?;
+                writeln!(out, "{p})")?;
+            }
+        }
+    }
+    match &m.animation {
+        None => {
+            write!(out, "{p}point3f[] points = ")?;
+            write_vec3s(out, &m.points)?;
+            writeln!(out)?;
+        }
+        Some(a) => {
+            writeln!(out, "{p}point3f[] points.timeSamples = {{")?;
+            for (f, t) in a.times.iter().enumerate() {
+                write!(out, "{p}    {t}: ")?;
+                write_vec3s(out, &m.frame_points(f))?;
+                writeln!(out, ",")?;
+            }
+            writeln!(out, "{p}}}")?;
+        }
+    }
+    if let Some(c) = m.color {
+        writeln!(
+            out,
+            "{p}color3f[] primvars:displayColor = [({}, {}, {})] (",
+            F(c[0]),
+            F(c[1]),
+            F(c[2])
+        )?;
+        writeln!(out, "{p}    interpolation = \"constant\"")?;
+        writeln!(out, "{p})")?;
+    }
+    if let Some(st) = &m.st {
+        write!(out, "{p}texCoord2f[] primvars:st = [")?;
+        for (i, t) in st.iter().enumerate() {
+            if i > 0 {
+                out.write_all(b", ")?;
+            }
+            write!(out, "({}, {})", F(t[0]), F(t[1]))?;
+        }
+        writeln!(out, "] (")?;
+        writeln!(out, "{p}    interpolation = \"vertex\"")?;
+        writeln!(out, "{p})")?;
+    }
+    writeln!(out, "{p}uniform token subdivisionScheme = \"none\"")?;
+    writeln!(out, "{pad}}}")?;
+    Ok(())
+}
+
+/// Write `stage` to `path` in `format`, atomically (temporary file, renamed on success).
+pub fn write_file(stage: &Stage, format: UsdFormat, path: &Path) -> Result<()> {
+    match format {
+        UsdFormat::Usda => crate::write::atomic_write_with(path, |w| write_usda(stage, w)),
+        UsdFormat::Usdc | UsdFormat::Usdz => bail!(
+            "{}: .{} output is not written yet; use .usda",
+            path.display(),
+            if format == UsdFormat::Usdc {
+                "usdc"
+            } else {
+                "usdz"
+            }
+        ),
+    }
+}

@@ -1,0 +1,265 @@
+//! USD point caches: usd-core opens them, its validators pass, metadata and samples are right,
+//! and the points equal the glTF output's frames for the same input.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// (mesh name, primitive index, primitive count, points of every frame)
+type GltfPrimitiveFrames = (String, usize, usize, Vec<Vec<[f32; 3]>>);
+
+/// Formats checked (each must open in usd-core).
+const FORMATS: &[&str] = &["usda"];
+
+/// Tween `input` to .glb and to each USD format with `args`; check every USD output against
+/// the glTF frames. Returns the number of animated prims checked.
+fn check_input(input: &Path, args: &[&str]) -> usize {
+    let Some(python) = python() else { return 0 };
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("out.glb");
+    let mut a = vec!["tween", s(input), "-o", s(&glb), "-q"];
+    a.extend_from_slice(args);
+    run_ok(&a);
+    let (gdoc, buffers, _) = gltf::import(&glb).unwrap();
+    // Processed primitives of the glTF output: (mesh name, primitive index, frames of points).
+    let mut gltf_frames: Vec<GltfPrimitiveFrames> = Vec::new();
+    for m in gdoc.meshes() {
+        let nprims = m.primitives().count();
+        for p in m.primitives() {
+            let r = p.reader(|b| Some(&buffers[b.index()]));
+            let base: Vec<[f32; 3]> = r.read_positions().unwrap().collect();
+            let frames: Vec<Vec<[f32; 3]>> = r
+                .read_morph_targets()
+                .map(|(pos, _, _)| {
+                    pos.unwrap()
+                        .zip(&base)
+                        .map(|(d, b)| [b[0] + d[0], b[1] + d[1], b[2] + d[2]])
+                        .collect()
+                })
+                .collect();
+            if !frames.is_empty() {
+                let name = m
+                    .name()
+                    .map(str::to_owned)
+                    .unwrap_or_else(|| format!("mesh{}", m.index()));
+                gltf_frames.push((name, p.index(), nprims, frames));
+            }
+        }
+    }
+    let mut checked = 0;
+    for fmt in FORMATS {
+        let usd = dir.path().join(format!("out.{fmt}"));
+        let mut a = vec!["tween", s(input), "-o", s(&usd), "-q"];
+        a.extend_from_slice(args);
+        run_ok(&a);
+        let dump = dir.path().join("dump.bin");
+        let out = std::process::Command::new(&python)
+            .arg(root().join("tools/check_usd.py"))
+            .arg(&usd)
+            .arg(&dump)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}: {}",
+            input.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert!(
+            r["errors"].as_array().unwrap().is_empty(),
+            "{} .{fmt}: {}",
+            input.display(),
+            r["errors"]
+        );
+        assert!(
+            r["validation"].as_array().unwrap().is_empty(),
+            "{} .{fmt}: {}",
+            input.display(),
+            r["validation"]
+        );
+        let bytes = std::fs::read(&dump).unwrap();
+        let floats: Vec<f32> = bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        let mut at = 0;
+        let animated: Vec<&serde_json::Value> = r["meshes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|m| !m["static"].as_bool().unwrap())
+            .collect();
+        assert_eq!(
+            animated.len(),
+            gltf_frames.len(),
+            "{}: animated prims",
+            input.display()
+        );
+        let meta = &r["meta"];
+        for m in animated {
+            let path = m["path"].as_str().unwrap();
+            let leaf = path.rsplit('/').next().unwrap();
+            // Match the glTF primitive by name (mesh, or mesh_<index> when it has several).
+            let (_, _, _, frames) = gltf_frames
+                .iter()
+                .find(|(name, pi, n, _)| {
+                    let want = if *n == 1 {
+                        inbetween::usd::identifier(name)
+                    } else {
+                        inbetween::usd::identifier(&format!("{name}_{pi}"))
+                    };
+                    leaf == want || leaf.starts_with(&format!("{want}_"))
+                })
+                .unwrap_or_else(|| panic!("no glTF primitive for {path}"));
+            let samples = m["samples"].as_u64().unwrap() as usize;
+            assert_eq!(samples, frames.len(), "{path}: one sample per frame");
+            let times: Vec<f64> = m["times"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|t| t.as_f64().unwrap())
+                .collect();
+            assert_eq!(times[0], meta["start"].as_f64().unwrap().max(times[0]));
+            assert!(times.windows(2).all(|w| w[1] > w[0]));
+            assert!(*times.last().unwrap() <= meta["end"].as_f64().unwrap());
+            let n = m["points"].as_u64().unwrap() as usize;
+            let all: Vec<[f32; 3]> = frames.iter().flatten().copied().collect();
+            let lo = all.iter().fold([f32::MAX; 3], |a, p| {
+                [a[0].min(p[0]), a[1].min(p[1]), a[2].min(p[2])]
+            });
+            let hi = all.iter().fold([f32::MIN; 3], |a, p| {
+                [a[0].max(p[0]), a[1].max(p[1]), a[2].max(p[2])]
+            });
+            let diag = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2))
+                .sqrt() as f64;
+            for (f, frame) in frames.iter().enumerate() {
+                assert_eq!(frame.len(), n);
+                for (v, p) in frame.iter().enumerate() {
+                    for c in 0..3 {
+                        let u = floats[at + (f * n + v) * 3 + c] as f64;
+                        assert!(
+                            (u - p[c] as f64).abs() <= 1e-6 * diag.max(1e-30),
+                            "{path} frame {f} vertex {v}: usd {u} gltf {}",
+                            p[c]
+                        );
+                    }
+                }
+            }
+            at += samples * n * 3;
+            checked += 1;
+        }
+        assert_eq!(at, floats.len());
+    }
+    checked
+}
+
+#[test]
+fn samples_as_usd_point_caches() {
+    for (name, args) in [
+        ("bar_twist.glb", &[][..]),
+        ("tube_bend.glb", &["--tweens", "9"][..]),
+        ("flag_wave.glb", &["--fps", "24"][..]),
+    ] {
+        check_input(&sample(name), args);
+    }
+}
+
+#[test]
+fn usd_stage_metadata_and_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("flag.usda");
+    run_ok(&[
+        "tween",
+        s(&sample("flag_wave.glb")),
+        "-o",
+        s(&out),
+        "--fps",
+        "30",
+        "-q",
+    ]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    for line in [
+        "defaultPrim = \"samples\"",
+        "upAxis = \"Y\"",
+        "metersPerUnit = 1",
+        "timeCodesPerSecond = 30",
+        "framesPerSecond = 30",
+        "startTimeCode = 0",
+        "endTimeCode = 60",
+    ] {
+        assert!(text.contains(line), "missing {line}");
+    }
+    assert!(
+        text.contains("def Mesh \"pole\"") && text.contains("point3f[] points = ["),
+        "static mesh written once"
+    );
+    assert!(text.contains("uniform token subdivisionScheme = \"none\""));
+    assert!(text.contains("texCoord2f[] primvars:st"));
+    assert!(text.contains("primvars:displayColor = [(0.9, 0.1, 0.1)]"));
+    assert_eq!(
+        inbetween::usd::identifier("1 weird-name.x"),
+        "_1_weird_name_x"
+    );
+}
+
+#[test]
+fn fixtures_as_usd_point_caches() {
+    let Some(fx) = fixtures() else { return };
+    let mut total = 0;
+    for f in [
+        "morph-keyframes/Flamingo.glb",
+        "morph-keyframes/Parrot.glb",
+        "morph-keyframes/Flamingo_cubicspline_unindexed.glb",
+        "morph-khronos/AnimatedMorphCube/glTF/AnimatedMorphCube.gltf",
+        "morph-khronos/MorphPrimitivesTest/glTF/MorphPrimitivesTest.gltf",
+        "morph-khronos/SimpleMorph/glTF/SimpleMorph.gltf",
+        "morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf",
+    ] {
+        total += check_input(&fx.join(f), &["--tweens", "2"]);
+    }
+    if python().is_some() {
+        assert!(total >= 7 * FORMATS.len(), "{total}");
+    }
+}
+
+#[test]
+fn bad_output_paths_fail_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let ro = dir.path().join("readonly");
+    std::fs::create_dir(&ro).unwrap();
+    let mut dirs: Vec<PathBuf> = vec![dir.path().join("missing"), PathBuf::from("/proc")];
+    // A directory without write permission (root may still write there: checked only when it
+    // really refuses a plain file).
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o500)).unwrap();
+    if std::fs::write(ro.join("probe"), b"x").is_err() {
+        dirs.push(ro.clone());
+    }
+    let mut cases: Vec<PathBuf> = vec![dir.path().join("out.usdx")];
+    for d in &dirs {
+        for ext in ["usda", "usdc", "usdz"] {
+            cases.push(d.join(format!("inbetween-test-out.{ext}")));
+        }
+    }
+    for out in cases {
+        let r = inbetween(&["tween", s(&sample("bar_twist.glb")), "-o", s(&out)]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{}: {err}", out.display());
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains(out.to_str().unwrap()), "{err}");
+        assert!(!out.exists());
+    }
+    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o700)).unwrap();
+    let leftovers = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .count();
+    assert_eq!(leftovers, 0);
+}
