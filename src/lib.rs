@@ -16,5 +16,7 @@ pub mod solve;
 pub mod synth;
 pub mod tween;
 pub mod usd;
+pub mod usdc;
+pub mod usdz;
 pub mod weld;
 pub mod write;

@@ -576,16 +576,24 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str) -> Result<()> {
 
 /// Write `stage` to `path` in `format`, atomically (temporary file, renamed on success).
 pub fn write_file(stage: &Stage, format: UsdFormat, path: &Path) -> Result<()> {
+    use crate::write::atomic_write_with;
     match format {
-        UsdFormat::Usda => crate::write::atomic_write_with(path, |w| write_usda(stage, w)),
-        UsdFormat::Usdc | UsdFormat::Usdz => bail!(
-            "{}: .{} output is not written yet; use .usda",
-            path.display(),
-            if format == UsdFormat::Usdc {
-                "usdc"
-            } else {
-                "usdz"
-            }
-        ),
+        UsdFormat::Usda => atomic_write_with(path, |w| write_usda(stage, w)),
+        UsdFormat::Usdc => {
+            atomic_write_with(path, |w| crate::usdc::write_usdc(stage, w).map(|_| ()))
+        }
+        UsdFormat::Usdz => {
+            // The root layer, as .usdc, in a temporary file beside the output, then stored.
+            let layer = path.with_extension(format!("usdz.{}.usdc.tmp", std::process::id()));
+            let result = (|| {
+                atomic_write_with(&layer, |w| crate::usdc::write_usdc(stage, w).map(|_| ()))?;
+                let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("stage");
+                atomic_write_with(path, |w| {
+                    crate::usdz::write_package(w, &[(format!("{stem}.usdc"), layer.clone())])
+                })
+            })();
+            let _ = std::fs::remove_file(&layer);
+            result
+        }
     }
 }

@@ -702,7 +702,7 @@ fn encode_uri(name: &str) -> String {
 /// on failure the temporary file is removed and `path` is not touched.
 pub fn atomic_write_with(
     path: &Path,
-    fill: impl FnOnce(&mut dyn std::io::Write) -> Result<()>,
+    fill: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> Result<()>,
 ) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),

@@ -14,7 +14,7 @@ fn s(p: &Path) -> &str {
 type GltfPrimitiveFrames = (String, usize, usize, Vec<Vec<[f32; 3]>>);
 
 /// Formats checked (each must open in usd-core).
-const FORMATS: &[&str] = &["usda"];
+const FORMATS: &[&str] = &["usda", "usdc", "usdz"];
 
 /// Tween `input` to .glb and to each USD format with `args`; check every USD output against
 /// the glTF frames. Returns the number of animated prims checked.
@@ -156,6 +156,20 @@ fn check_input(input: &Path, args: &[&str]) -> usize {
         }
         assert_eq!(at, floats.len());
     }
+    // The binary layer holds exactly what the text layer holds.
+    let out = std::process::Command::new(&python)
+        .arg(root().join("tools/same_layers.py"))
+        .arg(dir.path().join("out.usda"))
+        .arg(dir.path().join("out.usdc"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}: usda and usdc differ: {}{}",
+        input.display(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
     checked
 }
 

@@ -1,0 +1,635 @@
+//! `.usdc` writer: the USD crate binary format, version 0.8.0, written from a [`Stage`].
+//!
+//! Layout: an 88-byte bootstrap (`PXR-USDC`, version, offset of the table of contents), the
+//! values that do not fit in a field ("heap": arrays, matrices, doubles, time samples), then
+//! the six structural sections TOKENS, STRINGS, FIELDS, FIELDSETS, PATHS and SPECS, then the
+//! table of contents. Structural sections are integer-coded (deltas, a common value and 2-bit
+//! width codes) and LZ4-compressed; integer arrays of 16 elements or more are too; float
+//! arrays are stored raw. Child lists (`primChildren`, `properties`) are TokenVector values.
+//!
+//! Every frame's points are written to the file as they are produced: a time-sampled value is
+//! laid out as `[offset to times][times][times rep][offset to reps][sample arrays][count][reps]`
+//! with every size known beforehand, so nothing is patched but the bootstrap.
+
+use crate::usd::{extent, MeshPrim, Prim, Stage};
+use anyhow::Result;
+use std::collections::HashMap;
+use std::io::{Seek, SeekFrom, Write};
+
+const VERSION: [u8; 3] = [0, 8, 0];
+const BOOTSTRAP_SIZE: u64 = 88;
+/// Pixar's reader treats integer arrays shorter than this as uncompressed.
+const MIN_COMPRESSED_ARRAY: usize = 16;
+
+// Value types (crate type enum).
+const T_BOOL: u64 = 1;
+const T_INT: u64 = 3;
+const T_DOUBLE: u64 = 9;
+const T_STRING: u64 = 10;
+const T_TOKEN: u64 = 11;
+const T_MATRIX4D: u64 = 15;
+const T_VEC2F: u64 = 20;
+const T_VEC3F: u64 = 24;
+const T_TOKEN_VECTOR: u64 = 41;
+const T_SPECIFIER: u64 = 42;
+const T_VARIABILITY: u64 = 44;
+const T_TIME_SAMPLES: u64 = 46;
+const T_DOUBLE_VECTOR: u64 = 48;
+
+// Spec types.
+const SPEC_ATTRIBUTE: u32 = 1;
+const SPEC_PRIM: u32 = 6;
+const SPEC_PSEUDO_ROOT: u32 = 7;
+
+const ARRAY_BIT: u64 = 1 << 63;
+const INLINED_BIT: u64 = 1 << 62;
+const COMPRESSED_BIT: u64 = 1 << 61;
+
+fn rep_inline(ty: u64, payload: u64) -> u64 {
+    (ty << 48) | INLINED_BIT | (payload & ((1 << 48) - 1))
+}
+
+fn rep_heap(ty: u64, offset: u64, array: bool) -> u64 {
+    (ty << 48) | if array { ARRAY_BIT } else { 0 } | offset
+}
+
+/// A field value before it is written.
+enum Val<'a> {
+    Token(&'a str),
+    String(&'a str),
+    Double(f64),
+    Bool(bool),
+    Specifier,
+    Uniform,
+    TokenVector(Vec<String>),
+    Tokens(Vec<&'a str>),
+    Matrix([f64; 16]),
+    Ints(Vec<i32>),
+    Vec3fs(&'a [[f32; 3]]),
+    Vec2fs(&'a [[f32; 2]]),
+}
+
+/// A path in the spec tree: its parent's index and its element (prim name or property name).
+struct PathNode {
+    parent: Option<usize>,
+    name: String,
+    property: bool,
+    children: Vec<usize>,
+}
+
+struct Writer<W: Write + Seek> {
+    out: W,
+    pos: u64,
+    tokens: Vec<String>,
+    token_index: HashMap<String, u32>,
+    strings: Vec<u32>,
+    fields: Vec<(u32, u64)>,
+    field_index: HashMap<(u32, u64), u32>,
+    fieldsets: Vec<u32>,
+    paths: Vec<PathNode>,
+    /// (path index, fieldset index, spec type)
+    specs: Vec<(u32, u32, u32)>,
+}
+
+impl<W: Write + Seek> Writer<W> {
+    fn bytes(&mut self, b: &[u8]) -> Result<()> {
+        self.out.write_all(b)?;
+        self.pos += b.len() as u64;
+        Ok(())
+    }
+
+    fn u64(&mut self, v: u64) -> Result<()> {
+        self.bytes(&v.to_le_bytes())
+    }
+
+    fn token(&mut self, s: &str) -> u32 {
+        if let Some(&i) = self.token_index.get(s) {
+            return i;
+        }
+        let i = self.tokens.len() as u32;
+        self.tokens.push(s.to_owned());
+        self.token_index.insert(s.to_owned(), i);
+        i
+    }
+
+    fn field(&mut self, name: &str, value: Val) -> Result<u32> {
+        let rep = self.value(value)?;
+        let key = (self.token(name), rep);
+        if let Some(&i) = self.field_index.get(&key) {
+            return Ok(i);
+        }
+        let i = self.fields.len() as u32;
+        self.fields.push(key);
+        self.field_index.insert(key, i);
+        Ok(i)
+    }
+
+    /// Write (or inline) a value and return its ValueRep.
+    fn value(&mut self, v: Val) -> Result<u64> {
+        Ok(match v {
+            Val::Token(t) => rep_inline(T_TOKEN, self.token(t) as u64),
+            Val::String(s) => {
+                let t = self.token(s);
+                let i = match self.strings.iter().position(|&x| x == t) {
+                    Some(i) => i,
+                    None => {
+                        self.strings.push(t);
+                        self.strings.len() - 1
+                    }
+                };
+                rep_inline(T_STRING, i as u64)
+            }
+            Val::Bool(b) => rep_inline(T_BOOL, b as u64),
+            Val::Specifier => rep_inline(T_SPECIFIER, 0), // def
+            Val::Uniform => rep_inline(T_VARIABILITY, 1),
+            Val::Double(d) => {
+                let at = self.pos;
+                self.bytes(&d.to_le_bytes())?;
+                rep_heap(T_DOUBLE, at, false)
+            }
+            Val::TokenVector(names) => {
+                let at = self.pos;
+                let idx: Vec<u32> = names.iter().map(|n| self.token(n)).collect();
+                self.u64(idx.len() as u64)?;
+                for i in idx {
+                    self.bytes(&i.to_le_bytes())?;
+                }
+                rep_heap(T_TOKEN_VECTOR, at, false)
+            }
+            Val::Tokens(names) => {
+                let at = self.pos;
+                let idx: Vec<u32> = names.iter().map(|n| self.token(n)).collect();
+                self.u64(idx.len() as u64)?;
+                for i in idx {
+                    self.bytes(&i.to_le_bytes())?;
+                }
+                rep_heap(T_TOKEN, at, true)
+            }
+            Val::Matrix(m) => {
+                let at = self.pos;
+                for x in m {
+                    self.bytes(&x.to_le_bytes())?;
+                }
+                rep_heap(T_MATRIX4D, at, false)
+            }
+            Val::Ints(v) => {
+                let at = self.pos;
+                self.u64(v.len() as u64)?;
+                if v.len() >= MIN_COMPRESSED_ARRAY {
+                    let encoded = encode_ints(&v);
+                    self.lz4(&encoded)?;
+                    rep_heap(T_INT, at, true) | COMPRESSED_BIT
+                } else {
+                    for x in v {
+                        self.bytes(&x.to_le_bytes())?;
+                    }
+                    rep_heap(T_INT, at, true)
+                }
+            }
+            Val::Vec3fs(v) => self.vec3f_array(v)?,
+            Val::Vec2fs(v) => {
+                let at = self.pos;
+                self.u64(v.len() as u64)?;
+                let raw: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+                self.bytes(&raw)?;
+                rep_heap(T_VEC2F, at, true)
+            }
+        })
+    }
+
+    fn vec3f_array(&mut self, v: &[[f32; 3]]) -> Result<u64> {
+        let at = self.pos;
+        self.u64(v.len() as u64)?;
+        let raw: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        self.bytes(&raw)?;
+        Ok(rep_heap(T_VEC3F, at, true))
+    }
+
+    /// Time samples of Vec3f arrays of `count` elements each, produced frame by frame.
+    fn time_samples(
+        &mut self,
+        times: &[f64],
+        count: usize,
+        mut frame: impl FnMut(usize) -> Vec<[f32; 3]>,
+    ) -> Result<u64> {
+        let at = self.pos;
+        let n = times.len() as u64;
+        // [i64 to times rep][times: u64 count + doubles][times rep]
+        let times_size = 8 + 8 * n;
+        self.bytes(&((8 + times_size) as i64).to_le_bytes())?;
+        let times_at = self.pos;
+        self.u64(n)?;
+        for t in times {
+            self.bytes(&t.to_le_bytes())?;
+        }
+        self.u64(rep_heap(T_DOUBLE_VECTOR, times_at, false))?;
+        // [i64 to values][sample arrays][u64 count][reps]
+        let array_size = 8 + 12 * count as u64;
+        self.bytes(&((8 + array_size * n) as i64).to_le_bytes())?;
+        let mut reps = Vec::with_capacity(times.len());
+        for f in 0..times.len() {
+            let v = frame(f);
+            anyhow::ensure!(
+                v.len() == count,
+                "time sample {f} has {} points, expected {count}",
+                v.len()
+            );
+            reps.push(self.vec3f_array(&v)?);
+        }
+        self.u64(n)?;
+        for r in reps {
+            self.u64(r)?;
+        }
+        Ok(rep_heap(T_TIME_SAMPLES, at, false))
+    }
+
+    /// LZ4 block in TfFastCompression framing: u64 compressed size, a 0 chunk-count byte, the block.
+    fn lz4(&mut self, data: &[u8]) -> Result<()> {
+        let block = lz4_flex::block::compress(data);
+        self.u64(block.len() as u64 + 1)?;
+        self.bytes(&[0])?;
+        self.bytes(&block)
+    }
+
+    fn path(&mut self, parent: Option<usize>, name: &str, property: bool) -> usize {
+        let i = self.paths.len();
+        self.paths.push(PathNode {
+            parent,
+            name: name.to_owned(),
+            property,
+            children: Vec::new(),
+        });
+        if let Some(p) = parent {
+            self.paths[p].children.push(i);
+        }
+        i
+    }
+
+    fn spec(&mut self, path: usize, fields: Vec<u32>, ty: u32) {
+        let fs = self.fieldsets.len() as u32;
+        self.fieldsets.extend(fields);
+        self.fieldsets.push(u32::MAX);
+        self.specs.push((path as u32, fs, ty));
+    }
+
+    /// An attribute spec under `prim` with the given fields.
+    fn attribute(
+        &mut self,
+        prim: usize,
+        name: &str,
+        type_name: &str,
+        extra: Vec<u32>,
+    ) -> Result<()> {
+        let p = self.path(Some(prim), name, true);
+        let mut fields = vec![self.field("typeName", Val::Token(type_name))?];
+        fields.extend(extra);
+        self.spec(p, fields, SPEC_ATTRIBUTE);
+        Ok(())
+    }
+
+    fn prim(&mut self, prim: &Prim, parent: usize) -> Result<()> {
+        match prim {
+            Prim::Xform {
+                name,
+                matrix,
+                children,
+            } => {
+                let me = self.path(Some(parent), name, false);
+                let mut props = Vec::new();
+                if let Some(m) = matrix {
+                    let v = self.field("default", Val::Matrix(*m))?;
+                    self.attribute(me, "xformOp:transform", "matrix4d", vec![v])?;
+                    let u = self.field("variability", Val::Uniform)?;
+                    let v = self.field("default", Val::Tokens(vec!["xformOp:transform"]))?;
+                    self.attribute(me, "xformOpOrder", "token[]", vec![u, v])?;
+                    props = vec!["xformOp:transform".to_owned(), "xformOpOrder".to_owned()];
+                }
+                for c in children {
+                    self.prim(c, me)?;
+                }
+                self.prim_spec(me, "Xform", props, children.iter().map(prim_name).collect())
+            }
+            Prim::Mesh(m) => self.mesh(m, parent),
+        }
+    }
+
+    fn prim_spec(
+        &mut self,
+        path: usize,
+        type_name: &str,
+        props: Vec<String>,
+        children: Vec<String>,
+    ) -> Result<()> {
+        let mut fields = vec![
+            self.field("specifier", Val::Specifier)?,
+            self.field("typeName", Val::Token(type_name))?,
+        ];
+        if !props.is_empty() {
+            fields.push(self.field("properties", Val::TokenVector(props))?);
+        }
+        if !children.is_empty() {
+            fields.push(self.field("primChildren", Val::TokenVector(children))?);
+        }
+        self.spec(path, fields, SPEC_PRIM);
+        Ok(())
+    }
+
+    fn mesh(&mut self, m: &MeshPrim, parent: usize) -> Result<()> {
+        let me = self.path(Some(parent), &m.name, false);
+        let mut props = Vec::new();
+        let uniform = self.field("variability", Val::Uniform)?;
+        let vertex = self.field("interpolation", Val::Token("vertex"))?;
+        let n = m.points.len();
+        if m.double_sided {
+            let v = self.field("default", Val::Bool(true))?;
+            self.attribute(me, "doubleSided", "bool", vec![uniform, v])?;
+            props.push("doubleSided");
+        }
+        match &m.animation {
+            None => {
+                let e = extent(&m.points);
+                let v = self.field("default", Val::Vec3fs(&e))?;
+                self.attribute(me, "extent", "float3[]", vec![v])?;
+            }
+            Some(a) => {
+                let rep =
+                    self.time_samples(&a.times, 2, |f| extent(&m.frame_points(f)).to_vec())?;
+                let v = self.raw_field("timeSamples", rep);
+                self.attribute(me, "extent", "float3[]", vec![v])?;
+            }
+        }
+        props.push("extent");
+        let counts = self.field("default", Val::Ints(vec![3; m.indices.len() / 3]))?;
+        self.attribute(me, "faceVertexCounts", "int[]", vec![counts])?;
+        let indices = self.field(
+            "default",
+            Val::Ints(m.indices.iter().map(|&i| i as i32).collect()),
+        )?;
+        self.attribute(me, "faceVertexIndices", "int[]", vec![indices])?;
+        props.extend(["faceVertexCounts", "faceVertexIndices"]);
+        if let Some(normals) = &m.normals {
+            let v = match &m.animation {
+                Some(a) if a.normals.is_some() => {
+                    let rep =
+                        self.time_samples(&a.times, n, |f| m.frame_normals(f).unwrap_or_default())?;
+                    self.raw_field("timeSamples", rep)
+                }
+                _ => self.field("default", Val::Vec3fs(normals))?,
+            };
+            self.attribute(me, "normals", "normal3f[]", vec![vertex, v])?;
+            props.push("normals");
+        }
+        let v = match &m.animation {
+            None => self.field("default", Val::Vec3fs(&m.points))?,
+            Some(a) => {
+                let rep = self.time_samples(&a.times, n, |f| m.frame_points(f))?;
+                self.raw_field("timeSamples", rep)
+            }
+        };
+        self.attribute(me, "points", "point3f[]", vec![v])?;
+        props.push("points");
+        if let Some(c) = m.color {
+            let constant = self.field("interpolation", Val::Token("constant"))?;
+            let v = self.field("default", Val::Vec3fs(&[c]))?;
+            self.attribute(me, "primvars:displayColor", "color3f[]", vec![constant, v])?;
+            props.push("primvars:displayColor");
+        }
+        if let Some(st) = &m.st {
+            let v = self.field("default", Val::Vec2fs(st))?;
+            self.attribute(me, "primvars:st", "texCoord2f[]", vec![vertex, v])?;
+            props.push("primvars:st");
+        }
+        let v = self.field("default", Val::Token("none"))?;
+        self.attribute(me, "subdivisionScheme", "token", vec![uniform, v])?;
+        props.push("subdivisionScheme");
+        self.prim_spec(
+            me,
+            "Mesh",
+            props.into_iter().map(str::to_owned).collect(),
+            vec![],
+        )
+    }
+
+    fn raw_field(&mut self, name: &str, rep: u64) -> u32 {
+        let key = (self.token(name), rep);
+        let i = self.fields.len() as u32;
+        self.fields.push(key);
+        self.field_index.insert(key, i);
+        i
+    }
+
+    /// Depth-first path table: (path index, element token, jump) per node.
+    fn path_table(&mut self) -> (Vec<u32>, Vec<i32>, Vec<i32>) {
+        let mut order = Vec::with_capacity(self.paths.len());
+        let mut stack = vec![0usize];
+        while let Some(p) = stack.pop() {
+            order.push(p);
+            stack.extend(self.paths[p].children.iter().rev());
+        }
+        // Position of each node in the depth-first order.
+        let mut at = vec![0usize; self.paths.len()];
+        for (i, &p) in order.iter().enumerate() {
+            at[p] = i;
+        }
+        let mut tokens = Vec::with_capacity(order.len());
+        let mut jumps = Vec::with_capacity(order.len());
+        for &p in &order {
+            let node = &self.paths[p];
+            let name = node.name.clone();
+            let property = node.property;
+            let has_child = !node.children.is_empty();
+            let next_sibling = node.parent.and_then(|q| {
+                let sibs = &self.paths[q].children;
+                let k = sibs.iter().position(|&s| s == p).unwrap();
+                sibs.get(k + 1).copied()
+            });
+            let t = if p == 0 { 0 } else { self.token(&name) as i32 };
+            tokens.push(if property { -t } else { t });
+            jumps.push(match (has_child, next_sibling) {
+                (true, Some(s)) => (at[s] - at[p]) as i32,
+                (true, None) => -1,
+                (false, Some(_)) => 0,
+                (false, None) => -2,
+            });
+        }
+        (order.iter().map(|&p| p as u32).collect(), tokens, jumps)
+    }
+
+    fn finish(mut self) -> Result<W> {
+        let (path_ids, element_tokens, jumps) = self.path_table();
+        let mut sections: Vec<(&str, u64, u64)> = Vec::new();
+        // TOKENS
+        let start = self.pos;
+        let mut buf = Vec::new();
+        for t in &self.tokens {
+            buf.extend_from_slice(t.as_bytes());
+            buf.push(0);
+        }
+        self.u64(self.tokens.len() as u64)?;
+        self.u64(buf.len() as u64)?;
+        self.lz4(&buf)?;
+        sections.push(("TOKENS", start, self.pos - start));
+        // STRINGS
+        let start = self.pos;
+        self.u64(self.strings.len() as u64)?;
+        for s in self.strings.clone() {
+            self.bytes(&s.to_le_bytes())?;
+        }
+        sections.push(("STRINGS", start, self.pos - start));
+        // FIELDS
+        let start = self.pos;
+        self.u64(self.fields.len() as u64)?;
+        let names: Vec<u32> = self.fields.iter().map(|f| f.0).collect();
+        self.lz4(&encode_ints(&names))?;
+        let reps: Vec<u8> = self.fields.iter().flat_map(|f| f.1.to_le_bytes()).collect();
+        self.lz4(&reps)?;
+        sections.push(("FIELDS", start, self.pos - start));
+        // FIELDSETS
+        let start = self.pos;
+        self.u64(self.fieldsets.len() as u64)?;
+        let sets = encode_ints(&self.fieldsets);
+        self.lz4(&sets)?;
+        sections.push(("FIELDSETS", start, self.pos - start));
+        // PATHS
+        let start = self.pos;
+        self.u64(self.paths.len() as u64)?;
+        self.u64(path_ids.len() as u64)?;
+        self.lz4(&encode_ints(&path_ids))?;
+        self.lz4(&encode_ints(&element_tokens))?;
+        self.lz4(&encode_ints(&jumps))?;
+        sections.push(("PATHS", start, self.pos - start));
+        // SPECS
+        let start = self.pos;
+        self.u64(self.specs.len() as u64)?;
+        let (a, b, c): (Vec<u32>, Vec<u32>, Vec<u32>) = (
+            self.specs.iter().map(|s| s.0).collect(),
+            self.specs.iter().map(|s| s.1).collect(),
+            self.specs.iter().map(|s| s.2).collect(),
+        );
+        self.lz4(&encode_ints(&a))?;
+        self.lz4(&encode_ints(&b))?;
+        self.lz4(&encode_ints(&c))?;
+        sections.push(("SPECS", start, self.pos - start));
+        // Table of contents.
+        let toc = self.pos;
+        self.u64(sections.len() as u64)?;
+        for (name, start, size) in sections {
+            let mut n = [0u8; 16];
+            n[..name.len()].copy_from_slice(name.as_bytes());
+            self.bytes(&n)?;
+            self.u64(start)?;
+            self.u64(size)?;
+        }
+        // Bootstrap.
+        self.out.seek(SeekFrom::Start(0))?;
+        let mut boot = [0u8; BOOTSTRAP_SIZE as usize];
+        boot[..8].copy_from_slice(b"PXR-USDC");
+        boot[8..11].copy_from_slice(&VERSION);
+        boot[16..24].copy_from_slice(&toc.to_le_bytes());
+        self.out.write_all(&boot)?;
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}
+
+fn prim_name(p: &Prim) -> String {
+    match p {
+        Prim::Xform { name, .. } => name.clone(),
+        Prim::Mesh(m) => m.name.clone(),
+    }
+}
+
+/// Write `stage` as a crate file to `out` (which must start empty, at position 0).
+pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W) -> Result<W> {
+    let mut w = Writer {
+        out,
+        pos: 0,
+        tokens: Vec::new(),
+        token_index: HashMap::new(),
+        strings: Vec::new(),
+        fields: Vec::new(),
+        field_index: HashMap::new(),
+        fieldsets: Vec::new(),
+        paths: Vec::new(),
+        specs: Vec::new(),
+    };
+    w.bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
+    // Token 0 is a prim name, so no property path ever needs the (unnegatable) index 0.
+    w.token(&stage.root);
+    let root = w.path(None, "", false);
+    let top = w.path(Some(root), &stage.root, false);
+    for c in &stage.children {
+        w.prim(c, top)?;
+    }
+    w.prim_spec(
+        top,
+        "Xform",
+        vec![],
+        stage.children.iter().map(prim_name).collect(),
+    )?;
+    let doc = format!("Written by inbetween {}", env!("CARGO_PKG_VERSION"));
+    let fields = vec![
+        w.field("defaultPrim", Val::Token(&stage.root))?,
+        w.field("documentation", Val::String(&doc))?,
+        w.field("endTimeCode", Val::Double(stage.end))?,
+        w.field("framesPerSecond", Val::Double(stage.rate))?,
+        w.field("metersPerUnit", Val::Double(1.0))?,
+        w.field("startTimeCode", Val::Double(stage.start))?,
+        w.field("timeCodesPerSecond", Val::Double(stage.rate))?,
+        w.field("upAxis", Val::Token("Y"))?,
+        w.field("primChildren", Val::TokenVector(vec![stage.root.clone()]))?,
+    ];
+    w.spec(root, fields, SPEC_PSEUDO_ROOT);
+    w.finish()
+}
+
+/// USD integer coding: deltas from the previous value, the most common delta stored once,
+/// 2-bit codes per value (common / 8 / 16 / 32 bits for 32-bit integers), then the
+/// non-common deltas.
+pub fn encode_ints<T: Copy + Into<i64>>(values: &[T]) -> Vec<u8> {
+    if values.is_empty() {
+        return Vec::new();
+    }
+    let mut prev = 0i64;
+    let deltas: Vec<i64> = values
+        .iter()
+        .map(|v| {
+            let v: i64 = (*v).into();
+            // Values are 32-bit: deltas wrap like the reader's 32-bit sums.
+            let d = (v as i32).wrapping_sub(prev as i32) as i64;
+            prev = v;
+            d
+        })
+        .collect();
+    let mut counts: HashMap<i64, usize> = HashMap::new();
+    for &d in &deltas {
+        *counts.entry(d).or_default() += 1;
+    }
+    let common = counts
+        .iter()
+        .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+        .map(|(v, _)| *v)
+        .unwrap_or(0);
+    let mut out = Vec::new();
+    out.extend_from_slice(&(common as i32).to_le_bytes());
+    let mut codes = vec![0u8; (deltas.len() * 2).div_ceil(8)];
+    let mut tail = Vec::new();
+    for (i, &d) in deltas.iter().enumerate() {
+        let code = if d == common {
+            0
+        } else if i8::try_from(d).is_ok() {
+            tail.push(d as i8 as u8);
+            1
+        } else if i16::try_from(d).is_ok() {
+            tail.extend_from_slice(&(d as i16).to_le_bytes());
+            2
+        } else {
+            tail.extend_from_slice(&(d as i32).to_le_bytes());
+            3
+        };
+        codes[i / 4] |= code << (2 * (i % 4));
+    }
+    out.extend_from_slice(&codes);
+    out.extend_from_slice(&tail);
+    out
+}
