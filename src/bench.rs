@@ -256,6 +256,10 @@ pub fn table(rows: &[BenchRow]) -> String {
 #[derive(Clone, Debug, Serialize)]
 pub struct EndToEnd {
     pub triangles: usize,
+    pub vertices: usize,
+    pub frames: usize,
+    /// Size of the frames themselves: vertices x frames x 12 bytes (f32 points), MiB.
+    pub frames_mib: f64,
     pub keys: usize,
     pub tweens: usize,
     pub input_mib: f64,
@@ -265,12 +269,9 @@ pub struct EndToEnd {
 }
 
 /// Write a tube of `triangles` with three keys (straight, bent 90, bent 150 and twisted 60) to
-/// a temporary .glb, run `inbetween tween --tweens N` on it in a child process, and time it.
-pub fn end_to_end(
-    triangles: usize,
-    tweens: usize,
-    keep: Option<&std::path::Path>,
-) -> Result<EndToEnd> {
+/// a temporary .glb, run `inbetween tween --tweens N` on it in a child process writing
+/// `tween.<format>`, and time it.
+pub fn end_to_end(triangles: usize, tweens: usize, format: &str) -> Result<EndToEnd> {
     let (segments, rings) = tube_for(triangles);
     let s = synth::tube(rings, segments, 6.0, 1.0, 1.0);
     let k1 = synth::bend(&s.positions, 3.0, 90f64.to_radians(), 0.8);
@@ -278,10 +279,10 @@ pub fn end_to_end(
     let dir = std::env::temp_dir().join(format!("inbetween-e2e-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let input = dir.join("keys.glb");
-    let output = keep
-        .map(|p| p.to_path_buf())
-        .unwrap_or_else(|| dir.join("tween.glb"));
+    let output = dir.join(format!("tween.{format}"));
     let tri_count = s.triangles.len();
+    let vertices = s.positions.len();
+    let frames = 2 * (tweens + 1) + 1;
     synth::KeyframeFile {
         meshes: vec![synth::KeyedMesh::new("tube", s, vec![k1, k2])],
         key_times: None,
@@ -312,6 +313,9 @@ pub fn end_to_end(
     };
     let r = EndToEnd {
         triangles: tri_count,
+        vertices,
+        frames,
+        frames_mib: (vertices * frames * 12) as f64 / 1048576.0,
         keys: 3,
         tweens,
         input_mib: mib(&input),

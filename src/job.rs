@@ -4,7 +4,8 @@ use crate::interpolate::Method;
 use crate::keyframes::{find_morph_meshes, KeyOptions, KeySource};
 use crate::progress::Progress;
 use crate::read::Document;
-use crate::tween::{schedule, tween_mesh, Timing, TweenOptions};
+use crate::tween::{collect_mesh, schedule, tween_mesh, Timing, TweenOptions};
+use crate::usd::{self, MeshPlan};
 use crate::write;
 use anyhow::Result;
 use std::path::PathBuf;
@@ -86,29 +87,58 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         method: job.method,
         timing: job.timing,
     };
-    let mut results = Vec::new();
-    for m in &meshes {
-        progress.message(m.name.clone());
-        results.push(tween_mesh(m, &opts, &|| progress.inc())?);
-    }
-    progress.finish();
+    let mut stats = Vec::new();
     match format {
         write::OutputFormat::Gltf(container) => {
+            let mut results = Vec::new();
+            for m in &meshes {
+                progress.message(m.name.clone());
+                results.push(collect_mesh(m, &opts, &|| progress.inc())?);
+            }
+            progress.finish();
             let mut out = write::begin(&doc, container, &job.output)?;
             write::apply_frames(&mut out, &results)?;
             write::finish(out, container, &job.output)?;
+            stats.extend(results.into_iter().map(|r| r.stats));
         }
         write::OutputFormat::Usd(usd_format) => {
             let fps = match job.timing {
                 Timing::Fps(f) => Some(f),
                 Timing::Tweens(_) => None,
             };
-            let stage = crate::usd::build_stage(&doc, &results, fps)?;
-            crate::usd::write_file(&stage, usd_format, &job.output)?;
+            let plans: Vec<MeshPlan> = meshes
+                .iter()
+                .map(|m| MeshPlan {
+                    mesh: m.mesh,
+                    tracks: m
+                        .tracks
+                        .iter()
+                        .map(|t| {
+                            schedule(&t.times, job.timing)
+                                .iter()
+                                .map(|f| f.time)
+                                .collect()
+                        })
+                        .collect(),
+                })
+                .collect();
+            let stage = usd::build_stage(&doc, &plans, fps)?;
+            // Frames stream from the solver to the file, one chunk at a time.
+            usd::write_file(&stage, usd_format, &job.output, &mut |sink| {
+                for (k, m) in meshes.iter().enumerate() {
+                    progress.message(m.name.clone());
+                    let done = tween_mesh(m, &opts, &|| progress.inc(), &mut |f, deltas| {
+                        sink(k, f, &deltas)
+                    })?;
+                    stats.push(done.stats);
+                }
+                Ok(())
+            })?;
+            progress.finish();
         }
     }
     Ok(Summary {
-        meshes: results.into_iter().map(|r| r.stats).collect(),
+        meshes: stats,
         seconds: started.elapsed().as_secs_f64(),
         peak_rss_mib: crate::bench::peak_rss_mib(),
     })

@@ -86,6 +86,12 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
         /// --tweens 10` on it end to end, in a child process (e.g. 1000000).
         #[arg(long, value_name = "TRIANGLES")]
         end_to_end: Option<usize>,
+        /// With --end-to-end: frames inserted between keys.
+        #[arg(long, default_value_t = 10)]
+        e2e_tweens: usize,
+        /// With --end-to-end: output format (glb, gltf, usda, usdc, usdz).
+        #[arg(long, default_value = "glb")]
+        e2e_format: String,
     },
 }
 
@@ -114,10 +120,12 @@ fn main() -> ExitCode {
             threads,
             json,
             end_to_end,
+            e2e_tweens,
+            e2e_format,
         } => {
             set_threads(threads);
             if let Some(triangles) = end_to_end {
-                return match bench::end_to_end(triangles, 10, None) {
+                return match bench::end_to_end(triangles, e2e_tweens, &e2e_format) {
                     Ok(r) => {
                         println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
                         ExitCode::SUCCESS

@@ -137,7 +137,7 @@ pub struct MeshStats {
 
 impl MeshFrames {
     pub fn frame_count(&self) -> usize {
-        self.primitives.first().map_or(0, |p| p.positions.len())
+        self.stats.frames
     }
 }
 
@@ -153,11 +153,16 @@ struct NormalKeys {
     authored: Vec<Vec<DVec3>>,
 }
 
-/// Compute every frame of every track of `mesh`. `progress` is called once per frame done.
+/// Compute every frame of every track of `mesh` and hand each to `sink` in order (frame index,
+/// per-primitive deltas), so a writer can stream them. Frames are computed in parallel in
+/// chunks of a few per thread, so at most one chunk is held at a time. `progress` is called
+/// once per frame done. The returned [`MeshFrames`] holds the tracks and figures but no
+/// frame data (see [`collect_mesh`] for a mesh with all of its frames).
 pub fn tween_mesh(
     mesh: &MorphMesh,
     opts: &TweenOptions,
     progress: &(dyn Fn() + Sync),
+    sink: &mut dyn FnMut(usize, Vec<PrimitiveDelta>) -> Result<()>,
 ) -> Result<MeshFrames> {
     let welded = Welded::build(mesh);
     let mut stats = MeshStats {
@@ -178,21 +183,9 @@ pub fn tween_mesh(
         .primitives
         .iter()
         .any(|p| p.target_nrm.iter().any(Option::is_some));
-    let all_tangents = mesh.primitives.iter().all(|p| p.tangents.is_some());
     let base: Vec<DVec3> = mesh.pose(&vec![0.0; mesh.target_count]);
 
     let mut tracks = Vec::new();
-    let with_normals = base_normals.is_some();
-    let mut primitives: Vec<PrimitiveFrames> = mesh
-        .primitives
-        .iter()
-        .map(|p| PrimitiveFrames {
-            index: p.index,
-            positions: Vec::new(),
-            normals: with_normals.then(Vec::new),
-            tangents: (with_normals && all_tangents).then(Vec::new),
-        })
-        .collect();
     for track in &mesh.tracks {
         let keys = key_poses(mesh, track);
         stats.keys += keys.len();
@@ -244,46 +237,41 @@ pub fn tween_mesh(
                 &welded.triangles,
             )?;
             stats.setup += t0.elapsed();
-            let t0 = Instant::now();
-            let computed: Vec<Vec<PrimitiveDelta>> = frames[i..j]
-                .par_iter()
-                .map(|f| {
-                    let w = segment.frame(f.t);
-                    let positions: Vec<DVec3> =
-                        welded.of_vertex.iter().map(|&k| w[k as usize]).collect();
-                    drop(w);
-                    let normals = normal_keys.as_ref().map(|nk| {
-                        let rec = nk.smoothing.normals(&positions, &welded.input_triangles);
-                        (0..positions.len())
-                            .map(|v| {
-                                carry(
-                                    nk.authored[a][v],
-                                    nk.recomputed[a][v],
-                                    nk.authored[b][v],
-                                    nk.recomputed[b][v],
-                                    rec[v],
-                                    f.t,
-                                )
-                            })
-                            .collect::<Vec<DVec3>>()
-                    });
-                    let deltas = frame_deltas(mesh, &positions, normals.as_deref());
-                    progress();
-                    deltas
-                })
-                .collect();
-            stats.solve += t0.elapsed();
-            for frame in computed {
-                for (out, d) in primitives.iter_mut().zip(frame) {
-                    out.positions.push(d.positions);
-                    if let (Some(all), Some(n)) = (&mut out.normals, d.normals) {
-                        all.push(n);
-                    }
-                    if let (Some(all), Some(t)) = (&mut out.tangents, d.tangents) {
-                        all.push(t);
-                    }
+            let chunk = 2 * rayon::current_num_threads().max(1);
+            for start in (i..j).step_by(chunk) {
+                let t0 = Instant::now();
+                let computed: Vec<Vec<PrimitiveDelta>> = frames[start..(start + chunk).min(j)]
+                    .par_iter()
+                    .map(|f| {
+                        let w = segment.frame(f.t);
+                        let positions: Vec<DVec3> =
+                            welded.of_vertex.iter().map(|&k| w[k as usize]).collect();
+                        drop(w);
+                        let normals = normal_keys.as_ref().map(|nk| {
+                            let rec = nk.smoothing.normals(&positions, &welded.input_triangles);
+                            (0..positions.len())
+                                .map(|v| {
+                                    carry(
+                                        nk.authored[a][v],
+                                        nk.recomputed[a][v],
+                                        nk.authored[b][v],
+                                        nk.recomputed[b][v],
+                                        rec[v],
+                                        f.t,
+                                    )
+                                })
+                                .collect::<Vec<DVec3>>()
+                        });
+                        let deltas = frame_deltas(mesh, &positions, normals.as_deref());
+                        progress();
+                        deltas
+                    })
+                    .collect();
+                stats.solve += t0.elapsed();
+                for frame in computed {
+                    sink(stats.frames, frame)?;
+                    stats.frames += 1;
                 }
-                stats.frames += 1;
             }
             i = j;
         }
@@ -292,17 +280,51 @@ pub fn tween_mesh(
         mesh: mesh.mesh,
         name: mesh.name.clone(),
         tracks,
-        primitives,
+        primitives: Vec::new(),
         dropped_channels: mesh.dropped_channels.clone(),
         stats,
     })
 }
 
-/// One frame of one primitive, as morph target deltas.
-struct PrimitiveDelta {
-    positions: Vec<[f32; 3]>,
-    normals: Option<Vec<[f32; 3]>>,
-    tangents: Option<Vec<[f32; 3]>>,
+/// [`tween_mesh`] with every frame kept, per primitive (what the glTF writer needs).
+pub fn collect_mesh(
+    mesh: &MorphMesh,
+    opts: &TweenOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Result<MeshFrames> {
+    let with_normals = mesh.primitives.iter().all(|p| p.normals.is_some());
+    let all_tangents = mesh.primitives.iter().all(|p| p.tangents.is_some());
+    let mut primitives: Vec<PrimitiveFrames> = mesh
+        .primitives
+        .iter()
+        .map(|p| PrimitiveFrames {
+            index: p.index,
+            positions: Vec::new(),
+            normals: with_normals.then(Vec::new),
+            tangents: (with_normals && all_tangents).then(Vec::new),
+        })
+        .collect();
+    let mut out = tween_mesh(mesh, opts, progress, &mut |_, frame| {
+        for (out, d) in primitives.iter_mut().zip(frame) {
+            out.positions.push(d.positions);
+            if let (Some(all), Some(n)) = (&mut out.normals, d.normals) {
+                all.push(n);
+            }
+            if let (Some(all), Some(t)) = (&mut out.tangents, d.tangents) {
+                all.push(t);
+            }
+        }
+        Ok(())
+    })?;
+    out.primitives = primitives;
+    Ok(out)
+}
+
+/// One frame of one primitive, as morph target deltas from the primitive's base.
+pub struct PrimitiveDelta {
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Option<Vec<[f32; 3]>>,
+    pub tangents: Option<Vec<[f32; 3]>>,
 }
 
 /// Split a frame (input vertex order) into per-primitive deltas from the base. Tangents are

@@ -17,13 +17,13 @@
 
 use crate::keyframes::{read_triangles, read_vec3};
 use crate::read::{arr, Document};
-use crate::tween::MeshFrames;
+use crate::tween::PrimitiveDelta;
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 use std::collections::HashMap;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The three USD file formats, by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,30 +42,28 @@ pub struct MeshPrim {
     pub indices: Vec<u32>,
     pub color: Option<[f32; 3]>,
     pub double_sided: bool,
-    /// Per-frame deltas (points, normals) of an animated primitive, with each frame's time code.
+    /// For an animated primitive: where its frames come from and their time codes.
     pub animation: Option<Animation>,
 }
 
+/// The frames of an animated primitive: frame f of primitive `primitive` (its position in the
+/// mesh's primitive list) of processed mesh `mesh` (its position in the job's list) is at time
+/// code `times[f]`.
 pub struct Animation {
+    pub mesh: usize,
+    pub primitive: usize,
     pub times: Vec<f64>,
-    pub points: Vec<Vec<[f32; 3]>>,
-    pub normals: Option<Vec<Vec<[f32; 3]>>>,
+    /// Whether the frames carry normals.
+    pub normals: bool,
 }
 
-impl MeshPrim {
-    /// Points of frame `f` (base + delta, in f32 as a glTF viewer adds them).
-    pub fn frame_points(&self, f: usize) -> Vec<[f32; 3]> {
-        let a = self.animation.as_ref().expect("animated");
-        add(&self.points, &a.points[f])
-    }
+/// Hands every frame of every processed mesh, in order, to the sink it is given:
+/// (processed mesh, frame index, per-primitive deltas).
+pub type FrameSource<'a> =
+    dyn FnMut(&mut dyn FnMut(usize, usize, &[PrimitiveDelta]) -> Result<()>) -> Result<()> + 'a;
 
-    pub fn frame_normals(&self, f: usize) -> Option<Vec<[f32; 3]>> {
-        let a = self.animation.as_ref()?;
-        Some(add(self.normals.as_ref()?, &a.normals.as_ref()?[f]))
-    }
-}
-
-fn add(base: &[[f32; 3]], delta: &[[f32; 3]]) -> Vec<[f32; 3]> {
+/// Base + delta, in f32 as a glTF viewer adds them.
+pub fn add(base: &[[f32; 3]], delta: &[[f32; 3]]) -> Vec<[f32; 3]> {
     base.iter()
         .zip(delta)
         .map(|(b, d)| [b[0] + d[0], b[1] + d[1], b[2] + d[2]])
@@ -120,13 +118,20 @@ fn unique(name: String, taken: &mut HashMap<String, usize>) -> String {
     candidate
 }
 
+/// A processed mesh as the USD writer sees it before any frame is computed: the glTF mesh
+/// index and the frame times (seconds) of each of its tracks.
+pub struct MeshPlan {
+    pub mesh: usize,
+    pub tracks: Vec<Vec<f64>>,
+}
+
 /// Frame rate and time codes of every processed mesh's frames (`codes[mesh][frame]`).
-fn timeline(meshes: &[MeshFrames], fps: Option<f64>) -> (f64, Vec<Vec<f64>>) {
+fn timeline(meshes: &[MeshPlan], fps: Option<f64>) -> (f64, Vec<Vec<f64>>) {
     let rate = fps.unwrap_or_else(|| {
         let spacing = meshes
             .iter()
             .flat_map(|m| m.tracks.iter())
-            .flat_map(|t| t.frames.windows(2).map(|w| w[1].time - w[0].time))
+            .flat_map(|t| t.windows(2).map(|w| w[1] - w[0]))
             .filter(|d| *d > 0.0)
             .fold(f64::INFINITY, f64::min);
         if spacing.is_finite() {
@@ -142,13 +147,13 @@ fn timeline(meshes: &[MeshFrames], fps: Option<f64>) -> (f64, Vec<Vec<f64>>) {
             let mut codes = Vec::new();
             let mut next_start: Option<f64> = None;
             for t in &m.tracks {
-                let first = t.frames.first().map_or(0.0, |f| f.time) * rate;
+                let first = t.first().copied().unwrap_or(0.0) * rate;
                 let offset = match next_start {
                     Some(s) if s > first => s - first,
                     _ => 0.0,
                 };
-                for f in &t.frames {
-                    codes.push(round(f.time * rate + offset));
+                for time in t {
+                    codes.push(round(time * rate + offset));
                 }
                 next_start = codes.last().map(|c| c + 1.0);
             }
@@ -159,7 +164,7 @@ fn timeline(meshes: &[MeshFrames], fps: Option<f64>) -> (f64, Vec<Vec<f64>>) {
 }
 
 /// Build the stage from the glTF document and the processed meshes' frames.
-pub fn build_stage(doc: &Document, meshes: &[MeshFrames], fps: Option<f64>) -> Result<Stage> {
+pub fn build_stage(doc: &Document, meshes: &[MeshPlan], fps: Option<f64>) -> Result<Stage> {
     let json = &doc.json;
     let (rate, codes) = timeline(meshes, fps);
     let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
@@ -222,7 +227,7 @@ pub fn build_stage(doc: &Document, meshes: &[MeshFrames], fps: Option<f64>) -> R
 
 struct Ctx<'a> {
     doc: &'a Document,
-    meshes: &'a [MeshFrames],
+    meshes: &'a [MeshPlan],
     codes: &'a [Vec<f64>],
 }
 
@@ -303,14 +308,13 @@ impl Ctx<'_> {
             });
             let color = color.or(material.map(|_| [1.0, 1.0, 1.0]));
             let double_sided = material.is_some_and(|m| m["doubleSided"].as_bool() == Some(true));
-            let animation = processed.and_then(|k| {
-                let frames = &self.meshes[k];
-                let pf = frames.primitives.iter().find(|x| x.index == pi)?;
-                Some(Animation {
-                    times: self.codes[k].clone(),
-                    points: pf.positions.clone(),
-                    normals: pf.normals.clone(),
-                })
+            // Processed meshes keep every primitive (a non-triangle one is an error there).
+            let animation = processed.map(|k| Animation {
+                mesh: k,
+                primitive: pi,
+                times: self.codes[k].clone(),
+                normals: normals.is_some()
+                    && prims.iter().all(|q| q["attributes"]["NORMAL"].is_u64()),
             });
             let base_name = if prims.len() == 1 {
                 identifier(&mesh_name)
@@ -383,7 +387,7 @@ pub fn extent(points: &[[f32; 3]]) -> [[f32; 3]; 2] {
 // ---------------------------------------------------------------------------------------------
 
 /// Write the stage as USDA text.
-pub fn write_usda(stage: &Stage, out: &mut dyn Write) -> Result<()> {
+pub fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
     writeln!(out, "#usda 1.0")?;
     writeln!(out, "(")?;
     writeln!(out, "    defaultPrim = \"{}\"", stage.root)?;
@@ -403,13 +407,13 @@ pub fn write_usda(stage: &Stage, out: &mut dyn Write) -> Result<()> {
     writeln!(out, "def Xform \"{}\"", stage.root)?;
     writeln!(out, "{{")?;
     for c in &stage.children {
-        write_prim(c, out, 1)?;
+        write_prim(c, out, 1, spool)?;
     }
     writeln!(out, "}}")?;
     Ok(())
 }
 
-fn write_prim(prim: &Prim, out: &mut dyn Write, depth: usize) -> Result<()> {
+fn write_prim(prim: &Prim, out: &mut dyn Write, depth: usize, spool: &Spool) -> Result<()> {
     let pad = "    ".repeat(depth);
     match prim {
         Prim::Xform {
@@ -435,11 +439,11 @@ fn write_prim(prim: &Prim, out: &mut dyn Write, depth: usize) -> Result<()> {
                 )?;
             }
             for c in children {
-                write_prim(c, out, depth + 1)?;
+                write_prim(c, out, depth + 1, spool)?;
             }
             writeln!(out, "{pad}}}")?;
         }
-        Prim::Mesh(m) => write_mesh(m, out, &pad)?,
+        Prim::Mesh(m) => write_mesh(m, out, &pad, spool)?,
     }
     Ok(())
 }
@@ -470,7 +474,7 @@ fn write_vec3s(out: &mut dyn Write, v: &[[f32; 3]]) -> std::io::Result<()> {
     out.write_all(b"]")
 }
 
-fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str) -> Result<()> {
+fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str, spool: &Spool) -> Result<()> {
     writeln!(out, "{pad}def Mesh \"{}\"", m.name)?;
     writeln!(out, "{pad}{{")?;
     let p = format!("{pad}    ");
@@ -486,11 +490,7 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str) -> Result<()> {
         }
         Some(a) => {
             writeln!(out, "{p}float3[] extent.timeSamples = {{")?;
-            for (f, t) in a.times.iter().enumerate() {
-                write!(out, "{p}    {t}: ")?;
-                write_vec3s(out, &extent(&m.frame_points(f)))?;
-                writeln!(out, ",")?;
-            }
+            spool.copy(a, Attr::Extent, out)?;
             writeln!(out, "{p}}}")?;
         }
     }
@@ -509,16 +509,12 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str) -> Result<()> {
     writeln!(out, "]")?;
     if let Some(n) = &m.normals {
         match &m.animation {
-            Some(a) if a.normals.is_some() => {
+            Some(a) if a.normals => {
                 writeln!(out, "{p}normal3f[] normals (")?;
                 writeln!(out, "{p}    interpolation = \"vertex\"")?;
                 writeln!(out, "{p})")?;
                 writeln!(out, "{p}normal3f[] normals.timeSamples = {{")?;
-                for (f, t) in a.times.iter().enumerate() {
-                    write!(out, "{p}    {t}: ")?;
-                    write_vec3s(out, &m.frame_normals(f).unwrap_or_default())?;
-                    writeln!(out, ",")?;
-                }
+                spool.copy(a, Attr::Normals, out)?;
                 writeln!(out, "{p}}}")?;
             }
             _ => {
@@ -538,11 +534,7 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str) -> Result<()> {
         }
         Some(a) => {
             writeln!(out, "{p}point3f[] points.timeSamples = {{")?;
-            for (f, t) in a.times.iter().enumerate() {
-                write!(out, "{p}    {t}: ")?;
-                write_vec3s(out, &m.frame_points(f))?;
-                writeln!(out, ",")?;
-            }
+            spool.copy(a, Attr::Points, out)?;
             writeln!(out, "{p}}}")?;
         }
     }
@@ -574,19 +566,169 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str) -> Result<()> {
     Ok(())
 }
 
-/// Write `stage` to `path` in `format`, atomically (temporary file, renamed on success).
-pub fn write_file(stage: &Stage, format: UsdFormat, path: &Path) -> Result<()> {
+/// The animated primitives of a stage: one entry per (processed mesh, primitive), with the
+/// base points and normals its frames' deltas apply to (instances share the entry).
+pub fn animated(stage: &Stage) -> Vec<&MeshPrim> {
+    fn walk<'a>(p: &'a Prim, out: &mut Vec<&'a MeshPrim>) {
+        match p {
+            Prim::Xform { children, .. } => children.iter().for_each(|c| walk(c, out)),
+            Prim::Mesh(m) => {
+                if let Some(a) = &m.animation {
+                    let key = (a.mesh, a.primitive);
+                    if !out
+                        .iter()
+                        .any(|o| o.animation.as_ref().map(|x| (x.mesh, x.primitive)) == Some(key))
+                    {
+                        out.push(m);
+                    }
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    stage.children.iter().for_each(|c| walk(c, &mut out));
+    out
+}
+
+/// Time-sampled attributes written per frame.
+#[derive(Clone, Copy)]
+pub enum Attr {
+    Extent,
+    Normals,
+    Points,
+}
+
+/// Sample text of every animated attribute, spooled to temporary files beside the output as
+/// frames arrive, then copied into the .usda (so no frame is held in memory).
+pub struct Spool {
+    files: HashMap<(usize, usize, u8), PathBuf>,
+}
+
+impl Spool {
+    fn path(&self, a: &Animation, attr: Attr) -> Option<&PathBuf> {
+        self.files.get(&(a.mesh, a.primitive, attr as u8))
+    }
+
+    fn copy(&self, a: &Animation, attr: Attr, out: &mut dyn Write) -> Result<()> {
+        if let Some(p) = self.path(a, attr) {
+            let mut f = std::fs::File::open(p)?;
+            std::io::copy(&mut f, out)?;
+        }
+        Ok(())
+    }
+
+    fn remove(&self) {
+        for p in self.files.values() {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
+/// Run the frame source, writing each animated primitive's sample lines to spool files.
+fn spool_frames(
+    stage: &Stage,
+    path: &Path,
+    source: &mut FrameSource,
+    spool: &mut Spool,
+) -> Result<()> {
+    let prims = animated(stage);
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    let mut writers: HashMap<(usize, usize, u8), std::io::BufWriter<std::fs::File>> =
+        HashMap::new();
+    for m in &prims {
+        let a = m.animation.as_ref().expect("animated");
+        let attrs: &[Attr] = if a.normals {
+            &[Attr::Extent, Attr::Normals, Attr::Points]
+        } else {
+            &[Attr::Extent, Attr::Points]
+        };
+        for &attr in attrs {
+            let key = (a.mesh, a.primitive, attr as u8);
+            let file = dir.join(format!(
+                ".{name}.{}.{}_{}_{}.tmp",
+                std::process::id(),
+                a.mesh,
+                a.primitive,
+                attr as u8
+            ));
+            spool.files.insert(key, file.clone());
+            let f = std::fs::File::create(&file)
+                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+            writers.insert(key, std::io::BufWriter::with_capacity(1 << 20, f));
+        }
+    }
+    let pad = "            ";
+    source(&mut |k, f, deltas| {
+        for m in prims
+            .iter()
+            .filter(|m| m.animation.as_ref().is_some_and(|a| a.mesh == k))
+        {
+            let a = m.animation.as_ref().expect("animated");
+            let d = &deltas[a.primitive];
+            let t = a.times[f];
+            let points = add(&m.points, &d.positions);
+            let w = writers
+                .get_mut(&(k, a.primitive, Attr::Extent as u8))
+                .expect("spool");
+            write!(w, "{pad}{t}: ")?;
+            write_vec3s(w, &extent(&points))?;
+            writeln!(w, ",")?;
+            if let (true, Some(base), Some(n)) = (a.normals, &m.normals, &d.normals) {
+                let w = writers
+                    .get_mut(&(k, a.primitive, Attr::Normals as u8))
+                    .expect("spool");
+                write!(w, "{pad}{t}: ")?;
+                write_vec3s(w, &add(base, n))?;
+                writeln!(w, ",")?;
+            }
+            let w = writers
+                .get_mut(&(k, a.primitive, Attr::Points as u8))
+                .expect("spool");
+            write!(w, "{pad}{t}: ")?;
+            write_vec3s(w, &points)?;
+            writeln!(w, ",")?;
+        }
+        Ok(())
+    })?;
+    for (_, mut w) in writers {
+        w.flush()?;
+    }
+    Ok(())
+}
+
+/// Write `stage` to `path` in `format`, atomically (temporary files beside it, renamed on
+/// success), taking the frames from `source` as they are computed.
+pub fn write_file(
+    stage: &Stage,
+    format: UsdFormat,
+    path: &Path,
+    source: &mut FrameSource,
+) -> Result<()> {
     use crate::write::atomic_write_with;
     match format {
-        UsdFormat::Usda => atomic_write_with(path, |w| write_usda(stage, w)),
-        UsdFormat::Usdc => {
-            atomic_write_with(path, |w| crate::usdc::write_usdc(stage, w).map(|_| ()))
+        UsdFormat::Usda => {
+            let mut spool = Spool {
+                files: HashMap::new(),
+            };
+            let result = spool_frames(stage, path, source, &mut spool)
+                .and_then(|_| atomic_write_with(path, |w| write_usda(stage, w, &spool)));
+            spool.remove();
+            result
         }
+        UsdFormat::Usdc => atomic_write_with(path, |w| {
+            crate::usdc::write_usdc(stage, w, source).map(|_| ())
+        }),
         UsdFormat::Usdz => {
             // The root layer, as .usdc, in a temporary file beside the output, then stored.
             let layer = path.with_extension(format!("usdz.{}.usdc.tmp", std::process::id()));
             let result = (|| {
-                atomic_write_with(&layer, |w| crate::usdc::write_usdc(stage, w).map(|_| ()))?;
+                atomic_write_with(&layer, |w| {
+                    crate::usdc::write_usdc(stage, w, source).map(|_| ())
+                })?;
                 let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("stage");
                 atomic_write_with(path, |w| {
                     crate::usdz::write_package(w, &[(format!("{stem}.usdc"), layer.clone())])

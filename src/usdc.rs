@@ -11,7 +11,7 @@
 //! laid out as `[offset to times][times][times rep][offset to reps][sample arrays][count][reps]`
 //! with every size known beforehand, so nothing is patched but the bootstrap.
 
-use crate::usd::{extent, MeshPrim, Prim, Stage};
+use crate::usd::{add, animated, extent, FrameSource, MeshPrim, Prim, Stage};
 use anyhow::Result;
 use std::collections::HashMap;
 use std::io::{Seek, SeekFrom, Write};
@@ -205,16 +205,17 @@ impl<W: Write + Seek> Writer<W> {
         Ok(rep_heap(T_VEC3F, at, true))
     }
 
-    /// Time samples of Vec3f arrays of `count` elements each, produced frame by frame.
-    fn time_samples(
-        &mut self,
-        times: &[f64],
-        count: usize,
-        mut frame: impl FnMut(usize) -> Vec<[f32; 3]>,
-    ) -> Result<u64> {
+    /// A TimeSamples value over arrays already in the file (`reps[f]` at `times[f]`):
+    /// `[i64 to times rep][times: u64 count + doubles][times rep][i64 to values][count][reps]`.
+    fn time_samples(&mut self, times: &[f64], reps: &[u64]) -> Result<u64> {
+        anyhow::ensure!(
+            times.len() == reps.len(),
+            "{} time samples for {} times",
+            reps.len(),
+            times.len()
+        );
         let at = self.pos;
         let n = times.len() as u64;
-        // [i64 to times rep][times: u64 count + doubles][times rep]
         let times_size = 8 + 8 * n;
         self.bytes(&((8 + times_size) as i64).to_le_bytes())?;
         let times_at = self.pos;
@@ -223,21 +224,9 @@ impl<W: Write + Seek> Writer<W> {
             self.bytes(&t.to_le_bytes())?;
         }
         self.u64(rep_heap(T_DOUBLE_VECTOR, times_at, false))?;
-        // [i64 to values][sample arrays][u64 count][reps]
-        let array_size = 8 + 12 * count as u64;
-        self.bytes(&((8 + array_size * n) as i64).to_le_bytes())?;
-        let mut reps = Vec::with_capacity(times.len());
-        for f in 0..times.len() {
-            let v = frame(f);
-            anyhow::ensure!(
-                v.len() == count,
-                "time sample {f} has {} points, expected {count}",
-                v.len()
-            );
-            reps.push(self.vec3f_array(&v)?);
-        }
+        self.bytes(&8i64.to_le_bytes())?;
         self.u64(n)?;
-        for r in reps {
+        for &r in reps {
             self.u64(r)?;
         }
         Ok(rep_heap(T_TIME_SAMPLES, at, false))
@@ -287,7 +276,7 @@ impl<W: Write + Seek> Writer<W> {
         Ok(())
     }
 
-    fn prim(&mut self, prim: &Prim, parent: usize) -> Result<()> {
+    fn prim(&mut self, prim: &Prim, parent: usize, frames: &FrameReps) -> Result<()> {
         match prim {
             Prim::Xform {
                 name,
@@ -305,11 +294,11 @@ impl<W: Write + Seek> Writer<W> {
                     props = vec!["xformOp:transform".to_owned(), "xformOpOrder".to_owned()];
                 }
                 for c in children {
-                    self.prim(c, me)?;
+                    self.prim(c, me, frames)?;
                 }
                 self.prim_spec(me, "Xform", props, children.iter().map(prim_name).collect())
             }
-            Prim::Mesh(m) => self.mesh(m, parent),
+            Prim::Mesh(m) => self.mesh(m, parent, frames),
         }
     }
 
@@ -334,27 +323,29 @@ impl<W: Write + Seek> Writer<W> {
         Ok(())
     }
 
-    fn mesh(&mut self, m: &MeshPrim, parent: usize) -> Result<()> {
+    fn mesh(&mut self, m: &MeshPrim, parent: usize, frames: &FrameReps) -> Result<()> {
+        let reps = m
+            .animation
+            .as_ref()
+            .and_then(|a| frames.get(&(a.mesh, a.primitive)));
         let me = self.path(Some(parent), &m.name, false);
         let mut props = Vec::new();
         let uniform = self.field("variability", Val::Uniform)?;
         let vertex = self.field("interpolation", Val::Token("vertex"))?;
-        let n = m.points.len();
         if m.double_sided {
             let v = self.field("default", Val::Bool(true))?;
             self.attribute(me, "doubleSided", "bool", vec![uniform, v])?;
             props.push("doubleSided");
         }
-        match &m.animation {
-            None => {
-                let e = extent(&m.points);
-                let v = self.field("default", Val::Vec3fs(&e))?;
+        match (&m.animation, reps) {
+            (Some(a), Some(r)) => {
+                let rep = self.time_samples(&a.times, &r.extent)?;
+                let v = self.raw_field("timeSamples", rep);
                 self.attribute(me, "extent", "float3[]", vec![v])?;
             }
-            Some(a) => {
-                let rep =
-                    self.time_samples(&a.times, 2, |f| extent(&m.frame_points(f)).to_vec())?;
-                let v = self.raw_field("timeSamples", rep);
+            _ => {
+                let e = extent(&m.points);
+                let v = self.field("default", Val::Vec3fs(&e))?;
                 self.attribute(me, "extent", "float3[]", vec![v])?;
             }
         }
@@ -368,10 +359,9 @@ impl<W: Write + Seek> Writer<W> {
         self.attribute(me, "faceVertexIndices", "int[]", vec![indices])?;
         props.extend(["faceVertexCounts", "faceVertexIndices"]);
         if let Some(normals) = &m.normals {
-            let v = match &m.animation {
-                Some(a) if a.normals.is_some() => {
-                    let rep =
-                        self.time_samples(&a.times, n, |f| m.frame_normals(f).unwrap_or_default())?;
+            let v = match (&m.animation, reps) {
+                (Some(a), Some(r)) if a.normals => {
+                    let rep = self.time_samples(&a.times, &r.normals)?;
                     self.raw_field("timeSamples", rep)
                 }
                 _ => self.field("default", Val::Vec3fs(normals))?,
@@ -379,12 +369,12 @@ impl<W: Write + Seek> Writer<W> {
             self.attribute(me, "normals", "normal3f[]", vec![vertex, v])?;
             props.push("normals");
         }
-        let v = match &m.animation {
-            None => self.field("default", Val::Vec3fs(&m.points))?,
-            Some(a) => {
-                let rep = self.time_samples(&a.times, n, |f| m.frame_points(f))?;
+        let v = match (&m.animation, reps) {
+            (Some(a), Some(r)) => {
+                let rep = self.time_samples(&a.times, &r.points)?;
                 self.raw_field("timeSamples", rep)
             }
+            _ => self.field("default", Val::Vec3fs(&m.points))?,
         };
         self.attribute(me, "points", "point3f[]", vec![v])?;
         props.push("points");
@@ -539,8 +529,19 @@ fn prim_name(p: &Prim) -> String {
     }
 }
 
-/// Write `stage` as a crate file to `out` (which must start empty, at position 0).
-pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W) -> Result<W> {
+/// Offsets (ValueReps) of each animated primitive's per-frame arrays.
+#[derive(Default)]
+struct SampleReps {
+    extent: Vec<u64>,
+    normals: Vec<u64>,
+    points: Vec<u64>,
+}
+
+type FrameReps = HashMap<(usize, usize), SampleReps>;
+
+/// Write `stage` as a crate file to `out` (which must start empty, at position 0), taking the
+/// animated primitives' frames from `source`: each frame's arrays go to the file as it arrives.
+pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSource) -> Result<W> {
     let mut w = Writer {
         out,
         pos: 0,
@@ -554,12 +555,35 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W) -> Result<W> {
         specs: Vec::new(),
     };
     w.bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
+    let prims = animated(stage);
+    let mut frames: FrameReps = HashMap::new();
+    source(&mut |k, _f, deltas| {
+        for m in prims
+            .iter()
+            .filter(|m| m.animation.as_ref().is_some_and(|a| a.mesh == k))
+        {
+            let a = m.animation.as_ref().expect("animated");
+            let d = &deltas[a.primitive];
+            let points = add(&m.points, &d.positions);
+            let e = w.vec3f_array(&extent(&points))?;
+            let p = w.vec3f_array(&points)?;
+            let n = match (a.normals, &m.normals, &d.normals) {
+                (true, Some(base), Some(n)) => Some(w.vec3f_array(&add(base, n))?),
+                _ => None,
+            };
+            let r = frames.entry((a.mesh, a.primitive)).or_default();
+            r.extent.push(e);
+            r.points.push(p);
+            r.normals.extend(n);
+        }
+        Ok(())
+    })?;
     // Token 0 is a prim name, so no property path ever needs the (unnegatable) index 0.
     w.token(&stage.root);
     let root = w.path(None, "", false);
     let top = w.path(Some(root), &stage.root, false);
     for c in &stage.children {
-        w.prim(c, top)?;
+        w.prim(c, top, &frames)?;
     }
     w.prim_spec(
         top,

@@ -277,3 +277,43 @@ fn bad_output_paths_fail_cleanly() {
         .count();
     assert_eq!(leftovers, 0);
 }
+
+#[test]
+fn usdc_size_is_close_to_usd_core_resave() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (x0, x1, triangles) = inbetween::bench::bench_keys(16020);
+    let surface = inbetween::synth::Surface {
+        positions: x0,
+        normals: None,
+        uvs: None,
+        triangles,
+    };
+    let keys = dir.path().join("keys.glb");
+    inbetween::synth::KeyframeFile {
+        meshes: vec![inbetween::synth::KeyedMesh::new("tube", surface, vec![x1])],
+        key_times: None,
+    }
+    .write(&keys)
+    .unwrap();
+    let ours = dir.path().join("cache.usdc");
+    run_ok(&["tween", s(&keys), "-o", s(&ours), "--tweens", "98", "-q"]); // 100 frames
+    let resaved = dir.path().join("resaved.usdc");
+    let script =
+        "import sys\nfrom pxr import Sdf\nSdf.Layer.FindOrOpen(sys.argv[1]).Export(sys.argv[2])\n";
+    let out = std::process::Command::new(&python)
+        .args(["-c", script])
+        .arg(&ours)
+        .arg(&resaved)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let a = std::fs::metadata(&ours).unwrap().len() as f64;
+    let b = std::fs::metadata(&resaved).unwrap().len() as f64;
+    eprintln!("100-frame cache of 16,020 triangles: ours {a} bytes, usd-core re-save {b} bytes, ratio {:.3}", a / b);
+    assert!(a <= 1.5 * b, "ratio {}", a / b);
+}
