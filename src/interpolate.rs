@@ -36,10 +36,17 @@ struct TriangleTween {
     /// Unit rotation axis of R and its angle in [0, pi] (shortest arc, as the seed's slerp).
     axis: DVec3,
     angle: f64,
-    /// Gradient operator of the reference triangle.
-    g: [DVec3; 3],
-    /// S applied to each g.
-    sg: [DVec3; 3],
+    /// Gradient operator of the reference triangle at corners 1 and 2 (corner 0's is minus
+    /// their sum).
+    g: [DVec3; 2],
+    /// S applied to each of them.
+    sg: [DVec3; 2],
+}
+
+impl TriangleTween {
+    fn gradients(&self) -> [DVec3; 3] {
+        [-(self.g[0] + self.g[1]), self.g[0], self.g[1]]
+    }
 }
 
 /// The tween of one pair of keys, ready to produce frames.
@@ -120,14 +127,14 @@ impl SeedSegment {
                     corners: [a, b, c],
                     axis,
                     angle,
-                    g,
-                    sg: g.map(|gk| s * gk),
+                    g: [g[1], g[2]],
+                    sg: [s * g[1], s * g[2]],
                 })
             })
             .collect();
         let grads: Vec<Option<[DVec3; 3]>> = per_triangle
             .iter()
-            .map(|t| t.as_ref().map(|t| t.g))
+            .map(|t| t.as_ref().map(TriangleTween::gradients))
             .collect();
         let valid: Vec<[u32; 3]> = per_triangle.iter().flatten().map(|t| t.corners).collect();
         let (component, count) = components(n, &valid);
@@ -176,8 +183,8 @@ impl SeedSegment {
         for tri in &self.triangles {
             let r = axis_angle_matrix(tri.axis, tri.angle * t);
             // T(t) g = R(t) ((1-t) g + t S g); the three g sum to zero, so do two.
-            let v1 = r * (tri.g[1] * (1.0 - t) + tri.sg[1] * t);
-            let v2 = r * (tri.g[2] * (1.0 - t) + tri.sg[2] * t);
+            let v1 = r * (tri.g[0] * (1.0 - t) + tri.sg[0] * t);
+            let v2 = r * (tri.g[1] * (1.0 - t) + tri.sg[1] * t);
             for (k, v) in [(0, -(v1 + v2)), (1, v1), (2, v2)] {
                 let b = &mut rhs[tri.corners[k] as usize];
                 b[0] += v.x;

@@ -118,6 +118,10 @@ impl Pattern {
     }
 }
 
+/// Above this many off-diagonal nonzeros in L (about 12 bytes each per copy), only the
+/// row-oriented copy is kept: a factor of 16M nonzeros then takes 190 MiB instead of 380 MiB.
+pub const TWO_COPIES_MAX_NONZEROS: usize = 16_000_000;
+
 /// A numeric factorization for one reference pose: `P A P^T = L L^T`, with L kept as its
 /// diagonal plus a strictly-lower CSC copy (explicit zeros of the supernodal blocks dropped) so
 /// a frame's three right-hand sides are solved together in one pass over L per direction.
@@ -242,6 +246,7 @@ impl Factor {
                 }
             }
         }
+        drop(values);
         rows.shrink_to_fit();
         vals.shrink_to_fit();
         // Transpose to rows (columns visited in order, so each row's entries come out sorted).
@@ -263,7 +268,8 @@ impl Factor {
                 next[r] += 1;
             }
         }
-        Ok(Factor {
+        let large = rows.len() > TWO_COPIES_MAX_NONZEROS;
+        let mut factor = Factor {
             row_ptr,
             cols,
             row_vals,
@@ -273,29 +279,46 @@ impl Factor {
             rows,
             vals,
             pinned,
-        })
+        };
+        if large {
+            factor.keep_rows_only();
+        }
+        Ok(factor)
+    }
+
+    /// Keep only the row-oriented copy of L (half the memory, a slower backward pass): done
+    /// for factors over [`TWO_COPIES_MAX_NONZEROS`].
+    pub fn keep_rows_only(&mut self) {
+        self.col_ptr = Vec::new();
+        self.rows = Vec::new();
+        self.vals = Vec::new();
     }
 
     /// Nonzeros of L kept for the solves (diagonal included).
     pub fn nonzeros(&self) -> usize {
-        self.diag.len() + self.vals.len()
+        self.diag.len() + self.row_vals.len()
     }
 
     /// Solve `A x = b` in place for three right-hand sides stored as rows `[x, y, z]`.
     pub fn solve(&self, b: &mut [[f64; 3]]) {
         let n = self.diag.len();
         assert_eq!(b.len(), n);
-        assert_eq!(self.col_ptr.len(), n + 1);
-        assert_eq!(self.rows.len(), self.vals.len());
-        assert!(self.col_ptr[n] <= self.rows.len());
+        assert_eq!(self.row_ptr.len(), n + 1);
+        assert!(self.row_ptr[n] <= self.cols.len() && self.cols.len() == self.row_vals.len());
         assert!(
-            self.rows.iter().all(|&r| (r as usize) < n)
+            self.cols.iter().all(|&c| (c as usize) < n)
                 && self.perm.iter().all(|&p| (p as usize) < n)
         );
+        let by_columns = !self.col_ptr.is_empty();
+        if by_columns {
+            assert_eq!(self.col_ptr.len(), n + 1);
+            assert!(self.col_ptr[n] <= self.rows.len() && self.rows.len() == self.vals.len());
+            assert!(self.rows.iter().all(|&r| (r as usize) < n));
+        }
         let mut y: Vec<[f64; 3]> = self.perm.iter().map(|&p| b[p as usize]).collect();
-        // SAFETY (all unchecked accesses below): col_ptr is non-decreasing and bounded by
-        // rows.len() == vals.len(), and every row index is below n (checked above; the
-        // arrays are immutable after construction).
+        // SAFETY (all unchecked accesses below): row_ptr and col_ptr are non-decreasing and
+        // bounded by their index arrays' lengths, which equal their value arrays' lengths, and
+        // every index is below n (checked above; the arrays are immutable after construction).
         unsafe {
             // L z = P b, row by row
             for i in 0..n {
@@ -311,17 +334,36 @@ impl Factor {
                 *y.get_unchecked_mut(i) = [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
             }
             // L^T w = z
-            for j in (0..n).rev() {
-                let s = gather_dot(
-                    &y,
-                    &self.rows,
-                    &self.vals,
-                    *self.col_ptr.get_unchecked(j),
-                    *self.col_ptr.get_unchecked(j + 1),
-                );
-                let b = *y.get_unchecked(j);
-                let d = 1.0 / *self.diag.get_unchecked(j);
-                *y.get_unchecked_mut(j) = [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
+            if by_columns {
+                // Gather along each column of L.
+                for j in (0..n).rev() {
+                    let s = gather_dot(
+                        &y,
+                        &self.rows,
+                        &self.vals,
+                        *self.col_ptr.get_unchecked(j),
+                        *self.col_ptr.get_unchecked(j + 1),
+                    );
+                    let b = *y.get_unchecked(j);
+                    let d = 1.0 / *self.diag.get_unchecked(j);
+                    *y.get_unchecked_mut(j) =
+                        [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
+                }
+            } else {
+                // Only the row copy is kept: scatter each finished value along its row.
+                for i in (0..n).rev() {
+                    let d = 1.0 / *self.diag.get_unchecked(i);
+                    let v = *y.get_unchecked(i);
+                    let w = [v[0] * d, v[1] * d, v[2] * d];
+                    *y.get_unchecked_mut(i) = w;
+                    for k in *self.row_ptr.get_unchecked(i)..*self.row_ptr.get_unchecked(i + 1) {
+                        let l = *self.row_vals.get_unchecked(k);
+                        let t = y.get_unchecked_mut(*self.cols.get_unchecked(k) as usize);
+                        t[0] -= l * w[0];
+                        t[1] -= l * w[1];
+                        t[2] -= l * w[2];
+                    }
+                }
             }
         }
         for (i, &p) in self.perm.iter().enumerate() {
@@ -406,4 +448,49 @@ pub fn components(n: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, usize) {
         label[v] = root_label[r];
     }
     (label, count)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gradient::{frame, gradient_operator};
+
+    #[test]
+    fn row_only_solve_matches_two_copy_solve() {
+        let s = crate::synth::tube(12, 9, 3.0, 0.5, 0.4);
+        let pattern = Pattern::new(s.positions.len(), &s.triangles).unwrap();
+        let grads: Vec<Option<[DVec3; 3]>> = s
+            .triangles
+            .iter()
+            .map(|t| {
+                frame(
+                    s.positions[t[0] as usize],
+                    s.positions[t[1] as usize],
+                    s.positions[t[2] as usize],
+                )
+                .map(|v| gradient_operator(&v.inverse()))
+            })
+            .collect();
+        let mut pinned = vec![false; s.positions.len()];
+        pinned[0] = true;
+        let mut factor = Factor::new(&pattern, &grads, pinned).unwrap();
+        let rhs: Vec<[f64; 3]> = (0..s.positions.len())
+            .map(|i| [i as f64 % 3.0 - 1.0, (i * 7 % 5) as f64, 0.5])
+            .collect();
+        let mut a = rhs.clone();
+        factor.solve(&mut a);
+        factor.keep_rows_only();
+        let mut b = rhs;
+        factor.solve(&mut b);
+        let worst = a
+            .iter()
+            .zip(&b)
+            .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs()))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-12, "{worst}");
+        assert!(
+            a.iter().flatten().any(|v| v.abs() > 1e-3),
+            "a non-trivial solution"
+        );
+    }
 }
