@@ -132,10 +132,6 @@ impl SeedSegment {
                 })
             })
             .collect();
-        let grads: Vec<Option<[DVec3; 3]>> = per_triangle
-            .iter()
-            .map(|t| t.as_ref().map(TriangleTween::gradients))
-            .collect();
         let valid: Vec<[u32; 3]> = per_triangle.iter().flatten().map(|t| t.corners).collect();
         let (component, count) = components(n, &valid);
         // Pin the first vertex of every component, and every vertex no valid triangle touches.
@@ -151,7 +147,13 @@ impl SeedSegment {
                 _ => {}
             }
         }
-        let factor = Factor::new(pattern, &grads, pinned)?;
+        let factor = Factor::new(
+            pattern,
+            per_triangle
+                .iter()
+                .map(|t| t.as_ref().map(TriangleTween::gradients)),
+            pinned,
+        )?;
         let mut centroid0 = vec![DVec3::ZERO; count];
         let mut centroid1 = vec![DVec3::ZERO; count];
         let mut component_size = vec![0usize; count];

@@ -148,11 +148,11 @@ impl Factor {
     /// factor it. `pinned[v]` marks vertices fixed at 0.
     pub fn new(
         pattern: &Pattern,
-        grads: &[Option<[DVec3; 3]>],
+        grads: impl IntoIterator<Item = Option<[DVec3; 3]>>,
         pinned: Vec<bool>,
     ) -> Result<Factor> {
         let mut a = vec![0.0f64; pattern.row_idx.len()];
-        for (g, s) in grads.iter().zip(&pattern.slots) {
+        for (g, s) in grads.into_iter().zip(&pattern.slots) {
             let Some(g) = g else { continue };
             for k in 0..3 {
                 a[s[k] as usize] += g[k].length_squared();
@@ -196,80 +196,88 @@ impl Factor {
             Some(p) => p.arrays().0.to_vec(),
             None => (0..n as u32).collect(),
         };
+        // Off-diagonal entries of L column by column (rows ascending within a column).
         let mut diag = vec![0.0; n];
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut rows = Vec::new();
-        let mut vals = Vec::new();
-        col_ptr.push(0);
-        match symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                let (cp, ri) = (s.col_ptr(), s.row_idx());
-                for j in 0..n {
-                    for k in cp[j] as usize..cp[j + 1] as usize {
-                        let (r, v) = (ri[k] as usize, values[k]);
-                        if r == j {
-                            diag[j] = v;
-                        } else if v != 0.0 {
-                            rows.push(r as u32);
-                            vals.push(v);
-                        }
-                    }
-                    col_ptr.push(rows.len());
-                }
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let begin = s.supernode_begin();
-                let end = s.supernode_end();
-                for sn in 0..s.n_supernodes() {
-                    let (start, stop) = (begin[sn] as usize, end[sn] as usize);
-                    let pattern_rows = s.supernode(sn).pattern();
-                    let ncols = stop - start;
-                    let nrows = ncols + pattern_rows.len();
-                    let block = &values
-                        [s.col_ptr_for_val()[sn] as usize..s.col_ptr_for_val()[sn + 1] as usize];
-                    for c in 0..ncols {
-                        let col = &block[c * nrows..(c + 1) * nrows];
-                        diag[start + c] = col[c];
-                        for (r, &v) in col.iter().enumerate().skip(c + 1) {
-                            if v != 0.0 {
-                                let row = if r < ncols {
-                                    start + r
-                                } else {
-                                    pattern_rows[r - ncols] as usize
-                                };
-                                rows.push(row as u32);
-                                vals.push(v);
+        let for_each_entry =
+            |diag: &mut [f64], emit: &mut dyn FnMut(usize, usize, f64)| match symbolic.raw() {
+                SymbolicCholeskyRaw::Simplicial(s) => {
+                    let (cp, ri) = (s.col_ptr(), s.row_idx());
+                    for j in 0..n {
+                        for k in cp[j] as usize..cp[j + 1] as usize {
+                            let (r, v) = (ri[k] as usize, values[k]);
+                            if r == j {
+                                diag[j] = v;
+                            } else if v != 0.0 {
+                                emit(j, r, v);
                             }
                         }
-                        col_ptr.push(rows.len());
                     }
                 }
-            }
-        }
-        drop(values);
-        rows.shrink_to_fit();
-        vals.shrink_to_fit();
-        // Transpose to rows (columns visited in order, so each row's entries come out sorted).
+                SymbolicCholeskyRaw::Supernodal(s) => {
+                    let (begin, end) = (s.supernode_begin(), s.supernode_end());
+                    for sn in 0..s.n_supernodes() {
+                        let (start, stop) = (begin[sn] as usize, end[sn] as usize);
+                        let pattern_rows = s.supernode(sn).pattern();
+                        let ncols = stop - start;
+                        let nrows = ncols + pattern_rows.len();
+                        let block = &values[s.col_ptr_for_val()[sn] as usize
+                            ..s.col_ptr_for_val()[sn + 1] as usize];
+                        for c in 0..ncols {
+                            let col = &block[c * nrows..(c + 1) * nrows];
+                            diag[start + c] = col[c];
+                            for (r, &v) in col.iter().enumerate().skip(c + 1) {
+                                if v != 0.0 {
+                                    let row = if r < ncols {
+                                        start + r
+                                    } else {
+                                        pattern_rows[r - ncols] as usize
+                                    };
+                                    emit(start + c, row, v);
+                                }
+                            }
+                        }
+                    }
+                }
+            };
+        // Row copy, built straight from the factor: count, then fill (columns come in order, so
+        // each row's entries are sorted).
         let mut row_ptr = vec![0usize; n + 1];
-        for &r in &rows {
-            row_ptr[r as usize + 1] += 1;
-        }
+        for_each_entry(&mut diag, &mut |_, r, _| row_ptr[r + 1] += 1);
         for i in 0..n {
             row_ptr[i + 1] += row_ptr[i];
         }
+        let total = row_ptr[n];
         let mut next = row_ptr.clone();
-        let mut cols = vec![0u32; rows.len()];
-        let mut row_vals = vec![0.0f64; rows.len()];
-        for j in 0..n {
-            for k in col_ptr[j]..col_ptr[j + 1] {
-                let r = rows[k] as usize;
-                cols[next[r]] = j as u32;
-                row_vals[next[r]] = vals[k];
-                next[r] += 1;
+        let mut cols = vec![0u32; total];
+        let mut row_vals = vec![0.0f64; total];
+        for_each_entry(&mut diag, &mut |j, r, v| {
+            cols[next[r]] = j as u32;
+            row_vals[next[r]] = v;
+            next[r] += 1;
+        });
+        drop(next);
+        // Column copy, unless the factor is large.
+        let (mut col_ptr, mut rows, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        if total <= TWO_COPIES_MAX_NONZEROS {
+            col_ptr = Vec::with_capacity(n + 1);
+            rows.reserve_exact(total);
+            vals.reserve_exact(total);
+            col_ptr.push(0);
+            let mut current = 0;
+            for_each_entry(&mut diag, &mut |j, r, v| {
+                while current < j {
+                    col_ptr.push(rows.len());
+                    current += 1;
+                }
+                rows.push(r as u32);
+                vals.push(v);
+            });
+            while col_ptr.len() < n + 1 {
+                col_ptr.push(rows.len());
             }
         }
-        let large = rows.len() > TWO_COPIES_MAX_NONZEROS;
-        let mut factor = Factor {
+        drop(values);
+        Ok(Factor {
             row_ptr,
             cols,
             row_vals,
@@ -279,11 +287,7 @@ impl Factor {
             rows,
             vals,
             pinned,
-        };
-        if large {
-            factor.keep_rows_only();
-        }
-        Ok(factor)
+        })
     }
 
     /// Keep only the row-oriented copy of L (half the memory, a slower backward pass): done
@@ -473,7 +477,7 @@ mod tests {
             .collect();
         let mut pinned = vec![false; s.positions.len()];
         pinned[0] = true;
-        let mut factor = Factor::new(&pattern, &grads, pinned).unwrap();
+        let mut factor = Factor::new(&pattern, grads, pinned).unwrap();
         let rhs: Vec<[f64; 3]> = (0..s.positions.len())
             .map(|i| [i as f64 % 3.0 - 1.0, (i * 7 % 5) as f64, 0.5])
             .collect();
