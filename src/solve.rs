@@ -119,7 +119,8 @@ impl Pattern {
 }
 
 /// Above this many off-diagonal nonzeros in L (about 12 bytes each per copy), only the
-/// row-oriented copy is kept: a factor of 16M nonzeros then takes 190 MiB instead of 380 MiB.
+/// column-oriented copy is kept, compacted inside the factorization's own buffer: a factor of
+/// 16M nonzeros then takes 190 MiB instead of 380 MiB, and no second buffer is ever allocated.
 pub const TWO_COPIES_MAX_NONZEROS: usize = 16_000_000;
 
 /// A numeric factorization for one reference pose: `P A P^T = L L^T`, with L kept as its
@@ -239,44 +240,32 @@ impl Factor {
                     }
                 }
             };
-        // Row copy, built straight from the factor: count, then fill (columns come in order, so
-        // each row's entries are sorted).
+        // Row copy (small factors only), built straight from the factor: count, then fill
+        // (columns come in order, so each row's entries are sorted).
         let mut row_ptr = vec![0usize; n + 1];
         for_each_entry(&mut diag, &mut |_, r, _| row_ptr[r + 1] += 1);
-        for i in 0..n {
+        let large = row_ptr.iter().sum::<usize>() > TWO_COPIES_MAX_NONZEROS;
+        if large {
+            row_ptr.clear();
+        }
+        for i in 0..row_ptr.len().saturating_sub(1) {
             row_ptr[i + 1] += row_ptr[i];
         }
-        let total = row_ptr[n];
+        let total = row_ptr.last().copied().unwrap_or(0);
         let mut next = row_ptr.clone();
         let mut cols = vec![0u32; total];
         let mut row_vals = vec![0.0f64; total];
-        for_each_entry(&mut diag, &mut |j, r, v| {
-            cols[next[r]] = j as u32;
-            row_vals[next[r]] = v;
-            next[r] += 1;
-        });
-        drop(next);
-        // Column copy, unless the factor is large.
-        let (mut col_ptr, mut rows, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-        if total <= TWO_COPIES_MAX_NONZEROS {
-            col_ptr = Vec::with_capacity(n + 1);
-            rows.reserve_exact(total);
-            vals.reserve_exact(total);
-            col_ptr.push(0);
-            let mut current = 0;
+        if !large {
             for_each_entry(&mut diag, &mut |j, r, v| {
-                while current < j {
-                    col_ptr.push(rows.len());
-                    current += 1;
-                }
-                rows.push(r as u32);
-                vals.push(v);
+                cols[next[r]] = j as u32;
+                row_vals[next[r]] = v;
+                next[r] += 1;
             });
-            while col_ptr.len() < n + 1 {
-                col_ptr.push(rows.len());
-            }
         }
-        drop(values);
+        drop(next);
+        // Column copy: compacted in place inside the factor's own buffer (entries only move
+        // towards the front), so it costs no second allocation of values.
+        let (col_ptr, rows, vals) = compact_columns(symbolic, values, n);
         Ok(Factor {
             row_ptr,
             cols,
@@ -290,12 +279,12 @@ impl Factor {
         })
     }
 
-    /// Keep only the row-oriented copy of L (half the memory, a slower backward pass): done
-    /// for factors over [`TWO_COPIES_MAX_NONZEROS`].
-    pub fn keep_rows_only(&mut self) {
-        self.col_ptr = Vec::new();
-        self.rows = Vec::new();
-        self.vals = Vec::new();
+    /// Keep only the column-oriented copy of L (half the memory, a slower forward pass):
+    /// done for factors over [`TWO_COPIES_MAX_NONZEROS`].
+    pub fn keep_columns_only(&mut self) {
+        self.row_ptr = Vec::new();
+        self.cols = Vec::new();
+        self.row_vals = Vec::new();
     }
 
     /// Nonzeros of L kept for the solves (diagonal included).
@@ -307,73 +296,131 @@ impl Factor {
     pub fn solve(&self, b: &mut [[f64; 3]]) {
         let n = self.diag.len();
         assert_eq!(b.len(), n);
-        assert_eq!(self.row_ptr.len(), n + 1);
-        assert!(self.row_ptr[n] <= self.cols.len() && self.cols.len() == self.row_vals.len());
+        assert_eq!(self.col_ptr.len(), n + 1);
+        assert!(self.col_ptr[n] <= self.rows.len() && self.rows.len() == self.vals.len());
         assert!(
-            self.cols.iter().all(|&c| (c as usize) < n)
+            self.rows.iter().all(|&r| (r as usize) < n)
                 && self.perm.iter().all(|&p| (p as usize) < n)
         );
-        let by_columns = !self.col_ptr.is_empty();
-        if by_columns {
-            assert_eq!(self.col_ptr.len(), n + 1);
-            assert!(self.col_ptr[n] <= self.rows.len() && self.rows.len() == self.vals.len());
-            assert!(self.rows.iter().all(|&r| (r as usize) < n));
+        let by_rows = !self.row_ptr.is_empty();
+        if by_rows {
+            assert_eq!(self.row_ptr.len(), n + 1);
+            assert!(self.row_ptr[n] <= self.cols.len() && self.cols.len() == self.row_vals.len());
+            assert!(self.cols.iter().all(|&c| (c as usize) < n));
         }
         let mut y: Vec<[f64; 3]> = self.perm.iter().map(|&p| b[p as usize]).collect();
         // SAFETY (all unchecked accesses below): row_ptr and col_ptr are non-decreasing and
         // bounded by their index arrays' lengths, which equal their value arrays' lengths, and
         // every index is below n (checked above; the arrays are immutable after construction).
         unsafe {
-            // L z = P b, row by row
-            for i in 0..n {
-                let s = gather_dot(
-                    &y,
-                    &self.cols,
-                    &self.row_vals,
-                    *self.row_ptr.get_unchecked(i),
-                    *self.row_ptr.get_unchecked(i + 1),
-                );
-                let b = *y.get_unchecked(i);
-                let d = 1.0 / *self.diag.get_unchecked(i);
-                *y.get_unchecked_mut(i) = [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
-            }
-            // L^T w = z
-            if by_columns {
-                // Gather along each column of L.
-                for j in (0..n).rev() {
+            // L z = P b
+            if by_rows {
+                // Gather along each row of L.
+                for i in 0..n {
                     let s = gather_dot(
                         &y,
-                        &self.rows,
-                        &self.vals,
-                        *self.col_ptr.get_unchecked(j),
-                        *self.col_ptr.get_unchecked(j + 1),
+                        &self.cols,
+                        &self.row_vals,
+                        *self.row_ptr.get_unchecked(i),
+                        *self.row_ptr.get_unchecked(i + 1),
                     );
-                    let b = *y.get_unchecked(j);
-                    let d = 1.0 / *self.diag.get_unchecked(j);
-                    *y.get_unchecked_mut(j) =
+                    let b = *y.get_unchecked(i);
+                    let d = 1.0 / *self.diag.get_unchecked(i);
+                    *y.get_unchecked_mut(i) =
                         [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
                 }
             } else {
-                // Only the row copy is kept: scatter each finished value along its row.
-                for i in (0..n).rev() {
-                    let d = 1.0 / *self.diag.get_unchecked(i);
-                    let v = *y.get_unchecked(i);
+                // Only the column copy is kept: scatter each finished value down its column.
+                for j in 0..n {
+                    let d = 1.0 / *self.diag.get_unchecked(j);
+                    let v = *y.get_unchecked(j);
                     let w = [v[0] * d, v[1] * d, v[2] * d];
-                    *y.get_unchecked_mut(i) = w;
-                    for k in *self.row_ptr.get_unchecked(i)..*self.row_ptr.get_unchecked(i + 1) {
-                        let l = *self.row_vals.get_unchecked(k);
-                        let t = y.get_unchecked_mut(*self.cols.get_unchecked(k) as usize);
+                    *y.get_unchecked_mut(j) = w;
+                    for k in *self.col_ptr.get_unchecked(j)..*self.col_ptr.get_unchecked(j + 1) {
+                        let l = *self.vals.get_unchecked(k);
+                        let t = y.get_unchecked_mut(*self.rows.get_unchecked(k) as usize);
                         t[0] -= l * w[0];
                         t[1] -= l * w[1];
                         t[2] -= l * w[2];
                     }
                 }
             }
+            // L^T w = z: gather along each column of L.
+            for j in (0..n).rev() {
+                let s = gather_dot(
+                    &y,
+                    &self.rows,
+                    &self.vals,
+                    *self.col_ptr.get_unchecked(j),
+                    *self.col_ptr.get_unchecked(j + 1),
+                );
+                let b = *y.get_unchecked(j);
+                let d = 1.0 / *self.diag.get_unchecked(j);
+                *y.get_unchecked_mut(j) = [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
+            }
         }
         for (i, &p) in self.perm.iter().enumerate() {
             b[p as usize] = y[i];
         }
     }
+}
+
+/// Compact the off-diagonal nonzeros of L, column by column, to the front of `values` (the
+/// factorization's buffer: every entry moves only forwards), returning (col_ptr, rows, vals).
+fn compact_columns(
+    symbolic: &SymbolicCholesky<u32>,
+    mut values: Vec<f64>,
+    n: usize,
+) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut rows = Vec::new();
+    let mut w = 0usize;
+    col_ptr.push(0);
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let (cp, ri) = (s.col_ptr(), s.row_idx());
+            for j in 0..n {
+                for k in cp[j] as usize..cp[j + 1] as usize {
+                    let (r, v) = (ri[k] as usize, values[k]);
+                    if r != j && v != 0.0 {
+                        values[w] = v;
+                        w += 1;
+                        rows.push(r as u32);
+                    }
+                }
+                col_ptr.push(w);
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let (begin, end) = (s.supernode_begin(), s.supernode_end());
+            for sn in 0..s.n_supernodes() {
+                let (start, stop) = (begin[sn] as usize, end[sn] as usize);
+                let pattern_rows = s.supernode(sn).pattern();
+                let ncols = stop - start;
+                let nrows = ncols + pattern_rows.len();
+                let base = s.col_ptr_for_val()[sn] as usize;
+                for c in 0..ncols {
+                    for r in c + 1..nrows {
+                        let v = values[base + c * nrows + r];
+                        if v != 0.0 {
+                            values[w] = v;
+                            w += 1;
+                            rows.push(if r < ncols {
+                                (start + r) as u32
+                            } else {
+                                pattern_rows[r - ncols]
+                            });
+                        }
+                    }
+                    col_ptr.push(w);
+                }
+            }
+        }
+    }
+    values.truncate(w);
+    values.shrink_to_fit();
+    rows.shrink_to_fit();
+    (col_ptr, rows, values)
 }
 
 /// `sum_k vals[k] * y[idx[k]]` over `start..end`, for three right-hand sides at once, with two
@@ -460,7 +507,7 @@ mod tests {
     use crate::gradient::{frame, gradient_operator};
 
     #[test]
-    fn row_only_solve_matches_two_copy_solve() {
+    fn column_only_solve_matches_two_copy_solve() {
         let s = crate::synth::tube(12, 9, 3.0, 0.5, 0.4);
         let pattern = Pattern::new(s.positions.len(), &s.triangles).unwrap();
         let grads: Vec<Option<[DVec3; 3]>> = s
@@ -483,7 +530,7 @@ mod tests {
             .collect();
         let mut a = rhs.clone();
         factor.solve(&mut a);
-        factor.keep_rows_only();
+        factor.keep_columns_only();
         let mut b = rhs;
         factor.solve(&mut b);
         let worst = a
