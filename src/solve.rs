@@ -289,7 +289,7 @@ impl Factor {
 
     /// Nonzeros of L kept for the solves (diagonal included).
     pub fn nonzeros(&self) -> usize {
-        self.diag.len() + self.row_vals.len()
+        self.diag.len() + self.vals.len()
     }
 
     /// Solve `A x = b` in place for three right-hand sides stored as rows `[x, y, z]`.
@@ -317,17 +317,14 @@ impl Factor {
             if by_rows {
                 // Gather along each row of L.
                 for i in 0..n {
-                    let s = gather_dot(
-                        &y,
+                    gather_step(
+                        &mut y,
+                        i,
                         &self.cols,
                         &self.row_vals,
-                        *self.row_ptr.get_unchecked(i),
-                        *self.row_ptr.get_unchecked(i + 1),
+                        &self.row_ptr,
+                        &self.diag,
                     );
-                    let b = *y.get_unchecked(i);
-                    let d = 1.0 / *self.diag.get_unchecked(i);
-                    *y.get_unchecked_mut(i) =
-                        [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
                 }
             } else {
                 // Only the column copy is kept: scatter each finished value down its column.
@@ -347,16 +344,7 @@ impl Factor {
             }
             // L^T w = z: gather along each column of L.
             for j in (0..n).rev() {
-                let s = gather_dot(
-                    &y,
-                    &self.rows,
-                    &self.vals,
-                    *self.col_ptr.get_unchecked(j),
-                    *self.col_ptr.get_unchecked(j + 1),
-                );
-                let b = *y.get_unchecked(j);
-                let d = 1.0 / *self.diag.get_unchecked(j);
-                *y.get_unchecked_mut(j) = [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
+                gather_step(&mut y, j, &self.rows, &self.vals, &self.col_ptr, &self.diag);
             }
         }
         for (i, &p) in self.perm.iter().enumerate() {
@@ -421,6 +409,32 @@ fn compact_columns(
     values.shrink_to_fit();
     rows.shrink_to_fit();
     (col_ptr, rows, values)
+}
+
+/// One step of a gathering triangular solve: `y[i] = (y[i] - sum_k vals[k] y[idx[k]]) / diag[i]`
+/// over `k` in `ptr[i]..ptr[i + 1]`.
+///
+/// # Safety
+/// `i + 1 < ptr.len()`, `i < diag.len()`, and as for [`gather_dot`].
+#[inline(always)]
+unsafe fn gather_step(
+    y: &mut [[f64; 3]],
+    i: usize,
+    idx: &[u32],
+    vals: &[f64],
+    ptr: &[usize],
+    diag: &[f64],
+) {
+    let s = gather_dot(
+        y,
+        idx,
+        vals,
+        *ptr.get_unchecked(i),
+        *ptr.get_unchecked(i + 1),
+    );
+    let b = *y.get_unchecked(i);
+    let d = 1.0 / *diag.get_unchecked(i);
+    *y.get_unchecked_mut(i) = [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
 }
 
 /// `sum_k vals[k] * y[idx[k]]` over `start..end`, for three right-hand sides at once, with two

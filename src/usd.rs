@@ -590,6 +590,44 @@ pub fn animated(stage: &Stage) -> Vec<&MeshPrim> {
     out
 }
 
+/// The time-sampled arrays of one animated primitive at one frame.
+pub struct Sample {
+    pub extent: [[f32; 3]; 2],
+    pub points: Vec<[f32; 3]>,
+    /// Present when the primitive's frames carry normals.
+    pub normals: Option<Vec<[f32; 3]>>,
+}
+
+/// Call `f` with the sample of every animated primitive of processed mesh `k` in `prims` (from
+/// [`animated`]), given that mesh's per-primitive deltas for one frame.
+pub fn for_each_sample(
+    prims: &[&MeshPrim],
+    k: usize,
+    deltas: &[PrimitiveDelta],
+    f: &mut dyn FnMut(&Animation, Sample) -> Result<()>,
+) -> Result<()> {
+    for m in prims {
+        let Some(a) = m.animation.as_ref().filter(|a| a.mesh == k) else {
+            continue;
+        };
+        let d = &deltas[a.primitive];
+        let points = add(&m.points, &d.positions);
+        let normals = match (a.normals, &m.normals, &d.normals) {
+            (true, Some(base), Some(n)) => Some(add(base, n)),
+            _ => None,
+        };
+        f(
+            a,
+            Sample {
+                extent: extent(&points),
+                points,
+                normals,
+            },
+        )?;
+    }
+    Ok(())
+}
+
 /// Time-sampled attributes written per frame.
 #[derive(Clone, Copy)]
 pub enum Attr {
@@ -663,36 +701,25 @@ fn spool_frames(
     }
     let pad = "            ";
     source(&mut |k, f, deltas| {
-        for m in prims
-            .iter()
-            .filter(|m| m.animation.as_ref().is_some_and(|a| a.mesh == k))
-        {
-            let a = m.animation.as_ref().expect("animated");
-            let d = &deltas[a.primitive];
+        for_each_sample(&prims, k, deltas, &mut |a, s| {
             let t = a.times[f];
-            let points = add(&m.points, &d.positions);
-            let w = writers
-                .get_mut(&(k, a.primitive, Attr::Extent as u8))
-                .expect("spool");
-            write!(w, "{pad}{t}: ")?;
-            write_vec3s(w, &extent(&points))?;
-            writeln!(w, ",")?;
-            if let (true, Some(base), Some(n)) = (a.normals, &m.normals, &d.normals) {
-                let w = writers
-                    .get_mut(&(k, a.primitive, Attr::Normals as u8))
-                    .expect("spool");
-                write!(w, "{pad}{t}: ")?;
-                write_vec3s(w, &add(base, n))?;
-                writeln!(w, ",")?;
+            let arrays = [
+                (Attr::Extent, Some(&s.extent[..])),
+                (Attr::Normals, s.normals.as_deref()),
+                (Attr::Points, Some(&s.points[..])),
+            ];
+            for (attr, values) in arrays {
+                if let Some(values) = values {
+                    let w = writers
+                        .get_mut(&(k, a.primitive, attr as u8))
+                        .expect("spool");
+                    write!(w, "{pad}{t}: ")?;
+                    write_vec3s(w, values)?;
+                    writeln!(w, ",")?;
+                }
             }
-            let w = writers
-                .get_mut(&(k, a.primitive, Attr::Points as u8))
-                .expect("spool");
-            write!(w, "{pad}{t}: ")?;
-            write_vec3s(w, &points)?;
-            writeln!(w, ",")?;
-        }
-        Ok(())
+            Ok(())
+        })
     })?;
     for (_, mut w) in writers {
         w.flush()?;

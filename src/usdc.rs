@@ -11,7 +11,7 @@
 //! laid out as `[offset to times][times][times rep][offset to reps][sample arrays][count][reps]`
 //! with every size known beforehand, so nothing is patched but the bootstrap.
 
-use crate::usd::{add, animated, extent, FrameSource, MeshPrim, Prim, Stage};
+use crate::usd::{animated, extent, for_each_sample, FrameSource, MeshPrim, Prim, Stage};
 use anyhow::Result;
 use std::collections::HashMap;
 use std::io::{Seek, SeekFrom, Write};
@@ -558,25 +558,20 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     let prims = animated(stage);
     let mut frames: FrameReps = HashMap::new();
     source(&mut |k, _f, deltas| {
-        for m in prims
-            .iter()
-            .filter(|m| m.animation.as_ref().is_some_and(|a| a.mesh == k))
-        {
-            let a = m.animation.as_ref().expect("animated");
-            let d = &deltas[a.primitive];
-            let points = add(&m.points, &d.positions);
-            let e = w.vec3f_array(&extent(&points))?;
-            let p = w.vec3f_array(&points)?;
-            let n = match (a.normals, &m.normals, &d.normals) {
-                (true, Some(base), Some(n)) => Some(w.vec3f_array(&add(base, n))?),
-                _ => None,
-            };
+        for_each_sample(&prims, k, deltas, &mut |a, sample| {
+            let e = w.vec3f_array(&sample.extent)?;
+            let p = w.vec3f_array(&sample.points)?;
+            let n = sample
+                .normals
+                .as_ref()
+                .map(|n| w.vec3f_array(n))
+                .transpose()?;
             let r = frames.entry((a.mesh, a.primitive)).or_default();
             r.extent.push(e);
             r.points.push(p);
             r.normals.extend(n);
-        }
-        Ok(())
+            Ok(())
+        })
     })?;
     // Token 0 is a prim name, so no property path ever needs the (unnegatable) index 0.
     w.token(&stage.root);
