@@ -19,6 +19,9 @@ pub enum Method {
     Seed,
     /// Vertex lerp between consecutive keys (BlendShape baseline).
     Linear,
+    /// C1 spline across all keys in gradient space (rotation logs and stretches by Catmull-Rom,
+    /// same solve, centroids on the spline). Not yet the default: see the README.
+    Spline,
 }
 
 impl Method {
@@ -26,6 +29,7 @@ impl Method {
         match self {
             Method::Seed => "seed",
             Method::Linear => "linear",
+            Method::Spline => "spline",
         }
     }
 }
@@ -53,6 +57,7 @@ impl TriangleTween {
 pub enum Segment {
     Linear { x0: Vec<DVec3>, x1: Vec<DVec3> },
     Seed(Box<SeedSegment>),
+    Spline(Box<crate::spline::SplineSegment>),
 }
 
 pub struct SeedSegment {
@@ -78,7 +83,7 @@ impl Segment {
     ) -> Result<Segment> {
         match method {
             Method::Linear => Ok(Segment::Linear { x0, x1 }),
-            Method::Seed => {
+            Method::Seed | Method::Spline => {
                 let pattern = pattern.expect("the seed method needs the mesh's pattern");
                 Ok(Segment::Seed(Box::new(SeedSegment::new(
                     x0, x1, pattern, triangles,
@@ -92,6 +97,37 @@ impl Segment {
         match self {
             Segment::Linear { x0, x1 } => x0.iter().zip(x1).map(|(a, b)| a.lerp(*b, t)).collect(),
             Segment::Seed(s) => s.frame(t),
+            Segment::Spline(s) => s.frame(t),
+        }
+    }
+
+    /// The segment from key a to key b = a + 1 of a track (welded `keys` at `times`), for any
+    /// method. `pattern` is required by `seed` and `spline`.
+    pub fn for_key_pair(
+        method: Method,
+        keys: &[Vec<DVec3>],
+        times: &[f64],
+        a: usize,
+        b: usize,
+        pattern: Option<&Pattern>,
+        triangles: &[[u32; 3]],
+    ) -> Result<Segment> {
+        match method {
+            Method::Spline if b == a + 1 => {
+                let pattern = pattern.expect("the spline method needs the mesh's pattern");
+                let looped = crate::eval::is_loop(keys);
+                let track =
+                    crate::spline::SplineTrack::new(keys, times, looped, pattern, triangles)?;
+                Ok(Segment::Spline(Box::new(track.segment(a)?)))
+            }
+            Method::Spline => Segment::new(
+                Method::Seed,
+                keys[a].clone(),
+                keys[b].clone(),
+                pattern,
+                triangles,
+            ),
+            m => Segment::new(m, keys[a].clone(), keys[b].clone(), pattern, triangles),
         }
     }
 
@@ -100,6 +136,7 @@ impl Segment {
         match self {
             Segment::Linear { .. } => 0,
             Segment::Seed(s) => s.factor.nonzeros(),
+            Segment::Spline(s) => s.factor_nonzeros(),
         }
     }
 }

@@ -5,6 +5,7 @@
 //! -> [`normals`] -> [`write`]; [`tween`] runs it for one mesh and [`job`] from file to file.
 
 pub mod bench;
+pub mod eval;
 pub mod gradient;
 pub mod interpolate;
 pub mod job;
@@ -13,6 +14,7 @@ pub mod normals;
 pub mod progress;
 pub mod read;
 pub mod solve;
+pub mod spline;
 pub mod synth;
 pub mod tween;
 pub mod usd;

@@ -58,6 +58,24 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Hold-out accuracy: keep every K-th key, predict the dropped ones with each method, and
+    /// print the RMS vertex error over the bounding-box diagonal (mean and max) per method.
+    Eval {
+        /// Input .gltf or .glb with morph keyframes.
+        input: PathBuf,
+        /// Keep every K-th key.
+        #[arg(long, default_value_t = 2)]
+        step: usize,
+        /// Methods to compare (linear, poscr, seed, spline).
+        #[arg(long, value_delimiter = ',', default_values_t = ["linear", "poscr", "seed", "spline"].map(String::from))]
+        methods: Vec<String>,
+        /// Where the keys come from.
+        #[arg(long, value_enum, default_value_t = KeySource::Auto)]
+        keys: KeySource,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Print speed figures on generated meshes (set-up, per-frame time, throughput, memory),
     /// side by side with the numpy/scipy peer when python3 with numpy and scipy is available.
     Bench {
@@ -111,6 +129,43 @@ fn fail(e: anyhow::Error) -> ExitCode {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Eval {
+            input,
+            step,
+            methods,
+            keys,
+            json,
+        } => {
+            let run = || -> anyhow::Result<Vec<inbetween::eval::MeshScore>> {
+                let doc = inbetween::read::Document::open(&input)?;
+                let meshes = inbetween::keyframes::find_morph_meshes(
+                    &doc,
+                    &inbetween::keyframes::KeyOptions {
+                        source: keys,
+                        animation: None,
+                    },
+                )?;
+                let methods: Vec<&str> = methods.iter().map(String::as_str).collect();
+                meshes
+                    .iter()
+                    .map(|m| inbetween::eval::evaluate(m, step, &methods))
+                    .collect()
+            };
+            match run() {
+                Ok(scores) => {
+                    if json {
+                        println!(
+                            "{}",
+                            serde_json::to_string_pretty(&scores).unwrap_or_default()
+                        );
+                    } else {
+                        print!("{}", inbetween::eval::table(&scores));
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
         Command::Bench {
             sizes,
             frames,

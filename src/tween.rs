@@ -173,7 +173,7 @@ pub fn tween_mesh(
     };
     let started = Instant::now();
     let pattern = match opts.method {
-        Method::Seed => Some(Pattern::new(welded.n, &welded.triangles)?),
+        Method::Seed | Method::Spline => Some(Pattern::new(welded.n, &welded.triangles)?),
         Method::Linear => None,
     };
     stats.factor_nonzeros = pattern.as_ref().map_or(0, Pattern::factor_nonzeros);
@@ -229,10 +229,12 @@ pub fn tween_mesh(
                 .take_while(|f| f.key_a == a && f.key_b == b)
                 .count();
             let t0 = Instant::now();
-            let segment = Segment::new(
+            let segment = Segment::for_key_pair(
                 opts.method,
-                welded_keys[a].clone(),
-                welded_keys[b].clone(),
+                &welded_keys,
+                &track.times,
+                a,
+                b,
                 pattern.as_ref(),
                 &welded.triangles,
             )?;
@@ -385,7 +387,7 @@ pub fn track_frames_welded(
 ) -> Result<(Welded, Vec<Vec<DVec3>>)> {
     let welded = Welded::build(mesh);
     let pattern = match opts.method {
-        Method::Seed => Some(Pattern::new(welded.n, &welded.triangles)?),
+        Method::Seed | Method::Spline => Some(Pattern::new(welded.n, &welded.triangles)?),
         Method::Linear => None,
     };
     let keys: Vec<Vec<DVec3>> = key_poses(mesh, track)
@@ -400,10 +402,12 @@ pub fn track_frames_welded(
             .as_ref()
             .is_none_or(|(ab, _)| *ab != (f.key_a, f.key_b))
         {
-            let s = Segment::new(
+            let s = Segment::for_key_pair(
                 opts.method,
-                keys[f.key_a].clone(),
-                keys[f.key_b].clone(),
+                &keys,
+                &track.times,
+                f.key_a,
+                f.key_b,
                 pattern.as_ref(),
                 &welded.triangles,
             )?;

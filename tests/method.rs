@@ -56,9 +56,12 @@ fn max_dist(a: &[DVec3], b: &[DVec3]) -> f64 {
 
 #[test]
 fn keys_are_reproduced_by_the_solve() {
-    for name in ["bar_twist.glb", "tube_bend.glb", "flag_wave.glb"] {
+    for (name, method) in ["bar_twist.glb", "tube_bend.glb", "flag_wave.glb"]
+        .into_iter()
+        .flat_map(|n| [(n, Method::Seed), (n, Method::Spline)])
+    {
         let meshes = load(&common::sample(name));
-        let (keys, f) = frames(&meshes[0], Method::Seed, 3);
+        let (keys, f) = frames(&meshes[0], method, 3);
         let d = common::diag(&keys[0]);
         for (k, key) in keys.iter().enumerate() {
             let err = max_dist(&f[k * 4], key);
@@ -87,22 +90,24 @@ fn rigid_rotation_tweens_to_the_exact_rotation() {
             let key = synth::rigid(&s.positions, *axis, angle, DVec3::new(0.3, 0.2, 0.1), shift);
             let (_dir, path) = write_keys(s.clone(), vec![key]);
             let meshes = load(&path);
-            let (keys, f) = frames(&meshes[0], Method::Seed, 7);
-            let d = common::diag(&keys[0]);
-            let c0 = keys[0].iter().sum::<DVec3>() / keys[0].len() as f64;
-            let c1 = keys[1].iter().sum::<DVec3>() / keys[1].len() as f64;
-            for (j, frame) in f.iter().enumerate() {
-                let t = j as f64 / 8.0;
-                let r = DQuat::from_axis_angle(axis.normalize(), t * angle);
-                let expect: Vec<DVec3> = keys[0]
-                    .iter()
-                    .map(|p| c0.lerp(c1, t) + r * (*p - c0))
-                    .collect();
-                let err = max_dist(frame, &expect);
-                assert!(
-                    err <= 1e-5 * d,
-                    "axis {axis} {degrees} deg t={t}: error {err} > 1e-5 of {d}"
-                );
+            for method in [Method::Seed, Method::Spline] {
+                let (keys, f) = frames(&meshes[0], method, 7);
+                let d = common::diag(&keys[0]);
+                let c0 = keys[0].iter().sum::<DVec3>() / keys[0].len() as f64;
+                let c1 = keys[1].iter().sum::<DVec3>() / keys[1].len() as f64;
+                for (j, frame) in f.iter().enumerate() {
+                    let t = j as f64 / 8.0;
+                    let r = DQuat::from_axis_angle(axis.normalize(), t * angle);
+                    let expect: Vec<DVec3> = keys[0]
+                        .iter()
+                        .map(|p| c0.lerp(c1, t) + r * (*p - c0))
+                        .collect();
+                    let err = max_dist(frame, &expect);
+                    assert!(
+                        err <= 1e-5 * d,
+                        "{method:?} axis {axis} {degrees} deg t={t}: error {err} > 1e-5 of {d}"
+                    );
+                }
             }
         }
     }
@@ -233,5 +238,36 @@ fn seams_and_primitive_borders_stay_closed() {
     // Same frames as the tube without duplicates.
     for (a, b) in f.iter().zip(&f2) {
         assert!(max_dist(a, b) < 1e-9);
+    }
+}
+
+#[test]
+fn eval_spline_beats_linear_and_positional_catmull_rom() {
+    let Some(fx) = common::fixtures() else { return };
+    for (file, step) in [
+        ("Flamingo.glb", 2),
+        ("Flamingo.glb", 3),
+        ("Parrot.glb", 2),
+        ("Parrot.glb", 3),
+    ] {
+        let meshes = load(&fx.join("morph-keyframes").join(file));
+        let r = inbetween::eval::evaluate(&meshes[0], step, inbetween::eval::METHODS).unwrap();
+        let score = |m: &str| r.scores.iter().find(|s| s.method == m).unwrap().mean;
+        let (lin, poscr, spline) = (score("linear"), score("poscr"), score("spline"));
+        eprintln!("{file} step {step}: linear {lin:.5} poscr {poscr:.5} seed {:.5} spline {spline:.5} (spline/linear {:.2}, spline/poscr {:.2})", score("seed"), spline / lin, spline / poscr);
+        assert!(
+            spline <= 0.75 * lin,
+            "{file} step {step}: spline {spline} vs linear {lin}"
+        );
+        assert!(
+            spline < poscr,
+            "{file} step {step}: spline {spline} vs poscr {poscr}"
+        );
+        if file == "Flamingo.glb" {
+            assert!(
+                spline <= 0.8 * poscr,
+                "{file} step {step}: spline {spline} vs poscr {poscr}"
+            );
+        }
     }
 }

@@ -1,0 +1,356 @@
+//! The `spline` method: C1 interpolation across all keys in gradient space.
+//!
+//! For the segment from key a to key b = a + 1, every triangle's deformation gradient from key
+//! a to the neighbouring keys a-1, b and b+1 is split into rotation and stretch (as the seed
+//! does for b alone). The rotation logs (relative to key a, whose own log is 0) and the
+//! stretches (key a's is I) are interpolated with a non-uniform Catmull-Rom spline (a cubic
+//! Hermite whose tangents are the neighbours' differences over their time spans), so the motion
+//! is C1 across keys; positions come from the same Poisson solve as the seed's, and every
+//! connected component's centroid follows the same spline through the keys' centroids.
+//!
+//! Ends: without a looping track, a missing neighbour is mirrored (log -r, stretch 2I - S,
+//! centroid 2c_a - c_b), which gives the end key the chord's tangent. A looping track (last
+//! key equal to the first) wraps around. Rotation branches across keys: each neighbour's log
+//! is taken on the branch (angle + 2 pi k about its axis) closest to the linear continuation
+//! of the segment's own log.
+
+use crate::gradient::{deformation, frame, gradient_operator, polar, quat_log};
+use crate::interpolate::axis_angle_matrix;
+use crate::solve::{components, Factor, Pattern};
+use anyhow::Result;
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Weight each triangle's term by its reference area.
+const WEIGHTED: bool = true;
+
+/// All keys of a track (welded positions) and their times.
+pub struct SplineTrack<'a> {
+    keys: &'a [Vec<DVec3>],
+    times: &'a [f64],
+    looped: bool,
+    pattern: &'a Pattern,
+    triangles: &'a [[u32; 3]],
+}
+
+/// Per valid triangle of a segment.
+struct Tri {
+    corners: [u32; 3],
+    /// Rotation logs relative to key a of keys prev, b, next.
+    r: [DVec3; 3],
+    /// Gradient operator at corners 1 and 2 of the reference triangle (corner 0: minus sum).
+    g: [DVec3; 2],
+    /// S_j g for j = prev, b, next and both gradients.
+    sg: [[DVec3; 2]; 3],
+}
+
+pub struct SplineSegment {
+    /// Times of prev, a, b, next (prev and next may be mirrored or wrapped).
+    t: [f64; 4],
+    tris: Vec<Tri>,
+    factor: Factor,
+    component: Vec<u32>,
+    component_size: Vec<usize>,
+    /// Centroids of prev, a, b, next per component.
+    centroids: Vec<[DVec3; 4]>,
+    /// Positions of a and b, for vertices no valid triangle touches.
+    x: [Vec<DVec3>; 2],
+}
+
+/// Hermite weights of (prev, a, b, next) at u in [0, 1] for knot times t.
+pub fn weights(t: [f64; 4], u: f64) -> [f64; 4] {
+    let (u2, u3) = (u * u, u * u * u);
+    let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
+    let h10 = u3 - 2.0 * u2 + u;
+    let h01 = -2.0 * u3 + 3.0 * u2;
+    let h11 = u3 - u2;
+    let span = t[2] - t[1];
+    let alpha = span / (t[2] - t[0]);
+    let beta = span / (t[3] - t[1]);
+    [
+        -h10 * alpha,
+        h00 - h11 * beta,
+        h01 + h10 * alpha,
+        h11 * beta,
+    ]
+}
+
+/// The branch of log `r` (angle + 2 pi k about its axis) closest to `target`.
+fn closest_branch(r: DVec3, target: DVec3) -> DVec3 {
+    let angle = r.length();
+    let axis = if angle > 1e-12 {
+        r / angle
+    } else {
+        target.try_normalize().unwrap_or(DVec3::X)
+    };
+    (-2..=2)
+        .map(|k| r + axis * (2.0 * PI * k as f64))
+        .min_by(|p, q| {
+            (*p - target)
+                .length_squared()
+                .total_cmp(&(*q - target).length_squared())
+        })
+        .unwrap_or(r)
+}
+
+impl<'a> SplineTrack<'a> {
+    pub fn new(
+        keys: &'a [Vec<DVec3>],
+        times: &'a [f64],
+        looped: bool,
+        pattern: &'a Pattern,
+        triangles: &'a [[u32; 3]],
+    ) -> Result<SplineTrack<'a>> {
+        Ok(SplineTrack {
+            keys,
+            times,
+            looped,
+            pattern,
+            triangles,
+        })
+    }
+
+    /// Neighbour key of segment a on side `before` (key a-1) or after (key a+2): its index
+    /// and time, or None when it must be mirrored.
+    fn neighbour(&self, a: usize, before: bool) -> Option<(usize, f64)> {
+        let k = self.keys.len();
+        let period = self.times[k - 1] - self.times[0];
+        if before {
+            if a > 0 {
+                Some((a - 1, self.times[a - 1]))
+            } else if self.looped {
+                Some((k - 2, self.times[k - 2] - period))
+            } else {
+                None
+            }
+        } else if a + 2 < k {
+            Some((a + 2, self.times[a + 2]))
+        } else if self.looped {
+            let j = a + 2 - (k - 1);
+            Some((j, self.times[j] + period))
+        } else {
+            None
+        }
+    }
+
+    /// Prepare segment a (keys a and a + 1).
+    pub fn segment(&self, a: usize) -> Result<SplineSegment> {
+        let b = a + 1;
+        let (x0, x1) = (&self.keys[a], &self.keys[b]);
+        let prev = self.neighbour(a, true);
+        let next = self.neighbour(a, false);
+        let (ta, tb) = (self.times[a], self.times[b]);
+        let t = [
+            prev.map_or(2.0 * ta - tb, |p| p.1),
+            ta,
+            tb,
+            next.map_or(2.0 * tb - ta, |p| p.1),
+        ];
+        let per: Vec<Option<Tri>> = self
+            .triangles
+            .par_iter()
+            .map(|&[i, j, k]| {
+                let v = frame(x0[i as usize], x0[j as usize], x0[k as usize])?;
+                let v_inv = v.inverse();
+                let g3 = gradient_operator(&v_inv);
+                // Each triangle's residual weighted by its reference area (the continuous
+                // Poisson energy), applied to the right-hand side here and to A below.
+                let area = 0.5
+                    * (x0[j as usize] - x0[i as usize])
+                        .cross(x0[k as usize] - x0[i as usize])
+                        .length();
+                let w = if WEIGHTED { area } else { 1.0 };
+                let g = [g3[1] * w, g3[2] * w];
+                let rs = |key: usize| -> (DVec3, DMat3) {
+                    let x = &self.keys[key];
+                    let (q, s) = polar(&deformation(
+                        &v_inv,
+                        x[i as usize],
+                        x[j as usize],
+                        x[k as usize],
+                    ));
+                    (quat_log(q), s)
+                };
+                let (rb, sb) = rs(b);
+                let (rp, sp) = match prev {
+                    Some((p, tp)) => {
+                        let (r, s) = rs(p);
+                        (closest_branch(r, rb * ((tp - ta) / (tb - ta))), s)
+                    }
+                    None => (-rb, DMat3::IDENTITY * 2.0 - sb),
+                };
+                let (rn, sn) = match next {
+                    Some((n, tn)) => {
+                        let (r, s) = rs(n);
+                        (closest_branch(r, rb * ((tn - ta) / (tb - ta))), s)
+                    }
+                    None => (rb * 2.0, sb * 2.0 - DMat3::IDENTITY),
+                };
+                Some(Tri {
+                    corners: [i, j, k],
+                    r: [rp, rb, rn],
+                    g,
+                    sg: [
+                        [sp * g[0], sp * g[1]],
+                        [sb * g[0], sb * g[1]],
+                        [sn * g[0], sn * g[1]],
+                    ],
+                })
+            })
+            .collect();
+        let n = x0.len();
+        // A = sum w g g^T: pass sqrt(w) g (the stored g carry w).
+        let grads = per.iter().map(|t| {
+            t.as_ref().map(|t| {
+                let [a, b, c] = t.corners.map(|v| x0[v as usize]);
+                let w = if WEIGHTED {
+                    0.5 * (b - a).cross(c - a).length()
+                } else {
+                    1.0
+                };
+                let s = 1.0 / w.sqrt();
+                [-(t.g[0] + t.g[1]) * s, t.g[0] * s, t.g[1] * s]
+            })
+        });
+        let valid: Vec<[u32; 3]> = per.iter().flatten().map(|t| t.corners).collect();
+        let (component, count) = components(n, &valid);
+        let mut pinned = vec![false; n];
+        let mut seen = vec![false; count];
+        for (v, pin) in pinned.iter_mut().enumerate() {
+            match component[v] {
+                u32::MAX => *pin = true,
+                c if !seen[c as usize] => {
+                    seen[c as usize] = true;
+                    *pin = true;
+                }
+                _ => {}
+            }
+        }
+        let factor = Factor::new(self.pattern, grads, pinned)?;
+        let mut sums = vec![[DVec3::ZERO; 4]; count];
+        let mut component_size = vec![0usize; count];
+        let key_or = |side: Option<(usize, f64)>| side.map(|(k, _)| &self.keys[k]);
+        let (kp, kn) = (key_or(prev), key_or(next));
+        for v in 0..n {
+            let c = component[v];
+            if c == u32::MAX {
+                continue;
+            }
+            let c = c as usize;
+            let pa = x0[v];
+            let pb = x1[v];
+            let pp = kp.map_or(2.0 * pa - pb, |k| k[v]);
+            let pn = kn.map_or(2.0 * pb - pa, |k| k[v]);
+            for (s, p) in sums[c].iter_mut().zip([pp, pa, pb, pn]) {
+                *s += p;
+            }
+            component_size[c] += 1;
+        }
+        let centroids = sums
+            .iter()
+            .zip(&component_size)
+            .map(|(s, &m)| s.map(|p| p / m as f64))
+            .collect();
+        Ok(SplineSegment {
+            t,
+            tris: per.into_iter().flatten().collect(),
+            factor,
+            component,
+            component_size,
+            centroids,
+            x: [x0.clone(), x1.clone()],
+        })
+    }
+
+    /// The frame at u in [0, 1] of segment a (built anew: use [`SplineSegment`] for several).
+    pub fn frame(&self, a: usize, u: f64) -> Vec<DVec3> {
+        self.segment(a)
+            .map(|s| s.frame(u))
+            .unwrap_or_else(|_| self.keys[a].clone())
+    }
+}
+
+impl SplineSegment {
+    pub fn factor_nonzeros(&self) -> usize {
+        self.factor.nonzeros()
+    }
+
+    pub fn frame(&self, u: f64) -> Vec<DVec3> {
+        let w = weights(self.t, u);
+        let n = self.x[0].len();
+        let mut rhs = vec![[0.0f64; 3]; n];
+        for tri in &self.tris {
+            let r = tri.r[0] * w[0] + tri.r[1] * w[2] + tri.r[2] * w[3];
+            let angle = r.length();
+            let rot = if angle > 0.0 {
+                axis_angle_matrix(r / angle, angle)
+            } else {
+                DMat3::IDENTITY
+            };
+            let mut v = [DVec3::ZERO; 2];
+            for (k, vk) in v.iter_mut().enumerate() {
+                let sg = tri.sg[0][k] * w[0]
+                    + tri.g[k] * w[1]
+                    + tri.sg[1][k] * w[2]
+                    + tri.sg[2][k] * w[3];
+                *vk = rot * sg;
+            }
+            for (c, val) in [(0, -(v[0] + v[1])), (1, v[0]), (2, v[1])] {
+                let b = &mut rhs[tri.corners[c] as usize];
+                b[0] += val.x;
+                b[1] += val.y;
+                b[2] += val.z;
+            }
+        }
+        for (b, &p) in rhs.iter_mut().zip(&self.factor.pinned) {
+            if p {
+                *b = [0.0; 3];
+            }
+        }
+        self.factor.solve(&mut rhs);
+        let mut out: Vec<DVec3> = rhs.iter().map(|b| DVec3::from_array(*b)).collect();
+        let mut sum = vec![DVec3::ZERO; self.centroids.len()];
+        for (v, p) in out.iter().enumerate() {
+            if self.component[v] != u32::MAX {
+                sum[self.component[v] as usize] += *p;
+            }
+        }
+        let shift: Vec<DVec3> = (0..sum.len())
+            .map(|c| {
+                let k = &self.centroids[c];
+                k[0] * w[0] + k[1] * w[1] + k[2] * w[2] + k[3] * w[3]
+                    - sum[c] / self.component_size[c] as f64
+            })
+            .collect();
+        for (v, p) in out.iter_mut().enumerate() {
+            match self.component[v] {
+                u32::MAX => *p = self.x[0][v].lerp(self.x[1][v], u),
+                c => *p += shift[c as usize],
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hermite_weights_interpolate_the_keys_and_sum_to_one() {
+        let t = [-1.0, 0.0, 1.0, 2.5];
+        for u in [0.0, 0.3, 0.7, 1.0] {
+            let w = weights(t, u);
+            assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        }
+        assert_eq!(weights(t, 0.0), [0.0, 1.0, 0.0, 0.0]);
+        let w1 = weights(t, 1.0);
+        assert!(
+            w1[0].abs() < 1e-15
+                && w1[1].abs() < 1e-15
+                && (w1[2] - 1.0).abs() < 1e-15
+                && w1[3].abs() < 1e-15
+        );
+    }
+}
