@@ -134,6 +134,82 @@ impl<'a> SplineTrack<'a> {
         }
     }
 
+    /// Make the rotation logs from key a to key b agree across neighbouring triangles: starting
+    /// from the least-rotated triangle of each connected region, every triangle reached over a
+    /// shared edge takes the branch of its log (angle + 2 pi k about its axis) closest to the
+    /// neighbour it was reached from (Baxter, Barla & Anjyo 2008). A part that turns by 180
+    /// degrees or more between two keys then turns the long way everywhere, instead of some
+    /// triangles taking the short way and the surface crumpling.
+    fn consistent_branches(&self, per: &mut [Option<Tri>]) {
+        let m = per.len();
+        let mut edges: std::collections::HashMap<(u32, u32), Vec<u32>> =
+            std::collections::HashMap::with_capacity(3 * m / 2);
+        for (t, tri) in per.iter().enumerate() {
+            if let Some(tri) = tri {
+                let [a, b, c] = tri.corners;
+                for (u, v) in [(a, b), (b, c), (c, a)] {
+                    edges
+                        .entry((u.min(v), u.max(v)))
+                        .or_default()
+                        .push(t as u32);
+                }
+            }
+        }
+        // Best-first growth: the triangle with the smallest rotation on the frontier is fixed
+        // next (from the neighbour that reached it), so triangles near 180 degrees, whose
+        // branch is ambiguous, are decided last from settled neighbours.
+        use std::cmp::Reverse;
+        use std::collections::BinaryHeap;
+        // Angles equal within 1e-9 rad tie, and the lower triangle index goes first: when two
+        // regions are both unrotated (a part turned by exactly 360 degrees), the region listed
+        // first in the file stays fixed.
+        let key = |r: DVec3| (r.length() * 1e9) as u64;
+        let mut done = vec![false; m];
+        let mut heap: BinaryHeap<Reverse<(u64, u32, u32)>> = BinaryHeap::new(); // (angle, tri, from)
+        let mut starts: Vec<u32> = (0..m as u32)
+            .filter(|&t| per[t as usize].is_some())
+            .collect();
+        starts.sort_by_key(|&t| {
+            (
+                key(per[t as usize].as_ref().map_or(DVec3::ZERO, |x| x.r[1])),
+                t,
+            )
+        });
+        for &start in &starts {
+            if done[start as usize] {
+                continue;
+            }
+            heap.push(Reverse((0, start, u32::MAX)));
+            while let Some(Reverse((_, t, from))) = heap.pop() {
+                if done[t as usize] {
+                    continue;
+                }
+                done[t as usize] = true;
+                if from != u32::MAX {
+                    let target = per[from as usize].as_ref().map_or(DVec3::ZERO, |x| x.r[1]);
+                    if let Some(tri) = per[t as usize].as_mut() {
+                        tri.r[1] = closest_branch(tri.r[1], target);
+                    }
+                }
+                let Some(tri) = per[t as usize].as_ref() else {
+                    continue;
+                };
+                let (corners, r) = (tri.corners, tri.r[1]);
+                let [a, b, c] = corners;
+                for (u, v) in [(a, b), (b, c), (c, a)] {
+                    for &nb in &edges[&(u.min(v), u.max(v))] {
+                        if !done[nb as usize] {
+                            if let Some(n) = per[nb as usize].as_ref() {
+                                let guess = closest_branch(n.r[1], r);
+                                heap.push(Reverse((key(guess), nb, t)));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Prepare segment a (keys a and a + 1).
     pub fn segment(&self, a: usize) -> Result<SplineSegment> {
         let b = a + 1;
@@ -172,20 +248,15 @@ impl<'a> SplineTrack<'a> {
                     ));
                     (quat_log(q), s)
                 };
+                // Shortest-arc logs for now; branches are made consistent below.
                 let (rb, sb) = rs(b);
                 let (rp, sp) = match prev {
-                    Some((p, tp)) => {
-                        let (r, s) = rs(p);
-                        (closest_branch(r, rb * ((tp - ta) / (tb - ta))), s)
-                    }
-                    None => (-rb, DMat3::IDENTITY * 2.0 - sb),
+                    Some((p, _)) => rs(p),
+                    None => (DVec3::ZERO, DMat3::IDENTITY * 2.0 - sb),
                 };
                 let (rn, sn) = match next {
-                    Some((n, tn)) => {
-                        let (r, s) = rs(n);
-                        (closest_branch(r, rb * ((tn - ta) / (tb - ta))), s)
-                    }
-                    None => (rb * 2.0, sb * 2.0 - DMat3::IDENTITY),
+                    Some((n, _)) => rs(n),
+                    None => (DVec3::ZERO, sb * 2.0 - DMat3::IDENTITY),
                 };
                 Some(Tri {
                     corners: [i, j, k],
@@ -199,6 +270,19 @@ impl<'a> SplineTrack<'a> {
                 })
             })
             .collect();
+        let mut per = per;
+        self.consistent_branches(&mut per);
+        for tri in per.iter_mut().flatten() {
+            let rb = tri.r[1];
+            tri.r[0] = match prev {
+                Some((_, tp)) => closest_branch(tri.r[0], rb * ((tp - ta) / (tb - ta))),
+                None => -rb,
+            };
+            tri.r[2] = match next {
+                Some((_, tn)) => closest_branch(tri.r[2], rb * ((tn - ta) / (tb - ta))),
+                None => rb * 2.0,
+            };
+        }
         let n = x0.len();
         // A = sum w g g^T: pass sqrt(w) g (the stored g carry w).
         let grads = per.iter().map(|t| {
