@@ -9,8 +9,8 @@ if [ ! -f tools/validator/node_modules/gltf-validator/package.json ]; then
   echo "setup: installing gltf-validator (npm)"
   (cd tools/validator && npm install --no-audit --no-fund --loglevel=error)
 fi
-if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import numpy, scipy, pxr" 2>/dev/null; then
-  echo "setup: creating .venv with numpy, scipy, usd-core (pip)"
+if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import numpy, scipy, pxr, jsonschema" 2>/dev/null; then
+  echo "setup: creating .venv with numpy, scipy, usd-core, jsonschema (pip)"
   python3 -m venv .venv
   .venv/bin/pip install --quiet --disable-pip-version-check -r tools/requirements.txt
 fi

@@ -21,6 +21,8 @@ pub struct TweenJob {
     pub animation: Option<String>,
     pub timing: Timing,
     pub quiet: bool,
+    /// Where to write the per-frame quality report (JSON).
+    pub report: Option<PathBuf>,
 }
 
 /// What was done, for the summary line.
@@ -86,8 +88,10 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let opts = TweenOptions {
         method: job.method,
         timing: job.timing,
+        report: job.report.is_some(),
     };
     let mut stats = Vec::new();
+    let mut reports = Vec::new();
     match format {
         write::OutputFormat::Gltf(container) => {
             let mut results = Vec::new();
@@ -99,7 +103,10 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
             let mut out = write::begin(&doc, container, &job.output)?;
             write::apply_frames(&mut out, &results)?;
             write::finish(out, container, &job.output)?;
-            stats.extend(results.into_iter().map(|r| r.stats));
+            for r in results {
+                stats.push(r.stats);
+                reports.extend(r.report);
+            }
         }
         write::OutputFormat::Usd(usd_format) => {
             let fps = match job.timing {
@@ -131,11 +138,21 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
                         sink(k, f, &deltas)
                     })?;
                     stats.push(done.stats);
+                    reports.extend(done.report);
                 }
                 Ok(())
             })?;
             progress.finish();
         }
+    }
+    if let Some(path) = &job.report {
+        let report = crate::report::Report {
+            input: job.input.display().to_string(),
+            output: job.output.display().to_string(),
+            meshes: reports,
+        };
+        let text = serde_json::to_vec_pretty(&report)?;
+        write::atomic_write(&[(path.clone(), text)])?;
     }
     Ok(Summary {
         meshes: stats,

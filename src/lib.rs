@@ -13,6 +13,7 @@ pub mod keyframes;
 pub mod normals;
 pub mod progress;
 pub mod read;
+pub mod report;
 pub mod solve;
 pub mod spline;
 pub mod synth;

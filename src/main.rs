@@ -54,6 +54,10 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
         /// Worker threads for frames (default: all cores). Output is identical for any value.
         #[arg(long)]
         threads: Option<usize>,
+        /// Also write per-frame shape figures (edge distortion, area and volume change,
+        /// inverted triangles) to this JSON file (schema: schemas/report.schema.json).
+        #[arg(long, value_name = "FILE.json")]
+        report: Option<PathBuf>,
         /// No progress bar, no summary.
         #[arg(short, long)]
         quiet: bool,
@@ -244,6 +248,7 @@ fn main() -> ExitCode {
             keys,
             animation,
             threads,
+            report,
             quiet,
         } => {
             if let Some(n) = threads {
@@ -259,6 +264,7 @@ fn main() -> ExitCode {
                 animation,
                 timing: fps.map(Timing::Fps).unwrap_or(Timing::Tweens(tweens)),
                 quiet,
+                report,
             };
             match run_tween(&job) {
                 Ok(summary) => {

@@ -333,10 +333,11 @@ pub fn samples() -> Vec<(&'static str, KeyframeFile)> {
             ..KeyedMesh::new("bar", s, vec![key])
         }
     };
-    // A round tube bent 150 degrees at a joint in the middle.
+    // A round tube bent 150 degrees at a joint in the middle (over 2 units of its length, so the
+    // inner side's radius of curvature, 2 / 2.62 - 0.4 = 0.36, stays positive: no fold).
     let tube_bend = {
         let s = tube(61, 24, 6.0, 0.4, 0.4);
-        let key = bend(&s.positions, 3.0, 150f64.to_radians(), 0.5);
+        let key = bend(&s.positions, 3.0, 150f64.to_radians(), 1.0);
         KeyedMesh {
             color: [0.3, 0.6, 0.9, 1.0],
             ..KeyedMesh::new("tube", s, vec![key])

@@ -3,6 +3,7 @@
 use crate::interpolate::{Method, Segment};
 use crate::keyframes::{MorphMesh, Track, TrackOrigin};
 use crate::normals::{arc, carry, Smoothing};
+use crate::report::{FrameReport, MeshReport, Shape};
 use crate::solve::Pattern;
 use crate::weld::Welded;
 use anyhow::Result;
@@ -96,6 +97,8 @@ pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
 pub struct TweenOptions {
     pub method: Method,
     pub timing: Timing,
+    /// Measure every frame for `--report`.
+    pub report: bool,
 }
 
 /// Output of one track: its frames occupy `first..first + frames.len()` of the mesh's targets.
@@ -121,6 +124,8 @@ pub struct MeshFrames {
     pub primitives: Vec<PrimitiveFrames>,
     pub dropped_channels: Vec<(usize, usize)>,
     pub stats: MeshStats,
+    /// Per-frame figures, when asked for.
+    pub report: Option<MeshReport>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -185,6 +190,14 @@ pub fn tween_mesh(
         .any(|p| p.target_nrm.iter().any(Option::is_some));
     let base: Vec<DVec3> = mesh.pose(&vec![0.0; mesh.target_count]);
 
+    let shape = opts.report.then(|| Shape::new(&welded.triangles));
+    let mut report = shape.as_ref().map(|shape| MeshReport {
+        mesh: mesh.name.clone(),
+        method: opts.method.name().to_string(),
+        triangles: welded.triangles.len(),
+        closed: shape.closed,
+        frames: Vec::new(),
+    });
     let mut tracks = Vec::new();
     for track in &mesh.tracks {
         let keys = key_poses(mesh, track);
@@ -242,10 +255,27 @@ pub fn tween_mesh(
             let chunk = 2 * rayon::current_num_threads().max(1);
             for start in (i..j).step_by(chunk) {
                 let t0 = Instant::now();
-                let computed: Vec<Vec<PrimitiveDelta>> = frames[start..(start + chunk).min(j)]
+                let computed: Vec<(Vec<PrimitiveDelta>, Option<FrameReport>)> = frames
+                    [start..(start + chunk).min(j)]
                     .par_iter()
                     .map(|f| {
                         let w = segment.frame(f.t);
+                        let figures = shape.as_ref().map(|shape| {
+                            let (mean, max, area, volume, inverted) =
+                                shape.measure(&w, &welded_keys[a], &welded_keys[b], f.t);
+                            FrameReport {
+                                frame: 0,
+                                time: f.time,
+                                key_a: a,
+                                key_b: b,
+                                t: f.t,
+                                edge_distortion_mean: mean,
+                                edge_distortion_max: max,
+                                area_change: area,
+                                volume_change: volume,
+                                inverted_triangles: inverted,
+                            }
+                        });
                         let positions: Vec<DVec3> =
                             welded.of_vertex.iter().map(|&k| w[k as usize]).collect();
                         drop(w);
@@ -266,11 +296,15 @@ pub fn tween_mesh(
                         });
                         let deltas = frame_deltas(mesh, &positions, normals.as_deref());
                         progress();
-                        deltas
+                        (deltas, figures)
                     })
                     .collect();
                 stats.solve += t0.elapsed();
-                for frame in computed {
+                for (frame, figures) in computed {
+                    if let (Some(r), Some(mut fig)) = (report.as_mut(), figures) {
+                        fig.frame = stats.frames;
+                        r.frames.push(fig);
+                    }
                     sink(stats.frames, frame)?;
                     stats.frames += 1;
                 }
@@ -285,6 +319,7 @@ pub fn tween_mesh(
         primitives: Vec::new(),
         dropped_channels: mesh.dropped_channels.clone(),
         stats,
+        report,
     })
 }
 

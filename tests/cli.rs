@@ -53,6 +53,7 @@ fn samples_tween_to_valid_files_with_the_computed_frames() {
             let opts = TweenOptions {
                 method: Method::Seed,
                 timing: Timing::Tweens(tweens),
+                report: false,
             };
             let (welded, frames) =
                 track_frames_welded(&meshes[0], &meshes[0].tracks[0], &opts).unwrap();

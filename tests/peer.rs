@@ -30,6 +30,7 @@ fn seed_frames_agree_with_the_scipy_peer_on_flamingo_and_parrot() {
         let opts = TweenOptions {
             method: Method::Seed,
             timing: Timing::Tweens(3),
+            report: false,
         };
         let (welded, frames) = track_frames_welded(mesh, track, &opts).unwrap();
         let keys: Vec<Vec<[f64; 3]>> = key_poses(mesh, track)
