@@ -101,10 +101,10 @@ impl Segment {
         }
     }
 
-    /// The segment from key a to key b = a + 1 of a track (welded `keys` at `times`), for any
-    /// method. `pattern` is required by `seed` and `spline`.
+    /// The segment from key a to key b = a + 1 of a track (welded `keys` at `times`), for
+    /// `opts.method`. `pattern` is required by `seed` and `spline`.
     pub fn for_key_pair(
-        method: Method,
+        opts: &crate::tween::TweenOptions,
         keys: &[Vec<DVec3>],
         times: &[f64],
         a: usize,
@@ -112,10 +112,10 @@ impl Segment {
         pattern: Option<&Pattern>,
         triangles: &[[u32; 3]],
     ) -> Result<Segment> {
-        match method {
+        match opts.method {
             Method::Spline if b == a + 1 => {
                 let pattern = pattern.expect("the spline method needs the mesh's pattern");
-                let looped = crate::eval::is_loop(keys);
+                let looped = opts.wrap && crate::eval::is_loop(keys);
                 let track =
                     crate::spline::SplineTrack::new(keys, times, looped, pattern, triangles)?;
                 Ok(Segment::Spline(Box::new(track.segment(a)?)))

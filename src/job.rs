@@ -4,7 +4,7 @@ use crate::interpolate::Method;
 use crate::keyframes::{find_morph_meshes, KeyOptions, KeySource};
 use crate::progress::Progress;
 use crate::read::Document;
-use crate::tween::{collect_mesh, schedule, tween_mesh, Timing, TweenOptions};
+use crate::tween::{close_loop, collect_mesh, plan, tween_mesh, Timing, TweenOptions};
 use crate::usd::{self, MeshPlan};
 use crate::write;
 use anyhow::Result;
@@ -21,6 +21,11 @@ pub struct TweenJob {
     pub animation: Option<String>,
     pub timing: Timing,
     pub quiet: bool,
+    /// `Some(true)`: close every track into a loop (`--loop`); `Some(false)`: never wrap
+    /// (`--no-loop`); `None`: wrap tracks whose last key equals the first.
+    pub looping: Option<bool>,
+    /// Seconds to continue the motion before the first key and after the last.
+    pub extend: [f64; 2],
     /// Where to write the per-frame quality report (JSON).
     pub report: Option<PathBuf>,
 }
@@ -76,20 +81,25 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
             animation: job.animation.as_deref(),
         },
     )?;
-    let total: usize = meshes
-        .iter()
-        .flat_map(|m| {
-            m.tracks
-                .iter()
-                .map(|t| schedule(&t.times, job.timing).len())
-        })
-        .sum();
-    let progress = Progress::new(total as u64, "tween", job.quiet);
+    let mut meshes = meshes;
+    if job.looping == Some(true) {
+        meshes
+            .iter_mut()
+            .flat_map(|m| m.tracks.iter_mut())
+            .for_each(close_loop);
+    }
     let opts = TweenOptions {
         method: job.method,
         timing: job.timing,
         report: job.report.is_some(),
+        wrap: job.looping != Some(false),
+        extend: job.extend,
     };
+    let total: usize = meshes
+        .iter()
+        .flat_map(|m| m.tracks.iter().map(|t| plan(&t.times, &opts).len()))
+        .sum();
+    let progress = Progress::new(total as u64, "tween", job.quiet);
     let mut stats = Vec::new();
     let mut reports = Vec::new();
     match format {
@@ -120,12 +130,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
                     tracks: m
                         .tracks
                         .iter()
-                        .map(|t| {
-                            schedule(&t.times, job.timing)
-                                .iter()
-                                .map(|f| f.time)
-                                .collect()
-                        })
+                        .map(|t| plan(&t.times, &opts).iter().map(|f| f.time).collect())
                         .collect(),
                 })
                 .collect();

@@ -54,6 +54,19 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
         /// Worker threads for frames (default: all cores). Output is identical for any value.
         #[arg(long)]
         threads: Option<usize>,
+        /// Close every key sequence into a loop (append its first key after the last) and let
+        /// `spline` wrap around it. Without it, tracks whose last key equals the first wrap.
+        #[arg(long = "loop", conflicts_with = "no_loop")]
+        looping: bool,
+        /// Never wrap `spline` around the ends, even when the last key equals the first.
+        #[arg(long)]
+        no_loop: bool,
+        /// Seconds to continue the motion before the first key (the seed paper's exaggeration).
+        #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+        extend_before: f64,
+        /// Seconds to continue the motion after the last key.
+        #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+        extend_after: f64,
         /// Also write per-frame shape figures (edge distortion, area and volume change,
         /// inverted triangles) to this JSON file (schema: schemas/report.schema.json).
         #[arg(long, value_name = "FILE.json")]
@@ -248,6 +261,10 @@ fn main() -> ExitCode {
             keys,
             animation,
             threads,
+            looping,
+            no_loop,
+            extend_before,
+            extend_after,
             report,
             quiet,
         } => {
@@ -264,6 +281,14 @@ fn main() -> ExitCode {
                 animation,
                 timing: fps.map(Timing::Fps).unwrap_or(Timing::Tweens(tweens)),
                 quiet,
+                looping: if looping {
+                    Some(true)
+                } else if no_loop {
+                    Some(false)
+                } else {
+                    None
+                },
+                extend: [extend_before, extend_after],
                 report,
             };
             match run_tween(&job) {

@@ -99,6 +99,82 @@ pub struct TweenOptions {
     pub timing: Timing,
     /// Measure every frame for `--report`.
     pub report: bool,
+    /// Let `spline` wrap around tracks whose last key equals the first (`--no-loop` clears it).
+    pub wrap: bool,
+    /// Seconds of motion continued before the first key and after the last
+    /// (`--extend-before`, `--extend-after`).
+    pub extend: [f64; 2],
+}
+
+impl TweenOptions {
+    /// Options with every default: no report, wrapping on, no extension.
+    pub fn new(method: Method, timing: Timing) -> TweenOptions {
+        TweenOptions {
+            method,
+            timing,
+            report: false,
+            wrap: true,
+            extend: [0.0, 0.0],
+        }
+    }
+}
+
+/// Frames of a track with keys at `times`: [`schedule`] plus the extensions of `opts`, which
+/// continue the first and last segments' motion (t < 0 before the first key, t > 1 after the
+/// last) at the frame spacing next to them.
+pub fn plan(times: &[f64], opts: &TweenOptions) -> Vec<FrameAt> {
+    let mut frames = schedule(times, opts.timing);
+    let [before, after] = opts.extend;
+    if frames.len() < 2 {
+        return frames;
+    }
+    let first = frames[0];
+    let spacing = frames[1].time - first.time;
+    let span = |f: &FrameAt| times[f.key_b] - times[f.key_a];
+    if before > 0.0 && spacing > 0.0 {
+        let n = (before / spacing + 1e-9).floor() as usize;
+        let ext: Vec<FrameAt> = (1..=n)
+            .rev()
+            .map(|k| {
+                let time = first.time - k as f64 * spacing;
+                FrameAt {
+                    time,
+                    key_a: first.key_a,
+                    key_b: first.key_b,
+                    t: (time - times[first.key_a]) / span(&first),
+                }
+            })
+            .collect();
+        frames.splice(0..0, ext);
+    }
+    let last = frames[frames.len() - 1];
+    let spacing = last.time - frames[frames.len() - 2].time;
+    if after > 0.0 && spacing > 0.0 {
+        let n = (after / spacing + 1e-9).floor() as usize;
+        frames.extend((1..=n).map(|k| {
+            let time = last.time + k as f64 * spacing;
+            FrameAt {
+                time,
+                key_a: last.key_a,
+                key_b: last.key_b,
+                t: (time - times[last.key_a]) / span(&last),
+            }
+        }));
+    }
+    frames
+}
+
+/// Close a track into a loop (`--loop`): unless its last key already equals its first, append
+/// the first key again, one mean key spacing after the last.
+pub fn close_loop(track: &mut Track) {
+    let (k, times) = (track.times.len(), &track.times);
+    if k < 2 || track.weights[k - 1] == track.weights[0] {
+        return;
+    }
+    let spacing = (times[k - 1] - times[0]) / (k - 1) as f64;
+    let spacing = if spacing > 0.0 { spacing } else { 1.0 };
+    track.times.push(times[k - 1] + spacing);
+    track.weights.push(track.weights[0].clone());
 }
 
 /// Output of one track: its frames occupy `first..first + frames.len()` of the mesh's targets.
@@ -227,7 +303,7 @@ pub fn tween_mesh(
                 authored,
             }
         });
-        let frames = schedule(&track.times, opts.timing);
+        let frames = plan(&track.times, opts);
         tracks.push(TrackFrames {
             origin: track.origin.clone(),
             first: stats.frames,
@@ -243,7 +319,7 @@ pub fn tween_mesh(
                 .count();
             let t0 = Instant::now();
             let segment = Segment::for_key_pair(
-                opts.method,
+                opts,
                 &welded_keys,
                 &track.times,
                 a,
@@ -430,7 +506,7 @@ pub fn track_frames_welded(
         .map(|k| welded.weld(k))
         .collect();
     let mut out = Vec::new();
-    let frames = schedule(&track.times, opts.timing);
+    let frames = plan(&track.times, opts);
     let mut current: Option<((usize, usize), Segment)> = None;
     for f in &frames {
         if current
@@ -438,7 +514,7 @@ pub fn track_frames_welded(
             .is_none_or(|(ab, _)| *ab != (f.key_a, f.key_b))
         {
             let s = Segment::for_key_pair(
-                opts.method,
+                opts,
                 &keys,
                 &track.times,
                 f.key_a,

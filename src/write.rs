@@ -243,6 +243,15 @@ fn one_hot(len: usize, at: usize) -> Vec<f32> {
 
 /// Replace the targets and weight animation of each processed mesh.
 pub fn apply_frames(out: &mut Output, meshes: &[MeshFrames]) -> Result<()> {
+    // glTF key times cannot be negative: a motion extended before 0 s shifts every written
+    // timeline by the same amount.
+    let earliest = meshes
+        .iter()
+        .flat_map(|m| &m.tracks)
+        .flat_map(|t| t.frames.first())
+        .map(|f| f.time)
+        .fold(0.0, f64::min);
+    let shift = -earliest;
     let mut replaced: BTreeSet<usize> = BTreeSet::new(); // accessors no longer referenced by us
     let mut new_animation_samplers: Vec<Value> = Vec::new();
     let mut new_animation_channels: Vec<Value> = Vec::new();
@@ -294,7 +303,7 @@ pub fn apply_frames(out: &mut Output, meshes: &[MeshFrames]) -> Result<()> {
                 t.frames
                     .iter()
                     .enumerate()
-                    .map(move |(i, f)| (t.first + i, f.time))
+                    .map(move |(i, f)| (t.first + i, f.time + shift))
             })
             .map(|(i, time)| format!("f{i:04}_t{time:.4}"))
             .collect();
@@ -312,7 +321,11 @@ pub fn apply_frames(out: &mut Output, meshes: &[MeshFrames]) -> Result<()> {
         }
         // Animation: one key per frame of each track, one-hot over the track's frames.
         for track in &m.tracks {
-            let times: Vec<f32> = track.frames.iter().map(|f| f.time as f32).collect();
+            let times: Vec<f32> = track
+                .frames
+                .iter()
+                .map(|f| (f.time + shift) as f32)
+                .collect();
             let mut weights = Vec::with_capacity(times.len() * frames);
             for i in 0..times.len() {
                 weights.extend(one_hot(frames, track.first + i));

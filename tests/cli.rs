@@ -50,11 +50,7 @@ fn samples_tween_to_valid_files_with_the_computed_frames() {
                 },
             )
             .unwrap();
-            let opts = TweenOptions {
-                method: Method::Seed,
-                timing: Timing::Tweens(tweens),
-                report: false,
-            };
+            let opts = TweenOptions::new(Method::Seed, Timing::Tweens(tweens));
             let (welded, frames) =
                 track_frames_welded(&meshes[0], &meshes[0].tracks[0], &opts).unwrap();
             let (base, targets) = read_targets(&out, 0, 0);
@@ -608,4 +604,52 @@ fn hard_edges_stay_hard_and_key_normals_are_kept() {
     for (v, d) in frames[0].iter().enumerate() {
         assert!(d.iter().all(|x| x.abs() < 1e-6), "vertex {v}: {d:?}");
     }
+}
+
+#[test]
+fn loop_closes_the_motion_and_extension_adds_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("loop.glb");
+    // flag_wave: 5 keys; --loop appends the first key again: 5 segments of 5 frames + 1.
+    run_ok(&[
+        "tween",
+        s(&sample("flag_wave.glb")),
+        "-o",
+        s(&out),
+        "--loop",
+        "--method",
+        "spline",
+        "-q",
+    ]);
+    assert_valid(&out);
+    let (_, t) = read_targets(&out, 0, 0);
+    assert_eq!(t.len(), 26);
+    for (a, b) in t[0].iter().zip(&t[25]) {
+        for c in 0..3 {
+            assert!((a[c] - b[c]).abs() < 1e-5, "the loop ends where it starts");
+        }
+    }
+    let ext = dir.path().join("ext.glb");
+    run_ok(&[
+        "tween",
+        s(&sample("bar_twist.glb")),
+        "-o",
+        s(&ext),
+        "--extend-before",
+        "0.5",
+        "--extend-after",
+        "0.4",
+        "-q",
+    ]);
+    assert_valid(&ext);
+    assert_eq!(read_targets(&ext, 0, 0).1.len(), 6 + 2 + 2);
+    let r = inbetween(&[
+        "tween",
+        s(&sample("bar_twist.glb")),
+        "-o",
+        s(&ext),
+        "--extend-after",
+        "-1",
+    ]);
+    assert_eq!(r.status.code(), Some(2));
 }

@@ -34,11 +34,7 @@ fn write_keys(surface: Surface, keys: Vec<Vec<DVec3>>) -> (tempfile::TempDir, st
 }
 
 fn frames(mesh: &MorphMesh, method: Method, tweens: usize) -> (Vec<Vec<DVec3>>, Vec<Vec<DVec3>>) {
-    let opts = TweenOptions {
-        method,
-        timing: Timing::Tweens(tweens),
-        report: false,
-    };
+    let opts = TweenOptions::new(method, Timing::Tweens(tweens));
     let track = &mesh.tracks[0];
     let (welded, f) = track_frames_welded(mesh, track, &opts).unwrap();
     let keys = inbetween::tween::key_poses(mesh, track)
@@ -199,11 +195,7 @@ fn seams_and_primitive_borders_stay_closed() {
     let path = common::sample("tube_bend.glb");
     let meshes = load(&path);
     let mesh = &meshes[0];
-    let opts = TweenOptions {
-        method: Method::Seed,
-        timing: Timing::Tweens(5),
-        report: false,
-    };
+    let opts = TweenOptions::new(Method::Seed, Timing::Tweens(5));
     let (welded, f) = track_frames_welded(mesh, &mesh.tracks[0], &opts).unwrap();
     assert_eq!(
         welded.n,
@@ -314,5 +306,41 @@ fn large_twists_between_two_keys_stay_consistent() {
             "spline {degrees} deg: RMS {} > {tol}",
             spline.0
         );
+    }
+}
+
+#[test]
+fn extension_continues_a_rigid_rotation_exactly() {
+    let s = synth::tube(12, 10, 3.0, 0.6, 0.3);
+    let axis = DVec3::new(0.2, 1.0, -0.4).normalize();
+    let angle = 100f64.to_radians();
+    let key = synth::rigid(
+        &s.positions,
+        axis,
+        angle,
+        DVec3::ZERO,
+        DVec3::new(0.5, 0.0, 0.0),
+    );
+    let (_dir, path) = write_keys(s.clone(), vec![key]);
+    let meshes = load(&path);
+    for method in [Method::Seed, Method::Spline] {
+        let mut opts = TweenOptions::new(method, Timing::Tweens(3));
+        opts.extend = [0.5, 0.5];
+        let (_, frames) = track_frames_welded(&meshes[0], &meshes[0].tracks[0], &opts).unwrap();
+        let plan = inbetween::tween::plan(&meshes[0].tracks[0].times, &opts);
+        assert_eq!(frames.len(), 5 + 2 + 2);
+        assert!((plan[0].t + 0.5).abs() < 1e-12 && (plan[8].t - 1.5).abs() < 1e-12);
+        let (keys, _) = self::frames(&meshes[0], method, 1);
+        let d = common::diag(&keys[0]);
+        let c0 = keys[0].iter().sum::<DVec3>() / keys[0].len() as f64;
+        let c1 = keys[1].iter().sum::<DVec3>() / keys[1].len() as f64;
+        for (f, at) in frames.iter().zip(&plan) {
+            let r = DQuat::from_axis_angle(axis, at.t * angle);
+            let expect: Vec<DVec3> = keys[0]
+                .iter()
+                .map(|p| c0.lerp(c1, at.t) + r * (*p - c0))
+                .collect();
+            assert!(max_dist(f, &expect) <= 1e-5 * d, "{method:?} t={}", at.t);
+        }
     }
 }

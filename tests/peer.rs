@@ -27,11 +27,7 @@ fn seed_frames_agree_with_the_scipy_peer_on_flamingo_and_parrot() {
         .unwrap();
         let mesh = &meshes[0];
         let track = &mesh.tracks[0];
-        let opts = TweenOptions {
-            method: Method::Seed,
-            timing: Timing::Tweens(3),
-            report: false,
-        };
+        let opts = TweenOptions::new(Method::Seed, Timing::Tweens(3));
         let (welded, frames) = track_frames_welded(mesh, track, &opts).unwrap();
         let keys: Vec<Vec<[f64; 3]>> = key_poses(mesh, track)
             .iter()
