@@ -135,8 +135,10 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
         row.linear_frame_ms = time_frames(&linear);
         {
             let keys = [x0.clone(), x1.clone()];
-            let opts = crate::tween::TweenOptions::new(Method::Spline, crate::tween::Timing::Tweens(1));
-            let spline = Segment::for_key_pair(&opts, &keys, &[0.0, 1.0], 0, 1, Some(&pattern), &triangles)?;
+            let opts =
+                crate::tween::TweenOptions::new(Method::Spline, crate::tween::Timing::Tweens(1));
+            let spline =
+                Segment::for_key_pair(&opts, &keys, &[0.0, 1.0], 0, 1, Some(&pattern), &triangles)?;
             row.spline_frame_ms = time_frames(&spline);
         }
         row.threads = rayon::current_num_threads();

@@ -653,3 +653,137 @@ fn loop_closes_the_motion_and_extension_adds_frames() {
     ]);
     assert_eq!(r.status.code(), Some(2));
 }
+
+#[test]
+fn quantized_positions_are_read() {
+    // bar_twist with POSITION stored as int16 (KHR_mesh_quantization, not normalized) and the
+    // node scaled by 1/1000.
+    let dir = tempfile::tempdir().unwrap();
+    let doc = Document::open(&sample("bar_twist.glb")).unwrap();
+    let mut json = doc.json.clone();
+    let pos = json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    let (values, _) = doc.read_f64(pos).unwrap();
+    let quantized: Vec<i16> = values.iter().map(|v| (v * 1000.0).round() as i16).collect();
+    let mut bin = doc.buffers[0].clone();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let offset = bin.len();
+    for chunk in quantized.chunks(3) {
+        for q in chunk {
+            bin.extend(q.to_le_bytes());
+        }
+        bin.extend([0u8, 0]); // 4-byte aligned elements
+    }
+    let views = json["bufferViews"].as_array_mut().unwrap();
+    views.push(serde_json::json!({ "buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset, "byteStride": 8, "target": 34962 }));
+    let view = views.len() - 1;
+    let lo: Vec<i16> = (0..3)
+        .map(|c| quantized.iter().skip(c).step_by(3).copied().min().unwrap())
+        .collect();
+    let hi: Vec<i16> = (0..3)
+        .map(|c| quantized.iter().skip(c).step_by(3).copied().max().unwrap())
+        .collect();
+    let accessors = json["accessors"].as_array_mut().unwrap();
+    accessors.push(serde_json::json!({ "bufferView": view, "componentType": 5122, "count": values.len() / 3, "type": "VEC3", "min": lo, "max": hi }));
+    let acc = accessors.len() - 1;
+    json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = acc.into();
+    // Target deltas in the quantized space: scale them by 1000 too.
+    let tpos = json["meshes"][0]["primitives"][0]["targets"][0]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    let (deltas, _) = doc.read_f64(tpos).unwrap();
+    let scaled: Vec<f32> = deltas.iter().map(|d| (*d * 1000.0) as f32).collect();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let offset = bin.len();
+    bin.extend(scaled.iter().flat_map(|f| f.to_le_bytes()));
+    let views = json["bufferViews"].as_array_mut().unwrap();
+    views.push(serde_json::json!({ "buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset, "target": 34962 }));
+    let view = views.len() - 1;
+    let lo: Vec<f32> = (0..3)
+        .map(|c| {
+            scaled
+                .iter()
+                .skip(c)
+                .step_by(3)
+                .copied()
+                .fold(f32::MAX, f32::min)
+        })
+        .collect();
+    let hi: Vec<f32> = (0..3)
+        .map(|c| {
+            scaled
+                .iter()
+                .skip(c)
+                .step_by(3)
+                .copied()
+                .fold(f32::MIN, f32::max)
+        })
+        .collect();
+    let accessors = json["accessors"].as_array_mut().unwrap();
+    accessors.push(serde_json::json!({ "bufferView": view, "componentType": 5126, "count": scaled.len() / 3, "type": "VEC3", "min": lo, "max": hi }));
+    let tacc = accessors.len() - 1;
+    json["meshes"][0]["primitives"][0]["targets"][0]["POSITION"] = tacc.into();
+    json["buffers"][0]["byteLength"] = bin.len().into();
+    json["nodes"][0]["scale"] = serde_json::json!([0.001, 0.001, 0.001]);
+    json["extensionsUsed"] = serde_json::json!(["KHR_mesh_quantization"]);
+    json["extensionsRequired"] = serde_json::json!(["KHR_mesh_quantization"]);
+    let mut js = serde_json::to_vec(&json).unwrap();
+    while js.len() % 4 != 0 {
+        js.push(b' ');
+    }
+    let total = 12 + 8 + js.len() + 8 + bin.len();
+    let mut f = b"glTF".to_vec();
+    f.extend(2u32.to_le_bytes());
+    f.extend((total as u32).to_le_bytes());
+    f.extend((js.len() as u32).to_le_bytes());
+    f.extend(0x4E4F534Au32.to_le_bytes());
+    f.extend(&js);
+    f.extend((bin.len() as u32).to_le_bytes());
+    f.extend(0x004E4942u32.to_le_bytes());
+    f.extend(&bin);
+    let input = dir.path().join("quantized.glb");
+    std::fs::write(&input, f).unwrap();
+    assert_valid(&input);
+    let out = dir.path().join("out.glb");
+    run_ok(&["tween", s(&input), "-o", s(&out), "-q"]);
+    assert_valid(&out);
+    // Same frames as the float file, in the quantized space (x1000), within the rounding.
+    let plain = dir.path().join("plain.glb");
+    run_ok(&["tween", s(&sample("bar_twist.glb")), "-o", s(&plain), "-q"]);
+    let (qb, qt) = read_targets_any(&out);
+    let (pb, pt) = read_targets_any(&plain);
+    for (qf, pf) in qt.iter().zip(&pt) {
+        for v in 0..qb.len() {
+            for c in 0..3 {
+                let q = (qb[v][c] + qf[v][c]) / 1000.0;
+                let p = pb[v][c] + pf[v][c];
+                assert!((q - p).abs() < 2e-3, "vertex {v}: {q} vs {p}");
+            }
+        }
+    }
+}
+
+/// Base positions (decoded, any component type) and target deltas of mesh 0 primitive 0.
+fn read_targets_any(path: &Path) -> (Vec<[f32; 3]>, Vec<Vec<[f32; 3]>>) {
+    let doc = Document::open(path).unwrap();
+    let p = &doc.json["meshes"][0]["primitives"][0];
+    let v3 = |a: &serde_json::Value| -> Vec<[f32; 3]> {
+        let (v, _) = doc.read_f64(a.as_u64().unwrap() as usize).unwrap();
+        v.chunks(3)
+            .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
+            .collect()
+    };
+    let base = v3(&p["attributes"]["POSITION"]);
+    let targets = p["targets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| v3(&t["POSITION"]))
+        .collect();
+    (base, targets)
+}
