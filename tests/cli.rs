@@ -667,7 +667,7 @@ fn quantized_positions_are_read() {
     let (values, _) = doc.read_f64(pos).unwrap();
     let quantized: Vec<i16> = values.iter().map(|v| (v * 1000.0).round() as i16).collect();
     let mut bin = doc.buffers[0].clone();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let offset = bin.len();
@@ -696,7 +696,7 @@ fn quantized_positions_are_read() {
         .unwrap() as usize;
     let (deltas, _) = doc.read_f64(tpos).unwrap();
     let scaled: Vec<f32> = deltas.iter().map(|d| (*d * 1000.0) as f32).collect();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let offset = bin.len();
@@ -733,7 +733,7 @@ fn quantized_positions_are_read() {
     json["extensionsUsed"] = serde_json::json!(["KHR_mesh_quantization"]);
     json["extensionsRequired"] = serde_json::json!(["KHR_mesh_quantization"]);
     let mut js = serde_json::to_vec(&json).unwrap();
-    while js.len() % 4 != 0 {
+    while !js.len().is_multiple_of(4) {
         js.push(b' ');
     }
     let total = 12 + 8 + js.len() + 8 + bin.len();
