@@ -127,6 +127,7 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
         Some(sel) => Some(find_animation(doc, sel)?),
     };
     let mut out = Vec::new();
+    let mut held_one_pose = false;
     for (mi, mesh) in arr(json, "meshes").iter().enumerate() {
         let prims = arr(mesh, "primitives");
         let target_count = prims.first().map(|p| arr(p, "targets").len()).unwrap_or(0);
@@ -230,10 +231,19 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
         };
         if mm.tracks.iter().any(|t| has_distinct_keys(&mm, t)) {
             out.push(mm);
+        } else if use_animation {
+            held_one_pose = true;
         }
     }
     if out.is_empty() {
-        bail!(doc.err("no mesh with morph targets and at least two distinct keys"));
+        let hint = if held_one_pose {
+            " (its weights animations hold a single pose; --keys targets tweens the targets)"
+        } else {
+            ""
+        };
+        bail!(doc.err(format!(
+            "no mesh with morph targets and at least two distinct keys{hint}"
+        )));
     }
     Ok(out)
 }

@@ -787,3 +787,40 @@ fn read_targets_any(path: &Path) -> (Vec<[f32; 3]>, Vec<Vec<[f32; 3]>>) {
         .collect();
     (base, targets)
 }
+
+#[test]
+fn constant_weight_animations_point_to_keys_targets() {
+    let Some(fx) = fixtures() else { return };
+    let input = fx.join("skinned/RobotExpressive.glb");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("robot.glb");
+    let r = inbetween(&["tween", s(&input), "-o", s(&out)]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--keys targets"));
+    assert!(!out.exists());
+    run_ok(&["tween", s(&input), "-o", s(&out), "--keys", "targets", "-q"]);
+    // The input has validator errors of its own (skin weights that do not sum to 1).
+    assert_no_new_issues(&input, &out);
+    // The skins and the other animations come through.
+    let a = Document::open(&input).unwrap();
+    let b = Document::open(&out).unwrap();
+    // (Accessors may be renumbered: the dropped weight channels' data is compacted away.)
+    for (sa, sb) in a.json["skins"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(b.json["skins"].as_array().unwrap())
+    {
+        assert_eq!(sa["joints"], sb["joints"]);
+        assert_eq!(sa["skeleton"], sb["skeleton"]);
+        let ibm = |d: &Document, s: &serde_json::Value| {
+            d.read_f64(s["inverseBindMatrices"].as_u64().unwrap() as usize)
+                .unwrap()
+        };
+        assert_eq!(ibm(&a, sa), ibm(&b, sb));
+    }
+    assert_eq!(
+        b.json["animations"].as_array().unwrap().len(),
+        a.json["animations"].as_array().unwrap().len() + 1
+    );
+}

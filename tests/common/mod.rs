@@ -124,3 +124,33 @@ pub fn read_targets(path: &Path, mesh: usize, prim: usize) -> (Vec<[f32; 3]>, Ve
 pub fn diag(points: &[glam::DVec3]) -> f64 {
     inbetween::weld::bbox_diagonal(points)
 }
+
+/// Error and warning codes the validator reports for a file, with their counts.
+fn issue_counts(line: &str) -> std::collections::BTreeMap<String, usize> {
+    let v: serde_json::Value = serde_json::from_str(line).unwrap();
+    let mut out = std::collections::BTreeMap::new();
+    for m in v["messages"].as_array().unwrap() {
+        if matches!(m["severity"].as_str(), Some("error") | Some("warning")) {
+            *out.entry(m["code"].as_str().unwrap().to_string())
+                .or_default() += 1;
+        }
+    }
+    out
+}
+
+/// Assert that `output` has no validator error or warning that `input` did not already have
+/// (per issue code, at most as many).
+pub fn assert_no_new_issues(input: &Path, output: &Path) {
+    let (Some((_, _, a)), Some((_, _, b))) = (validate(input), validate(output)) else {
+        return;
+    };
+    let (before, after) = (issue_counts(&a), issue_counts(&b));
+    for (code, n) in &after {
+        let m = before.get(code).copied().unwrap_or(0);
+        assert!(
+            *n <= m,
+            "{}: {n} x {code} (the input had {m})",
+            output.display()
+        );
+    }
+}

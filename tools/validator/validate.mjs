@@ -31,4 +31,5 @@ for (const file of process.argv.slice(2)) {
   if (i.numErrors + i.numWarnings > 0) bad = 1;
   console.log(JSON.stringify(out));
 }
-process.exit(bad);
+// exitCode, not exit(): exit() can cut off stdout still being written to a pipe.
+process.exitCode = bad;
