@@ -7,7 +7,7 @@
 //! * [`Method::Linear`] is vertex lerp (the BlendShape baseline).
 
 use crate::gradient::{deformation, frame, gradient_operator, polar, quat_log};
-use crate::solve::{components, Factor, Pattern};
+use crate::solve::{scatter, Pattern, Placement};
 use anyhow::Result;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -64,11 +64,9 @@ pub struct SeedSegment {
     x0: Vec<DVec3>,
     x1: Vec<DVec3>,
     triangles: Vec<TriangleTween>,
-    factor: Factor,
-    component: Vec<u32>,
+    placement: Placement,
     centroid0: Vec<DVec3>,
     centroid1: Vec<DVec3>,
-    component_size: Vec<usize>,
 }
 
 impl Segment {
@@ -135,7 +133,7 @@ impl Segment {
     pub fn factor_nonzeros(&self) -> usize {
         match self {
             Segment::Linear { .. } => 0,
-            Segment::Seed(s) => s.factor.nonzeros(),
+            Segment::Seed(s) => s.placement.factor_nonzeros(),
             Segment::Spline(s) => s.factor_nonzeros(),
         }
     }
@@ -170,50 +168,22 @@ impl SeedSegment {
             })
             .collect();
         let valid: Vec<[u32; 3]> = per_triangle.iter().flatten().map(|t| t.corners).collect();
-        let (component, count) = components(n, &valid);
-        // Pin the first vertex of every component, and every vertex no valid triangle touches.
-        let mut pinned = vec![false; n];
-        let mut seen = vec![false; count];
-        for (v, pin) in pinned.iter_mut().enumerate() {
-            match label(&component, v) {
-                None => *pin = true,
-                Some(c) if !seen[c] => {
-                    seen[c] = true;
-                    *pin = true;
-                }
-                _ => {}
-            }
-        }
-        let factor = Factor::new(
+        let placement = Placement::new(
             pattern,
+            n,
             per_triangle
                 .iter()
                 .map(|t| t.as_ref().map(TriangleTween::gradients)),
-            pinned,
+            &valid,
         )?;
-        let mut centroid0 = vec![DVec3::ZERO; count];
-        let mut centroid1 = vec![DVec3::ZERO; count];
-        let mut component_size = vec![0usize; count];
-        for v in 0..n {
-            if let Some(c) = label(&component, v) {
-                centroid0[c] += x0[v];
-                centroid1[c] += x1[v];
-                component_size[c] += 1;
-            }
-        }
-        for c in 0..count {
-            centroid0[c] /= component_size[c] as f64;
-            centroid1[c] /= component_size[c] as f64;
-        }
+        let (centroid0, centroid1) = (placement.centroids(&x0), placement.centroids(&x1));
         Ok(SeedSegment {
             x0,
             x1,
             triangles: per_triangle.into_iter().flatten().collect(),
-            factor,
-            component,
+            placement,
             centroid0,
             centroid1,
-            component_size,
         })
     }
 
@@ -221,50 +191,20 @@ impl SeedSegment {
         let mut rhs = vec![[0.0f64; 3]; self.x0.len()];
         for tri in &self.triangles {
             let r = axis_angle_matrix(tri.axis, tri.angle * t);
-            // T(t) g = R(t) ((1-t) g + t S g); the three g sum to zero, so do two.
+            // T(t) g = R(t) ((1-t) g + t S g)
             let v1 = r * (tri.g[0] * (1.0 - t) + tri.sg[0] * t);
             let v2 = r * (tri.g[1] * (1.0 - t) + tri.sg[1] * t);
-            for (k, v) in [(0, -(v1 + v2)), (1, v1), (2, v2)] {
-                let b = &mut rhs[tri.corners[k] as usize];
-                b[0] += v.x;
-                b[1] += v.y;
-                b[2] += v.z;
-            }
+            scatter(&mut rhs, tri.corners, v1, v2);
         }
-        for (b, &p) in rhs.iter_mut().zip(&self.factor.pinned) {
-            if p {
-                *b = [0.0; 3];
-            }
-        }
-        self.factor.solve(&mut rhs);
-        let mut out: Vec<DVec3> = rhs.iter().map(|b| DVec3::from_array(*b)).collect();
         // Centroid path per component; untouched vertices follow the straight line.
-        let mut sum = vec![DVec3::ZERO; self.centroid0.len()];
-        for (v, p) in out.iter().enumerate() {
-            if let Some(c) = label(&self.component, v) {
-                sum[c] += *p;
-            }
-        }
-        let shift: Vec<DVec3> = (0..sum.len())
-            .map(|c| {
-                self.centroid0[c].lerp(self.centroid1[c], t)
-                    - sum[c] / self.component_size[c] as f64
-            })
+        let centroids: Vec<DVec3> = self
+            .centroid0
+            .iter()
+            .zip(&self.centroid1)
+            .map(|(a, b)| a.lerp(*b, t))
             .collect();
-        for (v, p) in out.iter_mut().enumerate() {
-            match label(&self.component, v) {
-                Some(c) => *p += shift[c],
-                None => *p = self.x0[v].lerp(self.x1[v], t),
-            }
-        }
-        out
-    }
-}
-
-fn label(component: &[u32], v: usize) -> Option<usize> {
-    match component[v] {
-        u32::MAX => None,
-        c => Some(c as usize),
+        self.placement
+            .place(rhs, &centroids, |v| self.x0[v].lerp(self.x1[v], t))
     }
 }
 

@@ -515,6 +515,108 @@ pub fn components(n: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, usize) {
     (label, count)
 }
 
+/// The solve for one reference pose with its translations fixed: one vertex of every
+/// connected component (of the valid triangles) is pinned, and after each solve every
+/// component is translated onto the centroid the caller wants; vertices that no valid triangle
+/// touches are placed by the caller.
+pub struct Placement {
+    factor: Factor,
+    component: Vec<u32>,
+    size: Vec<usize>,
+}
+
+impl Placement {
+    /// Factor the system of `n` vertices: `grads` per triangle of the pattern (None for one
+    /// left out), `valid` the corners of the triangles kept.
+    pub fn new(
+        pattern: &Pattern,
+        n: usize,
+        grads: impl IntoIterator<Item = Option<[DVec3; 3]>>,
+        valid: &[[u32; 3]],
+    ) -> Result<Placement> {
+        let (component, count) = components(n, valid);
+        let mut pinned = vec![false; n];
+        let mut seen = vec![false; count];
+        for (pin, &c) in pinned.iter_mut().zip(&component) {
+            if c == u32::MAX {
+                *pin = true;
+            } else if !seen[c as usize] {
+                seen[c as usize] = true;
+                *pin = true;
+            }
+        }
+        let mut size = vec![0usize; count];
+        for &c in component.iter().filter(|&&c| c != u32::MAX) {
+            size[c as usize] += 1;
+        }
+        Ok(Placement {
+            factor: Factor::new(pattern, grads, pinned)?,
+            component,
+            size,
+        })
+    }
+
+    /// Vertex centroid of every component in pose `x`.
+    pub fn centroids(&self, x: &[DVec3]) -> Vec<DVec3> {
+        let mut sum = vec![DVec3::ZERO; self.size.len()];
+        for (p, &c) in x.iter().zip(&self.component) {
+            if c != u32::MAX {
+                sum[c as usize] += *p;
+            }
+        }
+        sum.iter()
+            .zip(&self.size)
+            .map(|(s, &m)| *s / m as f64)
+            .collect()
+    }
+
+    /// Solve for `rhs`, then move component c so its centroid is `centroid[c]`; a vertex no
+    /// valid triangle touches goes to `loose(v)`.
+    pub fn place(
+        &self,
+        mut rhs: Vec<[f64; 3]>,
+        centroid: &[DVec3],
+        loose: impl Fn(usize) -> DVec3,
+    ) -> Vec<DVec3> {
+        for (b, &p) in rhs.iter_mut().zip(&self.factor.pinned) {
+            if p {
+                *b = [0.0; 3];
+            }
+        }
+        self.factor.solve(&mut rhs);
+        let mut out: Vec<DVec3> = rhs.iter().map(|b| DVec3::from_array(*b)).collect();
+        let shift: Vec<DVec3> = self
+            .centroids(&out)
+            .iter()
+            .zip(centroid)
+            .map(|(now, want)| *want - *now)
+            .collect();
+        for (v, p) in out.iter_mut().enumerate() {
+            match self.component[v] {
+                u32::MAX => *p = loose(v),
+                c => *p += shift[c as usize],
+            }
+        }
+        out
+    }
+
+    pub fn factor_nonzeros(&self) -> usize {
+        self.factor.nonzeros()
+    }
+}
+
+/// Add a triangle's right-hand-side terms `T g` for corners 1 and 2 (corner 0 gets minus
+/// their sum, since the gradient operators sum to zero).
+#[inline]
+pub fn scatter(rhs: &mut [[f64; 3]], corners: [u32; 3], v1: DVec3, v2: DVec3) {
+    for (k, v) in [(0, -(v1 + v2)), (1, v1), (2, v2)] {
+        let b = &mut rhs[corners[k] as usize];
+        b[0] += v.x;
+        b[1] += v.y;
+        b[2] += v.z;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

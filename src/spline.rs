@@ -16,7 +16,7 @@
 
 use crate::gradient::{deformation, frame, gradient_operator, polar, quat_log};
 use crate::interpolate::axis_angle_matrix;
-use crate::solve::{components, Factor, Pattern};
+use crate::solve::{scatter, Pattern, Placement};
 use anyhow::Result;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -49,9 +49,7 @@ pub struct SplineSegment {
     /// Times of prev, a, b, next (prev and next may be mirrored or wrapped).
     t: [f64; 4],
     tris: Vec<Tri>,
-    factor: Factor,
-    component: Vec<u32>,
-    component_size: Vec<usize>,
+    placement: Placement,
     /// Centroids of prev, a, b, next per component.
     centroids: Vec<[DVec3; 4]>,
     /// Positions of a and b, for vertices no valid triangle touches.
@@ -298,50 +296,21 @@ impl<'a> SplineTrack<'a> {
             })
         });
         let valid: Vec<[u32; 3]> = per.iter().flatten().map(|t| t.corners).collect();
-        let (component, count) = components(n, &valid);
-        let mut pinned = vec![false; n];
-        let mut seen = vec![false; count];
-        for (v, pin) in pinned.iter_mut().enumerate() {
-            match component[v] {
-                u32::MAX => *pin = true,
-                c if !seen[c as usize] => {
-                    seen[c as usize] = true;
-                    *pin = true;
-                }
-                _ => {}
-            }
-        }
-        let factor = Factor::new(self.pattern, grads, pinned)?;
-        let mut sums = vec![[DVec3::ZERO; 4]; count];
-        let mut component_size = vec![0usize; count];
-        let key_or = |side: Option<(usize, f64)>| side.map(|(k, _)| &self.keys[k]);
-        let (kp, kn) = (key_or(prev), key_or(next));
-        for v in 0..n {
-            let c = component[v];
-            if c == u32::MAX {
-                continue;
-            }
-            let c = c as usize;
-            let pa = x0[v];
-            let pb = x1[v];
-            let pp = kp.map_or(2.0 * pa - pb, |k| k[v]);
-            let pn = kn.map_or(2.0 * pb - pa, |k| k[v]);
-            for (s, p) in sums[c].iter_mut().zip([pp, pa, pb, pn]) {
-                *s += p;
-            }
-            component_size[c] += 1;
-        }
-        let centroids = sums
-            .iter()
-            .zip(&component_size)
-            .map(|(s, &m)| s.map(|p| p / m as f64))
+        let placement = Placement::new(self.pattern, n, grads, &valid)?;
+        // Centroids of the four knots; a missing neighbour is mirrored.
+        let mirror = |p: &[DVec3], q: &[DVec3]| -> Vec<DVec3> {
+            p.iter().zip(q).map(|(a, b)| 2.0 * *a - *b).collect()
+        };
+        let kp = prev.map_or_else(|| mirror(x0, x1), |(k, _)| self.keys[k].clone());
+        let kn = next.map_or_else(|| mirror(x1, x0), |(k, _)| self.keys[k].clone());
+        let c = [kp.as_slice(), x0, x1, kn.as_slice()].map(|x| placement.centroids(x));
+        let centroids = (0..c[0].len())
+            .map(|i| [c[0][i], c[1][i], c[2][i], c[3][i]])
             .collect();
         Ok(SplineSegment {
             t,
             tris: per.into_iter().flatten().collect(),
-            factor,
-            component,
-            component_size,
+            placement,
             centroids,
             x: [x0.clone(), x1.clone()],
         })
@@ -357,13 +326,12 @@ impl<'a> SplineTrack<'a> {
 
 impl SplineSegment {
     pub fn factor_nonzeros(&self) -> usize {
-        self.factor.nonzeros()
+        self.placement.factor_nonzeros()
     }
 
     pub fn frame(&self, u: f64) -> Vec<DVec3> {
         let w = weights(self.t, u);
-        let n = self.x[0].len();
-        let mut rhs = vec![[0.0f64; 3]; n];
+        let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
         for tri in &self.tris {
             let r = tri.r[0] * w[0] + tri.r[1] * w[2] + tri.r[2] * w[3];
             let angle = r.length();
@@ -372,48 +340,21 @@ impl SplineSegment {
             } else {
                 DMat3::IDENTITY
             };
-            let mut v = [DVec3::ZERO; 2];
-            for (k, vk) in v.iter_mut().enumerate() {
-                let sg = tri.sg[0][k] * w[0]
+            let v: [DVec3; 2] = std::array::from_fn(|k| {
+                rot * (tri.sg[0][k] * w[0]
                     + tri.g[k] * w[1]
                     + tri.sg[1][k] * w[2]
-                    + tri.sg[2][k] * w[3];
-                *vk = rot * sg;
-            }
-            for (c, val) in [(0, -(v[0] + v[1])), (1, v[0]), (2, v[1])] {
-                let b = &mut rhs[tri.corners[c] as usize];
-                b[0] += val.x;
-                b[1] += val.y;
-                b[2] += val.z;
-            }
+                    + tri.sg[2][k] * w[3])
+            });
+            scatter(&mut rhs, tri.corners, v[0], v[1]);
         }
-        for (b, &p) in rhs.iter_mut().zip(&self.factor.pinned) {
-            if p {
-                *b = [0.0; 3];
-            }
-        }
-        self.factor.solve(&mut rhs);
-        let mut out: Vec<DVec3> = rhs.iter().map(|b| DVec3::from_array(*b)).collect();
-        let mut sum = vec![DVec3::ZERO; self.centroids.len()];
-        for (v, p) in out.iter().enumerate() {
-            if self.component[v] != u32::MAX {
-                sum[self.component[v] as usize] += *p;
-            }
-        }
-        let shift: Vec<DVec3> = (0..sum.len())
-            .map(|c| {
-                let k = &self.centroids[c];
-                k[0] * w[0] + k[1] * w[1] + k[2] * w[2] + k[3] * w[3]
-                    - sum[c] / self.component_size[c] as f64
-            })
+        let centroids: Vec<DVec3> = self
+            .centroids
+            .iter()
+            .map(|k| k[0] * w[0] + k[1] * w[1] + k[2] * w[2] + k[3] * w[3])
             .collect();
-        for (v, p) in out.iter_mut().enumerate() {
-            match self.component[v] {
-                u32::MAX => *p = self.x[0][v].lerp(self.x[1][v], u),
-                c => *p += shift[c as usize],
-            }
-        }
-        out
+        self.placement
+            .place(rhs, &centroids, |v| self.x[0][v].lerp(self.x[1][v], u))
     }
 }
 
