@@ -209,7 +209,7 @@ impl SeedSegment {
 }
 
 /// Rotation matrix about a unit axis by an angle, through the half-angle quaternion.
-#[inline]
+#[inline(always)]
 pub fn axis_angle_matrix(axis: DVec3, angle: f64) -> DMat3 {
     let (s, c) = sin_cos(0.5 * angle);
     let (x, y, z, w) = (axis.x * s, axis.y * s, axis.z * s, c);
@@ -226,7 +226,7 @@ pub fn axis_angle_matrix(axis: DVec3, angle: f64) -> DMat3 {
 
 /// sin and cos together, inlined: Cody-Waite reduction by pi/2 and the fdlibm kernel
 /// polynomials on [-pi/4, pi/4] (error about 1 ulp for |x| < 1e5).
-#[inline]
+#[inline(always)]
 pub fn sin_cos(x: f64) -> (f64, f64) {
     const PIO2_HI: f64 = 1.570_796_326_734_125_6;
     const PIO2_LO: f64 = 6.077_100_506_506_192e-11;
