@@ -197,49 +197,18 @@ impl Factor {
             Some(p) => p.arrays().0.to_vec(),
             None => (0..n as u32).collect(),
         };
-        // Off-diagonal entries of L column by column (rows ascending within a column).
+        // Off-diagonal nonzeros of L column by column (rows ascending within a column).
         let mut diag = vec![0.0; n];
-        let for_each_entry =
-            |diag: &mut [f64], emit: &mut dyn FnMut(usize, usize, f64)| match symbolic.raw() {
-                SymbolicCholeskyRaw::Simplicial(s) => {
-                    let (cp, ri) = (s.col_ptr(), s.row_idx());
-                    for j in 0..n {
-                        for k in cp[j] as usize..cp[j + 1] as usize {
-                            let (r, v) = (ri[k] as usize, values[k]);
-                            if r == j {
-                                diag[j] = v;
-                            } else if v != 0.0 {
-                                emit(j, r, v);
-                            }
-                        }
-                    }
+        let for_each_entry = |diag: &mut [f64], emit: &mut dyn FnMut(usize, usize, f64)| {
+            walk_lower(symbolic, n, &mut |j, r, at| {
+                let v = values[at];
+                if r == j {
+                    diag[j] = v;
+                } else if v != 0.0 {
+                    emit(j, r, v);
                 }
-                SymbolicCholeskyRaw::Supernodal(s) => {
-                    let (begin, end) = (s.supernode_begin(), s.supernode_end());
-                    for sn in 0..s.n_supernodes() {
-                        let (start, stop) = (begin[sn] as usize, end[sn] as usize);
-                        let pattern_rows = s.supernode(sn).pattern();
-                        let ncols = stop - start;
-                        let nrows = ncols + pattern_rows.len();
-                        let block = &values[s.col_ptr_for_val()[sn] as usize
-                            ..s.col_ptr_for_val()[sn + 1] as usize];
-                        for c in 0..ncols {
-                            let col = &block[c * nrows..(c + 1) * nrows];
-                            diag[start + c] = col[c];
-                            for (r, &v) in col.iter().enumerate().skip(c + 1) {
-                                if v != 0.0 {
-                                    let row = if r < ncols {
-                                        start + r
-                                    } else {
-                                        pattern_rows[r - ncols] as usize
-                                    };
-                                    emit(start + c, row, v);
-                                }
-                            }
-                        }
-                    }
-                }
-            };
+            })
+        };
         // Row copy (small factors only), built straight from the factor: count, then fill
         // (columns come in order, so each row's entries are sorted).
         let mut row_ptr = vec![0usize; n + 1];
@@ -360,23 +329,40 @@ fn compact_columns(
     mut values: Vec<f64>,
     n: usize,
 ) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
-    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut col_ptr = vec![0usize; n + 1];
     let mut rows = Vec::new();
     let mut w = 0usize;
-    col_ptr.push(0);
+    walk_lower(symbolic, n, &mut |j, r, at| {
+        let v = values[at];
+        if r != j && v != 0.0 {
+            values[w] = v;
+            w += 1;
+            rows.push(r as u32);
+        }
+        col_ptr[j + 1] = w;
+    });
+    // Columns with no entry at all keep the previous column's end.
+    for j in 0..n {
+        col_ptr[j + 1] = col_ptr[j + 1].max(col_ptr[j]);
+    }
+    values.truncate(w);
+    values.shrink_to_fit();
+    rows.shrink_to_fit();
+    (col_ptr, rows, values)
+}
+
+/// Every stored entry of L on or below the diagonal, column by column with rows ascending, as
+/// (column, row, position in the factor's value array), for either of faer's layouts: simplicial
+/// (plain CSC) or supernodal (per supernode a dense column-major block: the diagonal block's
+/// rows, then the supernode's pattern rows).
+fn walk_lower(symbolic: &SymbolicCholesky<u32>, n: usize, f: &mut dyn FnMut(usize, usize, usize)) {
     match symbolic.raw() {
         SymbolicCholeskyRaw::Simplicial(s) => {
             let (cp, ri) = (s.col_ptr(), s.row_idx());
             for j in 0..n {
                 for k in cp[j] as usize..cp[j + 1] as usize {
-                    let (r, v) = (ri[k] as usize, values[k]);
-                    if r != j && v != 0.0 {
-                        values[w] = v;
-                        w += 1;
-                        rows.push(r as u32);
-                    }
+                    f(j, ri[k] as usize, k);
                 }
-                col_ptr.push(w);
             }
         }
         SymbolicCholeskyRaw::Supernodal(s) => {
@@ -388,27 +374,18 @@ fn compact_columns(
                 let nrows = ncols + pattern_rows.len();
                 let base = s.col_ptr_for_val()[sn] as usize;
                 for c in 0..ncols {
-                    for r in c + 1..nrows {
-                        let v = values[base + c * nrows + r];
-                        if v != 0.0 {
-                            values[w] = v;
-                            w += 1;
-                            rows.push(if r < ncols {
-                                (start + r) as u32
-                            } else {
-                                pattern_rows[r - ncols]
-                            });
-                        }
+                    for r in c..nrows {
+                        let row = if r < ncols {
+                            start + r
+                        } else {
+                            pattern_rows[r - ncols] as usize
+                        };
+                        f(start + c, row, base + c * nrows + r);
                     }
-                    col_ptr.push(w);
                 }
             }
         }
     }
-    values.truncate(w);
-    values.shrink_to_fit();
-    rows.shrink_to_fit();
-    (col_ptr, rows, values)
 }
 
 /// One step of a gathering triangular solve: `y[i] = (y[i] - sum_k vals[k] y[idx[k]]) / diag[i]`
