@@ -360,8 +360,9 @@ fn walk_lower(symbolic: &SymbolicCholesky<u32>, n: usize, f: &mut dyn FnMut(usiz
         SymbolicCholeskyRaw::Simplicial(s) => {
             let (cp, ri) = (s.col_ptr(), s.row_idx());
             for j in 0..n {
-                for k in cp[j] as usize..cp[j + 1] as usize {
-                    f(j, ri[k] as usize, k);
+                let range = cp[j] as usize..cp[j + 1] as usize;
+                for (k, &r) in range.clone().zip(&ri[range]) {
+                    f(j, r as usize, k);
                 }
             }
         }

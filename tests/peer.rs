@@ -44,18 +44,13 @@ fn seed_frames_agree_with_the_scipy_peer_on_flamingo_and_parrot() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("job.json");
         std::fs::write(&path, job.to_string()).unwrap();
-        let out = std::process::Command::new(&python)
-            .arg(common::root().join("tools/crosscheck_peer.py"))
-            .arg(&path)
-            .arg(&peers)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        let stdout = common::run_tool(
+            &python,
+            "crosscheck_peer.py",
+            &[path.as_os_str(), peers.as_os_str()],
+            name,
         );
-        let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let r: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
         let worst = r["max_rel"].as_f64().unwrap();
         eprintln!(
             "{name}: {} frames, max |inbetween - peer| = {worst:.2e} of the diagonal",

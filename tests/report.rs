@@ -23,17 +23,12 @@ fn report(input: &Path, method: &str) -> serde_json::Value {
         "-q",
     ]);
     if let Some(python) = python() {
-        let r = std::process::Command::new(python)
-            .arg(root().join("tools/check_schema.py"))
-            .arg(root().join("schemas/report.schema.json"))
-            .arg(&rep)
-            .output()
-            .unwrap();
-        assert!(
-            r.status.success(),
-            "report does not match its schema: {}{}",
-            String::from_utf8_lossy(&r.stdout),
-            String::from_utf8_lossy(&r.stderr)
+        let schema = root().join("schemas/report.schema.json");
+        run_tool(
+            &python,
+            "check_schema.py",
+            &[schema.as_os_str(), rep.as_os_str()],
+            "the report against its schema",
         );
     }
     serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap()

@@ -58,19 +58,14 @@ fn check_input(input: &Path, args: &[&str]) -> usize {
         a.extend_from_slice(args);
         run_ok(&a);
         let dump = dir.path().join("dump.bin");
-        let out = std::process::Command::new(&python)
-            .arg(root().join("tools/check_usd.py"))
-            .arg(&usd)
-            .arg(&dump)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}: {}",
-            input.display(),
-            String::from_utf8_lossy(&out.stderr)
+        let what = input.display().to_string();
+        let stdout = run_tool(
+            &python,
+            "check_usd.py",
+            &[usd.as_os_str(), dump.as_os_str()],
+            &what,
         );
-        let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let r: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
         assert!(
             r["errors"].as_array().unwrap().is_empty(),
             "{} .{fmt}: {}",
@@ -157,18 +152,12 @@ fn check_input(input: &Path, args: &[&str]) -> usize {
         assert_eq!(at, floats.len());
     }
     // The binary layer holds exactly what the text layer holds.
-    let out = std::process::Command::new(&python)
-        .arg(root().join("tools/same_layers.py"))
-        .arg(dir.path().join("out.usda"))
-        .arg(dir.path().join("out.usdc"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}: usda and usdc differ: {}{}",
-        input.display(),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
+    let (usda, usdc) = (dir.path().join("out.usda"), dir.path().join("out.usdc"));
+    run_tool(
+        &python,
+        "same_layers.py",
+        &[usda.as_os_str(), usdc.as_os_str()],
+        &format!("{}: usda and usdc differ", input.display()),
     );
     checked
 }

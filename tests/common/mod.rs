@@ -154,3 +154,20 @@ pub fn assert_no_new_issues(input: &Path, output: &Path) {
         );
     }
 }
+
+/// Run `tools/<script>` with the project's python and `args`, insisting on success; returns
+/// its standard output. `what` prefixes the failure message.
+pub fn run_tool(python: &Path, script: &str, args: &[&std::ffi::OsStr], what: &str) -> Vec<u8> {
+    let out = Command::new(python)
+        .arg(root().join("tools").join(script))
+        .args(args)
+        .output()
+        .expect("run python");
+    assert!(
+        out.status.success(),
+        "{what}: {script} failed: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out.stdout
+}
