@@ -111,11 +111,6 @@ impl Pattern {
             )
         }
     }
-
-    /// Nonzeros of the Cholesky factor L.
-    pub fn factor_nonzeros(&self) -> usize {
-        self.symbolic.len_val()
-    }
 }
 
 /// Above this many off-diagonal nonzeros in L (about 12 bytes each per copy), only the

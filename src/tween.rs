@@ -206,12 +206,9 @@ pub struct MeshFrames {
 
 #[derive(Clone, Debug, Default)]
 pub struct MeshStats {
-    pub vertices: usize,
-    pub welded_vertices: usize,
     pub triangles: usize,
     pub keys: usize,
     pub frames: usize,
-    pub factor_nonzeros: usize,
     pub setup: Duration,
     pub solve: Duration,
 }
@@ -247,8 +244,6 @@ pub fn tween_mesh(
 ) -> Result<MeshFrames> {
     let welded = Welded::build(mesh);
     let mut stats = MeshStats {
-        vertices: mesh.vertex_count(),
-        welded_vertices: welded.n,
         triangles: welded.input_triangles.len(),
         ..Default::default()
     };
@@ -257,7 +252,6 @@ pub fn tween_mesh(
         Method::Seed | Method::Spline => Some(Pattern::new(welded.n, &welded.triangles)?),
         Method::Linear => None,
     };
-    stats.factor_nonzeros = pattern.as_ref().map_or(0, Pattern::factor_nonzeros);
     stats.setup += started.elapsed();
     let base_normals: Option<Vec<DVec3>> = mesh.pose_normals(&vec![0.0; mesh.target_count]);
     let has_normal_targets = mesh
