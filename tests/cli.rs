@@ -6,7 +6,6 @@ mod common;
 use common::*;
 use glam::DVec3;
 use inbetween::interpolate::Method;
-use inbetween::keyframes::{find_morph_meshes, KeyOptions, KeySource};
 use inbetween::read::Document;
 use inbetween::tween::{track_frames_welded, Timing, TweenOptions};
 use std::path::{Path, PathBuf};
@@ -41,15 +40,7 @@ fn samples_tween_to_valid_files_with_the_computed_frames() {
             ]);
             assert_valid(&out);
             // Frames from the library, expanded to input vertices.
-            let doc = Document::open(&input).unwrap();
-            let meshes = find_morph_meshes(
-                &doc,
-                &KeyOptions {
-                    source: KeySource::Auto,
-                    animation: None,
-                },
-            )
-            .unwrap();
+            let meshes = morph_meshes(&input);
             let opts = TweenOptions::new(Method::Seed, Timing::Tweens(tweens));
             let (welded, frames) =
                 track_frames_welded(&meshes[0], &meshes[0].tracks[0], &opts).unwrap();

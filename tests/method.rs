@@ -4,22 +4,9 @@ mod common;
 
 use glam::{DQuat, DVec3};
 use inbetween::interpolate::Method;
-use inbetween::keyframes::{KeyOptions, KeySource, MorphMesh};
-use inbetween::read::Document;
+use inbetween::keyframes::MorphMesh;
 use inbetween::synth::{self, KeyedMesh, KeyframeFile, Surface};
 use inbetween::tween::{track_frames_welded, Timing, TweenOptions};
-
-fn load(path: &std::path::Path) -> Vec<MorphMesh> {
-    let doc = Document::open(path).unwrap();
-    inbetween::keyframes::find_morph_meshes(
-        &doc,
-        &KeyOptions {
-            source: KeySource::Auto,
-            animation: None,
-        },
-    )
-    .unwrap()
-}
 
 fn write_keys(surface: Surface, keys: Vec<Vec<DVec3>>) -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
@@ -57,7 +44,7 @@ fn keys_are_reproduced_by_the_solve() {
         .into_iter()
         .flat_map(|n| [(n, Method::Seed), (n, Method::Spline)])
     {
-        let meshes = load(&common::sample(name));
+        let meshes = common::morph_meshes(&common::sample(name));
         let (keys, f) = frames(&meshes[0], method, 3);
         let d = common::diag(&keys[0]);
         for (k, key) in keys.iter().enumerate() {
@@ -86,7 +73,7 @@ fn rigid_rotation_tweens_to_the_exact_rotation() {
             let shift = DVec3::new(1.0, -2.0, 0.5) * i as f64;
             let key = synth::rigid(&s.positions, *axis, angle, DVec3::new(0.3, 0.2, 0.1), shift);
             let (_dir, path) = write_keys(s.clone(), vec![key]);
-            let meshes = load(&path);
+            let meshes = common::morph_meshes(&path);
             for method in [Method::Seed, Method::Spline] {
                 let (keys, f) = frames(&meshes[0], method, 7);
                 let d = common::diag(&keys[0]);
@@ -112,7 +99,7 @@ fn rigid_rotation_tweens_to_the_exact_rotation() {
 
 #[test]
 fn linear_is_vertex_lerp() {
-    let meshes = load(&common::sample("flag_wave.glb"));
+    let meshes = common::morph_meshes(&common::sample("flag_wave.glb"));
     let (keys, f) = frames(&meshes[0], Method::Linear, 4);
     for (j, frame) in f.iter().enumerate() {
         let (k, t) = (
@@ -131,7 +118,7 @@ fn linear_is_vertex_lerp() {
 #[test]
 fn twist_does_not_shrink_like_linear() {
     // Middle frame of the 90-degree twist: the seed keeps the cross-section, lerp shrinks it.
-    let meshes = load(&common::sample("bar_twist.glb"));
+    let meshes = common::morph_meshes(&common::sample("bar_twist.glb"));
     let far: Vec<usize> = (0..meshes[0].vertex_count())
         .filter(|&v| meshes[0].primitives[0].base[v].x > 3.99)
         .collect();
@@ -178,7 +165,7 @@ fn degenerate_triangles_and_reflections_give_no_nan() {
         .collect();
     for key in [mirrored, flat] {
         let (_dir, path) = write_keys(s.clone(), vec![key]);
-        let meshes = load(&path);
+        let meshes = common::morph_meshes(&path);
         let (keys, f) = frames(&meshes[0], Method::Seed, 5);
         for frame in &f {
             assert!(frame.iter().all(|p| p.is_finite()), "NaN in a frame");
@@ -193,7 +180,7 @@ fn seams_and_primitive_borders_stay_closed() {
     // Tube with its seam column duplicated (as a UV seam exports it) and split into two
     // primitives at the middle ring; bend it and check duplicates agree in every frame.
     let path = common::sample("tube_bend.glb");
-    let meshes = load(&path);
+    let meshes = common::morph_meshes(&path);
     let mesh = &meshes[0];
     let opts = TweenOptions::new(Method::Seed, Timing::Tweens(5));
     let (welded, f) = track_frames_welded(mesh, &mesh.tracks[0], &opts).unwrap();
@@ -226,7 +213,7 @@ fn seams_and_primitive_borders_stay_closed() {
     }
     let key = synth::bend(&dup.positions, 3.0, 150f64.to_radians(), 1.0);
     let (_dir, p2) = write_keys(dup, vec![key]);
-    let meshes2 = load(&p2);
+    let meshes2 = common::morph_meshes(&p2);
     let (welded2, f2) = track_frames_welded(&meshes2[0], &meshes2[0].tracks[0], &opts).unwrap();
     assert_eq!(welded2.n, welded.n, "duplicates weld");
     // Same frames as the tube without duplicates.
@@ -244,7 +231,7 @@ fn eval_spline_beats_linear_and_positional_catmull_rom() {
         ("Parrot.glb", 2),
         ("Parrot.glb", 3),
     ] {
-        let meshes = load(&fx.join("morph-keyframes").join(file));
+        let meshes = common::morph_meshes(&fx.join("morph-keyframes").join(file));
         let r = inbetween::eval::evaluate(&meshes[0], step, inbetween::eval::METHODS).unwrap();
         let score = |m: &str| r.scores.iter().find(|s| s.method == m).unwrap().mean;
         let (lin, poscr, spline) = (score("linear"), score("poscr"), score("spline"));
@@ -276,7 +263,7 @@ fn twist_error(method: Method, degrees: f64) -> (f64, f64) {
     let s = synth::tube(121, 24, LEN, 0.5, 0.25);
     let key = synth::twist(&s.positions, degrees.to_radians(), LEN);
     let (_dir, path) = write_keys(s.clone(), vec![key]);
-    let meshes = load(&path);
+    let meshes = common::morph_meshes(&path);
     let (keys, f) = frames(&meshes[0], method, 1);
     let half = synth::twist(&keys[0], (degrees / 2.0).to_radians(), LEN);
     let d = common::diag(&keys[0]);
@@ -322,7 +309,7 @@ fn extension_continues_a_rigid_rotation_exactly() {
         DVec3::new(0.5, 0.0, 0.0),
     );
     let (_dir, path) = write_keys(s.clone(), vec![key]);
-    let meshes = load(&path);
+    let meshes = common::morph_meshes(&path);
     for method in [Method::Seed, Method::Spline] {
         let mut opts = TweenOptions::new(method, Timing::Tweens(3));
         opts.extend = [0.5, 0.5];

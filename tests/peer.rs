@@ -3,8 +3,6 @@
 mod common;
 
 use inbetween::interpolate::Method;
-use inbetween::keyframes::{find_morph_meshes, KeyOptions, KeySource};
-use inbetween::read::Document;
 use inbetween::tween::{key_poses, schedule, track_frames_welded, Timing, TweenOptions};
 use serde_json::json;
 
@@ -16,15 +14,7 @@ fn seed_frames_agree_with_the_scipy_peer_on_flamingo_and_parrot() {
     };
     let peers = fx.join("../peers");
     for name in ["Flamingo.glb", "Parrot.glb"] {
-        let doc = Document::open(&fx.join("morph-keyframes").join(name)).unwrap();
-        let meshes = find_morph_meshes(
-            &doc,
-            &KeyOptions {
-                source: KeySource::Auto,
-                animation: None,
-            },
-        )
-        .unwrap();
+        let meshes = common::morph_meshes(&fx.join("morph-keyframes").join(name));
         let mesh = &meshes[0];
         let track = &mesh.tracks[0];
         let opts = TweenOptions::new(Method::Seed, Timing::Tweens(3));

@@ -171,3 +171,13 @@ pub fn run_tool(python: &Path, script: &str, args: &[&std::ffi::OsStr], what: &s
     );
     out.stdout
 }
+
+/// The morph meshes of a file, keys chosen as `--keys auto` does.
+pub fn morph_meshes(path: &Path) -> Vec<inbetween::keyframes::MorphMesh> {
+    let doc = inbetween::read::Document::open(path).unwrap();
+    let opts = inbetween::keyframes::KeyOptions {
+        source: inbetween::keyframes::KeySource::Auto,
+        animation: None,
+    };
+    inbetween::keyframes::find_morph_meshes(&doc, &opts).unwrap()
+}
