@@ -147,24 +147,10 @@ impl<W: Write + Seek> Writer<W> {
                 self.bytes(&d.to_le_bytes())?;
                 rep_heap(T_DOUBLE, at, false)
             }
-            Val::TokenVector(names) => {
-                let at = self.pos;
-                let idx: Vec<u32> = names.iter().map(|n| self.token(n)).collect();
-                self.u64(idx.len() as u64)?;
-                for i in idx {
-                    self.bytes(&i.to_le_bytes())?;
-                }
-                rep_heap(T_TOKEN_VECTOR, at, false)
-            }
-            Val::Tokens(names) => {
-                let at = self.pos;
-                let idx: Vec<u32> = names.iter().map(|n| self.token(n)).collect();
-                self.u64(idx.len() as u64)?;
-                for i in idx {
-                    self.bytes(&i.to_le_bytes())?;
-                }
-                rep_heap(T_TOKEN, at, true)
-            }
+            // Same bytes, different types: child lists must be a TokenVector (usd-core
+            // rejects a token array there), attribute values a token array.
+            Val::TokenVector(names) => rep_heap(T_TOKEN_VECTOR, self.token_list(&names)?, false),
+            Val::Tokens(names) => rep_heap(T_TOKEN, self.token_list(&names)?, true),
             Val::Matrix(m) => {
                 let at = self.pos;
                 for x in m {
@@ -195,6 +181,17 @@ impl<W: Write + Seek> Writer<W> {
                 rep_heap(T_VEC2F, at, true)
             }
         })
+    }
+
+    /// Write a u64 count and the token indices of `names`; returns where they start.
+    fn token_list<S: AsRef<str>>(&mut self, names: &[S]) -> Result<u64> {
+        let at = self.pos;
+        let idx: Vec<u32> = names.iter().map(|n| self.token(n.as_ref())).collect();
+        self.u64(idx.len() as u64)?;
+        for i in idx {
+            self.bytes(&i.to_le_bytes())?;
+        }
+        Ok(at)
     }
 
     fn vec3f_array(&mut self, v: &[[f32; 3]]) -> Result<u64> {
