@@ -4,7 +4,7 @@
 use crate::write::{self, BinBuilder, Container, Output};
 use anyhow::Result;
 use glam::{DMat3, DQuat, DVec3};
-use serde_json::{json, Value};
+use serde_json::json;
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -242,8 +242,7 @@ impl KeyframeFile {
                     .flat_map(|i| i.to_le_bytes())
                     .collect();
                 let view = out.bin.push_view(&idx, Some(34963));
-                let indices = push_accessor(
-                    &mut out.json,
+                let indices = out.push_accessor(
                     json!({ "bufferView": view, "componentType": 5125, "count": s.triangles.len() * 3, "type": "SCALAR" }),
                 );
                 let mut targets = Vec::new();
@@ -309,17 +308,6 @@ impl KeyframeFile {
         };
         write::finish(out, container, path)
     }
-}
-
-fn push_accessor(json: &mut Value, acc: Value) -> usize {
-    let list = json
-        .as_object_mut()
-        .unwrap()
-        .entry("accessors")
-        .or_insert_with(|| json!([]));
-    let list = list.as_array_mut().unwrap();
-    list.push(acc);
-    list.len() - 1
 }
 
 /// The samples shipped in `samples/`, by file name.

@@ -87,6 +87,11 @@ impl Output {
             acc["min"] = json!(lo);
             acc["max"] = json!(hi);
         }
+        self.push_accessor(acc)
+    }
+
+    /// Append an accessor to the document and return its index.
+    pub fn push_accessor(&mut self, acc: Value) -> usize {
         let accessors = self
             .json
             .as_object_mut()
