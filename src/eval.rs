@@ -12,9 +12,9 @@
 use crate::interpolate::{Method, Segment};
 use crate::keyframes::MorphMesh;
 use crate::solve::Pattern;
-use crate::spline::SplineTrack;
+use crate::spline::{is_loop, SplineTrack};
 use crate::tween::key_poses;
-use crate::weld::{bbox_diagonal, Welded};
+use crate::weld::{bbox_diagonal, rms_rel, Welded};
 use anyhow::{bail, Result};
 use glam::DVec3;
 use serde::Serialize;
@@ -42,15 +42,6 @@ pub struct MeshScore {
 /// The methods `eval` knows.
 pub const METHODS: &[&str] = &["linear", "poscr", "seed", "spline"];
 
-fn rms_rel(a: &[DVec3], b: &[DVec3], diag: f64) -> f64 {
-    let s: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(p, q)| (*p - *q).length_squared())
-        .sum();
-    (s / a.len() as f64).sqrt() / diag
-}
-
 /// Catmull-Rom through p0..p3 at t in [0, 1] between p1 and p2 (uniform parameterisation).
 pub fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, t: f64) -> DVec3 {
     let t2 = t * t;
@@ -59,14 +50,6 @@ pub fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, t: f64) -> DVec3 
         + (p2 - p0) * t
         + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t2
         + (3.0 * p1 - p0 - 3.0 * p2 + p3) * t3)
-}
-
-/// True when the track's last key repeats its first (a cycle).
-pub fn is_loop(keys: &[Vec<DVec3>]) -> bool {
-    keys.len() > 2 && {
-        let d = bbox_diagonal(&keys[0]).max(f64::MIN_POSITIVE);
-        rms_rel(&keys[0], &keys[keys.len() - 1], d) < 1e-6
-    }
 }
 
 /// Score `methods` on `mesh` keeping every `step`-th key.

@@ -113,7 +113,7 @@ impl Segment {
         match opts.method {
             Method::Spline if b == a + 1 => {
                 let pattern = pattern.expect("the spline method needs the mesh's pattern");
-                let looped = opts.wrap && crate::eval::is_loop(keys);
+                let looped = opts.wrap && crate::spline::is_loop(keys);
                 let track =
                     crate::spline::SplineTrack::new(keys, times, looped, pattern, triangles)?;
                 Ok(Segment::Spline(Box::new(track.segment(a)?)))

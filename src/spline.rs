@@ -74,6 +74,15 @@ pub fn weights(t: [f64; 4], u: f64) -> [f64; 4] {
     ]
 }
 
+/// True when a track's last key repeats its first (RMS difference below 1e-6 of the first key's
+/// bounding-box diagonal): a cycle the spline wraps around.
+pub fn is_loop(keys: &[Vec<DVec3>]) -> bool {
+    keys.len() > 2 && {
+        let d = crate::weld::bbox_diagonal(&keys[0]).max(f64::MIN_POSITIVE);
+        crate::weld::rms_rel(&keys[0], &keys[keys.len() - 1], d) < 1e-6
+    }
+}
+
 /// The branch of log `r` (angle + 2 pi k about its axis) closest to `target`.
 fn closest_branch(r: DVec3, target: DVec3) -> DVec3 {
     let angle = r.length();

@@ -119,3 +119,13 @@ pub fn bbox_diagonal(points: &[DVec3]) -> f64 {
         .fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
     (hi - lo).length()
 }
+
+/// RMS distance between two poses of the same vertices, divided by `diag`.
+pub fn rms_rel(a: &[DVec3], b: &[DVec3], diag: f64) -> f64 {
+    let s: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| (*p - *q).length_squared())
+        .sum();
+    (s / a.len() as f64).sqrt() / diag
+}
