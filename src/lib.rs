@@ -5,6 +5,7 @@
 //! -> [`normals`] -> [`write`]; [`tween`] runs it for one mesh and [`job`] from file to file.
 
 pub mod bench;
+pub mod blend;
 pub mod eval;
 pub mod gradient;
 pub mod interpolate;

@@ -1,0 +1,94 @@
+//! Space warp (ALGORITHMS.md B.3, Kovar, Gleicher & Pighin 2002): the rotation about the up axis
+//! and the floor translation that best carry one clip's joint positions onto the other's.
+
+use super::rig::{Pose, Rig};
+use glam::{DMat4, DQuat, DVec3};
+
+/// A rotation by `angle` (radians) about +Y followed by a floor translation (x, 0, z).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FloorTransform {
+    pub angle: f64,
+    pub translation: DVec3,
+}
+
+impl FloorTransform {
+    pub const IDENTITY: FloorTransform = FloorTransform {
+        angle: 0.0,
+        translation: DVec3::ZERO,
+    };
+
+    pub fn matrix(&self) -> DMat4 {
+        DMat4::from_rotation_translation(DQuat::from_rotation_y(self.angle), self.translation)
+    }
+
+    /// The transform `w` of the way from identity (0) to `self` (1).
+    pub fn scaled(&self, w: f64) -> FloorTransform {
+        FloorTransform {
+            angle: self.angle * w,
+            translation: self.translation * w,
+        }
+    }
+}
+
+/// The transform T minimising sum |p - T p'|^2 over corresponding points (equal weights), in
+/// closed form; `p` from the clip kept, `q` from the clip moved.
+pub fn fit(p: &[DVec3], q: &[DVec3]) -> FloorTransform {
+    let n = p.len().min(q.len());
+    if n == 0 {
+        return FloorTransform::IDENTITY;
+    }
+    let w = 1.0 / n as f64;
+    let (mut xm, mut zm, mut xm2, mut zm2, mut a, mut b) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for (p, q) in p.iter().zip(q) {
+        xm += w * p.x;
+        zm += w * p.z;
+        xm2 += w * q.x;
+        zm2 += w * q.z;
+        a += w * (p.x * q.x + p.z * q.z);
+        b += w * (p.x * q.z - q.x * p.z);
+    }
+    let angle = (b - (xm * zm2 - xm2 * zm)).atan2(a - (xm * xm2 + zm * zm2));
+    let (s, c) = angle.sin_cos();
+    FloorTransform {
+        angle,
+        translation: DVec3::new(xm - xm2 * c - zm2 * s, 0.0, zm + xm2 * s - zm2 * c),
+    }
+}
+
+/// Move the whole skeleton of `pose` by the world transform `m` (through its root joint).
+pub fn move_skeleton(rig: &Rig, pose: &mut Pose, m: &DMat4) {
+    let world = rig.world(pose);
+    let parent = rig.parent_world(&world, rig.root);
+    let local = pose.local[rig.root].matrix();
+    let moved = parent.inverse() * *m * parent * local;
+    pose.local[rig.root] = super::rig::Trs::from_matrix(&moved);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recovers_a_known_floor_transform() {
+        let truth = FloorTransform {
+            angle: 0.7,
+            translation: DVec3::new(1.5, 0.0, -2.0),
+        };
+        let q: Vec<DVec3> = (0..20)
+            .map(|i| {
+                DVec3::new(
+                    (i as f64).sin() * 3.0,
+                    i as f64 * 0.1,
+                    (i as f64 * 0.7).cos(),
+                )
+            })
+            .collect();
+        let p: Vec<DVec3> = q
+            .iter()
+            .map(|&x| truth.matrix().transform_point3(x))
+            .collect();
+        let fitted = fit(&p, &q);
+        assert!((fitted.angle - truth.angle).abs() < 1e-12);
+        assert!((fitted.translation - truth.translation).length() < 1e-12);
+    }
+}

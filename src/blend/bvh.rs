@@ -1,0 +1,160 @@
+//! BVH motion capture files as a rig and one clip (End Sites become leaf joints named
+//! `<parent>_end`, so chains end where the foot or toe does). Used to check cycle detection on
+//! real capture; `blend` itself reads and writes glTF.
+
+use super::rig::{clip_from_channels, Channel, Clip, Interp, Path, Pose, Rig, Trs};
+use crate::read::at;
+use anyhow::Result;
+use glam::{DQuat, DVec3};
+use std::path::Path as FsPath;
+
+#[derive(Clone, Copy)]
+enum Dof {
+    Pos(usize),
+    Rot(DVec3),
+}
+
+/// Read a BVH file into a rig (every joint in the skeleton) and its motion.
+pub fn read(path: &FsPath) -> Result<(Rig, Clip)> {
+    let text = std::fs::read_to_string(path).map_err(|e| at(path, format!("cannot read: {e}")))?;
+    parse(&text).map_err(|e| at(path, e))
+}
+
+fn parse(text: &str) -> Result<(Rig, Clip), String> {
+    let mut tokens = text.split_whitespace().peekable();
+    let mut next = |what: &str| tokens.next().ok_or_else(|| format!("ends before {what}"));
+    if next("HIERARCHY")? != "HIERARCHY" {
+        return Err("not a BVH file (no HIERARCHY)".into());
+    }
+    let mut names: Vec<String> = Vec::new();
+    let mut parent = Vec::new();
+    let mut offsets = Vec::new();
+    let mut dofs: Vec<(usize, Vec<Dof>)> = Vec::new();
+    let mut stack: Vec<usize> = Vec::new();
+    let mut last: Option<usize> = None;
+    loop {
+        let tok = next("MOTION")?;
+        match tok {
+            "ROOT" | "JOINT" | "End" => {
+                let name = next("a joint name")?.to_string();
+                let name = if tok == "End" {
+                    format!("{}_end", last.map_or("", |l| names[l].as_str()))
+                } else {
+                    name
+                };
+                names.push(name);
+                parent.push(stack.last().copied());
+                offsets.push(DVec3::ZERO);
+                last = Some(names.len() - 1);
+            }
+            "{" => stack.push(last.ok_or("a brace before any joint")?),
+            "}" => {
+                stack.pop().ok_or("unbalanced braces")?;
+                last = stack.last().copied();
+            }
+            "OFFSET" => {
+                let j = last.ok_or("OFFSET outside a joint")?;
+                let mut v = [0.0; 3];
+                for x in &mut v {
+                    *x = num(next("an offset")?)?;
+                }
+                offsets[j] = DVec3::from_array(v);
+            }
+            "CHANNELS" => {
+                let j = last.ok_or("CHANNELS outside a joint")?;
+                let n: usize = next("a channel count")?
+                    .parse()
+                    .map_err(|_| "bad channel count")?;
+                let mut list = Vec::with_capacity(n);
+                for _ in 0..n {
+                    list.push(
+                        match next("a channel name")?.to_ascii_lowercase().as_str() {
+                            "xposition" => Dof::Pos(0),
+                            "yposition" => Dof::Pos(1),
+                            "zposition" => Dof::Pos(2),
+                            "xrotation" => Dof::Rot(DVec3::X),
+                            "yrotation" => Dof::Rot(DVec3::Y),
+                            "zrotation" => Dof::Rot(DVec3::Z),
+                            other => return Err(format!("unknown channel {other:?}")),
+                        },
+                    );
+                }
+                dofs.push((j, list));
+            }
+            "MOTION" => break,
+            other => return Err(format!("unexpected {other:?} in the hierarchy")),
+        }
+    }
+    if next("Frames:")? != "Frames:" {
+        return Err("no \"Frames:\" line".into());
+    }
+    let frames: usize = next("a frame count")?
+        .parse()
+        .map_err(|_| "bad frame count")?;
+    if next("Frame Time:")? != "Frame" || next("Frame Time:")? != "Time:" {
+        return Err("no \"Frame Time:\" line".into());
+    }
+    let dt = num(next("a frame time")?)?;
+    if dt <= 0.0 || frames == 0 {
+        return Err("no frames".into());
+    }
+    let n = names.len();
+    let rest = Pose {
+        local: offsets
+            .iter()
+            .map(|&t| Trs { t, ..Trs::IDENTITY })
+            .collect(),
+        weights: vec![Vec::new(); n],
+    };
+    let times: Vec<f64> = (0..frames).map(|f| f as f64 * dt).collect();
+    let mut trans: Vec<Vec<f64>> = vec![Vec::new(); n];
+    let mut rots: Vec<Vec<f64>> = vec![Vec::new(); n];
+    for _ in 0..frames {
+        for (j, list) in &dofs {
+            let mut t = offsets[*j];
+            let mut r = DQuat::IDENTITY;
+            let mut moved = false;
+            for d in list {
+                let v = num(next("frame values")?)?;
+                match *d {
+                    Dof::Pos(c) => {
+                        t[c] = v;
+                        moved = true;
+                    }
+                    Dof::Rot(axis) => r *= DQuat::from_axis_angle(axis, v.to_radians()),
+                }
+            }
+            if moved {
+                trans[*j].extend(t.to_array());
+            }
+            rots[*j].extend(r.normalize().to_array());
+        }
+    }
+    let mut channels = Vec::new();
+    for j in 0..n {
+        for (path, values, width) in [
+            (Path::Translation, std::mem::take(&mut trans[j]), 3),
+            (Path::Rotation, std::mem::take(&mut rots[j]), 4),
+        ] {
+            if !values.is_empty() {
+                channels.push(Channel {
+                    node: j,
+                    path,
+                    interp: Interp::Linear,
+                    times: times.clone(),
+                    values,
+                    width,
+                });
+            }
+        }
+    }
+    let rig = Rig::new(names, parent, rest).map_err(|e| e.to_string())?;
+    Ok((rig, clip_from_channels("motion".into(), 0, channels)))
+}
+
+fn num(s: &str) -> Result<f64, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| format!("{s:?} is not a number"))
+}

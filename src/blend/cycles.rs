@@ -1,0 +1,180 @@
+//! Gait cycles: the stride period from the autocorrelation of the legs' motion, and cycle starts
+//! at the maxima of one leg's signal (one per stride, so left and right are never confused).
+//!
+//! * `legs` (default, any rig): each foot's forward offset from the root; a cycle starts when
+//!   the first leg (left, longest) is furthest forward.
+//! * `thigh` (the seed's method): the angle between the two longest opposite legs' thighs,
+//!   signed by which knee is ahead; a cycle starts at the widest stride with the left leg ahead.
+
+use super::legs::{Leg, Side};
+use super::track::Track;
+use glam::DVec3;
+use serde::Serialize;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CycleMethod {
+    Legs,
+    Thigh,
+}
+
+/// Shortest stride period considered, in seconds.
+pub const MIN_PERIOD: f64 = 0.25;
+/// Autocorrelation a looping clip needs at lag `duration / k` to hold `k` strides.
+pub const LOOP_REPEAT: f64 = 0.8;
+/// Longest stride period considered, in seconds.
+pub const MAX_PERIOD: f64 = 2.5;
+/// A cycle start is the largest value of the reference signal within this many seconds ...
+pub const START_WINDOW: f64 = 0.25;
+/// ... and rises this much above the lowest value within half of [`MAX_PERIOD`] on both sides
+/// (leg scales for `legs`, radians for `thigh`).
+pub const MIN_SWING: f64 = 0.15;
+
+/// Cycles found in one clip: (start time, period) per cycle.
+#[derive(Clone, Debug, Serialize)]
+pub struct Cycles {
+    pub spans: Vec<(f64, f64)>,
+}
+
+impl Cycles {
+    /// Median period.
+    pub fn period(&self) -> f64 {
+        let mut p: Vec<f64> = self.spans.iter().map(|s| s.1).collect();
+        p.sort_by(f64::total_cmp);
+        p.get(p.len() / 2).copied().unwrap_or(0.0)
+    }
+}
+
+/// Find the cycles of `track` by `method`; `None` when no periodic leg motion is found.
+pub fn detect(
+    method: CycleMethod,
+    track: &Track,
+    root: usize,
+    legs: &[Leg],
+    forward: DVec3,
+    scale: f64,
+) -> Option<Cycles> {
+    let signals: Vec<Vec<f64>> = match method {
+        CycleMethod::Legs => legs
+            .iter()
+            .map(|l| {
+                track
+                    .pos
+                    .iter()
+                    .map(|p| (p[l.end()] - p[root]).dot(forward) / scale)
+                    .collect()
+            })
+            .collect(),
+        CycleMethod::Thigh => {
+            let pick = |side| legs.iter().find(|l| l.side == side);
+            let (l, r) = (pick(Side::Left)?, pick(Side::Right)?);
+            let hk = |leg: &Leg| {
+                leg.ik
+                    .map_or([leg.chain[0], leg.chain[1]], |k| [k[0], k[1]])
+            };
+            let ([lh, lk], [rh, rk]) = (hk(l), hk(r));
+            vec![track
+                .pos
+                .iter()
+                .map(|p| {
+                    let angle = (p[lk] - p[lh]).angle_between(p[rk] - p[rh]);
+                    if (p[lk] - p[rk]).dot(forward) >= 0.0 {
+                        angle
+                    } else {
+                        -angle
+                    }
+                })
+                .collect()]
+        }
+    };
+    let raw_reference = signals.first()?.clone();
+    let signals: Vec<Vec<f64>> = signals.into_iter().filter_map(normalized).collect();
+    let reference = signals.first()?;
+    let n = track.len();
+    let corr = |lag: f64| -> f64 {
+        let lo = lag.floor() as usize;
+        let at = |l: usize| autocorrelation(&signals, l, track.looping);
+        let f = lag - lo as f64;
+        at(lo) * (1.0 - f) + if f > 0.0 { at(lo + 1) * f } else { 0.0 }
+    };
+    if track.looping {
+        let k = (1..=4)
+            .rev()
+            .find(|&k| n / k >= 2 && corr(n as f64 / k as f64) >= LOOP_REPEAT)
+            .unwrap_or(1);
+        let per = n as f64 / k as f64;
+        let first = (0..(per.ceil() as usize).min(n))
+            .max_by(|&a, &b| reference[a].total_cmp(&reference[b]))?;
+        let start = track.time(0) + refine(reference, first, track) * track.dt;
+        let period = per * track.dt;
+        return Some(Cycles {
+            spans: (0..k)
+                .map(|j| (start + j as f64 * period, period))
+                .collect(),
+        });
+    }
+    // Starts: prominent maxima of the reference signal (steps, not shuffles), a stride apart.
+    let raw = &raw_reference;
+    let near = ((START_WINDOW / track.dt).round() as usize).max(1);
+    let side = ((MAX_PERIOD / 2.0 / track.dt).round() as usize).max(1);
+    let starts: Vec<f64> = (1..n - 1)
+        .filter(|&i| {
+            let around = &raw[i.saturating_sub(near)..(i + near + 1).min(n)];
+            let before = &raw[i.saturating_sub(side)..=i];
+            let after = &raw[i..(i + side + 1).min(n)];
+            let min = |w: &[f64]| w.iter().copied().fold(f64::INFINITY, f64::min);
+            raw[i] >= around.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                && raw[i] - min(before) >= MIN_SWING
+                && raw[i] - min(after) >= MIN_SWING
+        })
+        .map(|i| track.time(0) + refine(raw, i, track) * track.dt)
+        .collect();
+    let spans: Vec<(f64, f64)> = starts
+        .windows(2)
+        .map(|w| (w[0], w[1] - w[0]))
+        .filter(|&(_, p)| (MIN_PERIOD..=MAX_PERIOD).contains(&p))
+        .collect();
+    (!spans.is_empty()).then_some(Cycles { spans })
+}
+
+/// Zero-mean, unit-variance copy; `None` for a flat signal.
+fn normalized(s: Vec<f64>) -> Option<Vec<f64>> {
+    let n = s.len() as f64;
+    let mean = s.iter().sum::<f64>() / n;
+    let var = s.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
+    (var > 1e-18).then(|| s.iter().map(|x| (x - mean) / var.sqrt()).collect())
+}
+
+/// Mean autocorrelation of normalized signals at `lag` frames (circular when `looping`).
+fn autocorrelation(signals: &[Vec<f64>], lag: usize, looping: bool) -> f64 {
+    let mut sum = 0.0;
+    for s in signals {
+        let n = s.len();
+        let m = if looping { n } else { n.saturating_sub(lag) };
+        if m == 0 {
+            continue;
+        }
+        let acc: f64 = (0..m).map(|i| s[i] * s[(i + lag) % n]).sum();
+        sum += acc / m as f64;
+    }
+    sum / signals.len().max(1) as f64
+}
+
+/// Offset of the extremum of the parabola through three equally spaced values.
+fn parabola(a: f64, b: f64, c: f64) -> f64 {
+    let d = a - 2.0 * b + c;
+    if d.abs() < 1e-15 {
+        0.0
+    } else {
+        (0.5 * (a - c) / d).clamp(-0.5, 0.5)
+    }
+}
+
+/// Sub-frame position of the maximum at frame `i`.
+fn refine(s: &[f64], i: usize, track: &Track) -> f64 {
+    let (a, c) = (track.step(i, -1), track.step(i, 1));
+    if !track.looping && (i == 0 || i + 1 == s.len()) {
+        return i as f64;
+    }
+    i as f64 + parabola(s[a], s[i], s[c])
+}

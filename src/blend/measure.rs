@@ -1,0 +1,115 @@
+//! Figures of a motion sampled at a fixed rate: foot sliding during contact, root and ground
+//! speed, and jerk. All lengths are in leg scales (the character's longest leg).
+//!
+//! Sliding is the horizontal movement of a planted foot from one frame to the next, relative to
+//! the ground: for a clip with root motion the ground is still; for an in-place clip (its root
+//! travels less than its planted feet) it moves like a treadmill at the feet's mean planted
+//! velocity.
+
+use super::contacts;
+use super::legs::Leg;
+use super::rig::UP;
+use super::track::Track;
+use glam::DVec3;
+use serde::Serialize;
+
+/// Mean and 95th percentile of per-frame values.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Spread {
+    pub mean: f64,
+    pub p95: f64,
+    /// How many values (frame steps) the figures summarise.
+    pub count: usize,
+}
+
+impl Spread {
+    pub fn of(mut v: Vec<f64>) -> Spread {
+        if v.is_empty() {
+            return Spread::default();
+        }
+        v.sort_by(f64::total_cmp);
+        Spread {
+            mean: v.iter().sum::<f64>() / v.len() as f64,
+            p95: v[((v.len() - 1) as f64 * 0.95).round() as usize],
+            count: v.len(),
+        }
+    }
+}
+
+/// Figures of one motion.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Figures {
+    /// Planted-foot sliding per frame, in leg scales.
+    pub sliding: Spread,
+    /// Horizontal root travel per second, in leg scales.
+    pub root_speed: f64,
+    /// Speed of the ground under planted feet per second (0 for a clip with root motion).
+    pub ground_speed: f64,
+    /// Mean magnitude of the joints' third derivative of position, leg scales per second cubed.
+    pub jerk: f64,
+}
+
+fn flat(v: DVec3) -> DVec3 {
+    v - UP * v.dot(UP)
+}
+
+pub fn figures(track: &Track, root: usize, joints: &[usize], legs: &[Leg], scale: f64) -> Figures {
+    let n = track.len();
+    let dt = track.dt;
+    let flags: Vec<Vec<bool>> = legs
+        .iter()
+        .map(|l| contacts::flags(track, l, scale))
+        .collect();
+    let steps = if track.looping {
+        n
+    } else {
+        n.saturating_sub(1)
+    };
+    let mut planted_moves = Vec::new();
+    for (leg, f) in legs.iter().zip(&flags) {
+        for i in 0..steps {
+            let k = track.step(i, 1);
+            if f[i] && f[k] {
+                planted_moves.push(flat(track.pos[k][leg.end()] - track.pos[i][leg.end()]));
+            }
+        }
+    }
+    let ground_step = if planted_moves.is_empty() {
+        DVec3::ZERO
+    } else {
+        planted_moves.iter().sum::<DVec3>() / planted_moves.len() as f64
+    };
+    let duration = (n.max(2) - 1) as f64 * dt;
+    let root_speed = flat(track.pos[n - 1][root] - track.pos[0][root]).length() / duration;
+    let ground_speed = ground_step.length() / dt;
+    let ground = if root_speed < ground_speed {
+        ground_step
+    } else {
+        DVec3::ZERO
+    };
+    let sliding = Spread::of(
+        planted_moves
+            .iter()
+            .map(|m| (*m - ground).length() / scale)
+            .collect(),
+    );
+    let mut jerk = 0.0;
+    let mut count = 0usize;
+    for i in 0..n.saturating_sub(3) {
+        for &j in joints {
+            let p = |k: usize| track.pos[i + k][j];
+            jerk += (p(3) - 3.0 * p(2) + 3.0 * p(1) - p(0)).length();
+            count += 1;
+        }
+    }
+    Figures {
+        sliding,
+        root_speed: root_speed / scale,
+        ground_speed: if root_speed < ground_speed {
+            ground_speed / scale
+        } else {
+            0.0
+        },
+        jerk: jerk / count.max(1) as f64 / (dt * dt * dt) / scale,
+    }
+}

@@ -1,0 +1,435 @@
+//! From two analysed clips to the frames of their blend: cycles paired and synchronised, phases
+//! warped by contact events, the second clip aligned to the first, poses mixed, feet cleaned up,
+//! and the figures of the report measured on the sources, a naive blend and the result.
+
+use super::align::{self, FloorTransform};
+use super::analyze::{analyze, Analysis};
+use super::cleanup::{self, LegGoal};
+use super::cycles::CycleMethod;
+use super::legs::Side;
+use super::measure::{self, Figures};
+use super::mix::mix;
+use super::rig::{Clip, Pose, Rig};
+use super::timewarp::{self, Warp};
+use super::track::{pose_unwrapped, Track};
+use glam::DVec3;
+use serde::Serialize;
+
+/// Options of a blend, with their defaults in [`BlendOptions::new`].
+#[derive(Clone, Debug)]
+pub struct BlendOptions {
+    /// 0 gives the first clip, 1 the second.
+    pub weight: f64,
+    pub cycles: CycleMethod,
+    /// Enforce foot contacts on the blend.
+    pub cleanup: bool,
+}
+
+impl BlendOptions {
+    pub fn new(weight: f64) -> BlendOptions {
+        BlendOptions {
+            weight,
+            cycles: CycleMethod::Legs,
+            cleanup: true,
+        }
+    }
+}
+
+/// The blended clip: poses at times (seconds from 0), LINEAR between them.
+pub struct Blended {
+    pub times: Vec<f64>,
+    pub poses: Vec<Pose>,
+    pub looping: bool,
+    pub report: Report,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CycleReport {
+    pub start: f64,
+    pub period: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactReport {
+    pub foot: String,
+    pub side: Side,
+    pub count: usize,
+    /// (touchdown, lift-off) in seconds on the clip's timeline.
+    pub intervals: Vec<(f64, f64)>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ClipReport {
+    pub name: String,
+    pub duration: f64,
+    pub looping: bool,
+    /// Cycles found; empty when none was (then the whole clip is one cycle).
+    pub cycles: Vec<CycleReport>,
+    /// The cycle start used after synchronising on the first foot's touchdown.
+    pub synced_start: f64,
+    pub contacts: Vec<ContactReport>,
+    pub figures: Figures,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct LegReport {
+    pub foot: String,
+    pub side: Side,
+    pub length: f64,
+    pub chain: Vec<String>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ResultReport {
+    pub duration: f64,
+    pub frames: usize,
+    pub fps: f64,
+    pub looping: bool,
+    /// Cycle durations of the blend (seconds).
+    pub cycle_periods: Vec<f64>,
+    /// Matched contact events used as time-warp knots in the first cycle.
+    pub warp_knots: usize,
+    pub before_cleanup: Figures,
+    pub after_cleanup: Figures,
+    /// Jerk of the blend over the weighted jerk of the sources.
+    pub jerk_ratio: f64,
+    /// Largest root drop the clean-up needed, in leg scales.
+    pub max_root_drop: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub weight: f64,
+    pub cycle_method: CycleMethod,
+    pub cleanup: bool,
+    /// Length unit of every figure: the longest leg, in scene units.
+    pub leg_scale: f64,
+    pub forward: [f64; 3],
+    pub legs: Vec<LegReport>,
+    pub clips: [ClipReport; 2],
+    /// Rotation (degrees, about +Y) and floor translation carrying the second clip onto the first.
+    pub alignment_degrees: f64,
+    pub alignment_translation: [f64; 3],
+    /// The same two clips blended at normalised time: no sync, no alignment, no clean-up.
+    pub naive: Figures,
+    pub result: ResultReport,
+}
+
+/// Weights within this distance of 0 or 1 fade the clean-up out, so that the end weights give
+/// the (time-warped) source clips themselves.
+pub const CLEANUP_FADE: f64 = 0.1;
+
+/// The clean-up pins what the contact test finds planted; pinning can make the test find a few
+/// more frames planted, so it is repeated (from the unclean blend) until nothing new is found,
+/// at most this many times.
+pub const CLEANUP_PASSES: usize = 4;
+
+/// Strength of the clean-up at weight `w`: 1 inside [`CLEANUP_FADE`], 1 - w, smoothly to 0.
+pub fn cleanup_strength(w: f64) -> f64 {
+    let x = (w.min(1.0 - w) / CLEANUP_FADE).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// One clip's cycles as used: (start, period) per cycle, synchronised on a touchdown.
+fn cycles_used(clip: &Clip, an: &Analysis) -> Vec<(f64, f64)> {
+    let mut spans = an
+        .cycles
+        .as_ref()
+        .map(|c| c.spans.clone())
+        .unwrap_or_else(|| vec![(clip.start, clip.duration().max(1e-6))]);
+    if an.looping() {
+        spans.truncate(1);
+    }
+    if let Some(first) = an.contacts.first() {
+        let dur = clip.duration();
+        for (start, period) in &mut spans {
+            let candidates = first.iter().flat_map(|c| {
+                let t = c.start;
+                if an.looping() {
+                    vec![t - dur, t, t + dur]
+                } else {
+                    vec![t]
+                }
+            });
+            if let Some(t) = candidates
+                .filter(|t| (t - *start).abs() <= 0.5 * *period)
+                .min_by(|x, y| (x - *start).abs().total_cmp(&(y - *start).abs()))
+            {
+                *start = t;
+            }
+        }
+    }
+    spans
+}
+
+fn cycle_at(spans: &[(f64, f64)], looping: bool, k: usize) -> (f64, f64) {
+    if looping {
+        let (s, p) = spans[0];
+        (s + k as f64 * p, p)
+    } else {
+        spans[k]
+    }
+}
+
+fn positions_track(rig: &Rig, poses: &[Pose], dt: f64) -> Track {
+    Track {
+        start: 0.0,
+        dt,
+        looping: false,
+        pos: poses.iter().map(|p| rig.positions(p)).collect(),
+    }
+}
+
+/// Blend clip `a` with clip `b` (weight `opts.weight` on `b`).
+pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
+    let w = opts.weight;
+    let (ch, an) = analyze(rig, &[a, b], opts.cycles);
+    let (an_a, an_b) = (&an[0], &an[1]);
+    let spans_a = cycles_used(a, an_a);
+    let spans_b = cycles_used(b, an_b);
+    let count = match (an_a.looping(), an_b.looping()) {
+        (true, true) => 1,
+        (true, false) => spans_b.len(),
+        (false, true) => spans_a.len(),
+        (false, false) => spans_a.len().min(spans_b.len()),
+    };
+    let looping = an_a.looping() && an_b.looping();
+    let fps = a.key_rate.max(b.key_rate);
+    // Phase plan: (output time, time in A, time in B) per frame.
+    let mut plan: Vec<(f64, f64, f64)> = Vec::new();
+    let mut periods = Vec::new();
+    let mut knots = 0;
+    let mut offset = 0.0;
+    for k in 0..count {
+        let (sa, pa) = cycle_at(&spans_a, an_a.looping(), k);
+        let (sb, pb) = cycle_at(&spans_b, an_b.looping(), k);
+        let warp = Warp::new(
+            &timewarp::events(&an_a.contacts, sa, pa, an_a.looping()),
+            &timewarp::events(&an_b.contacts, sb, pb, an_b.looping()),
+            w,
+        );
+        if k == 0 {
+            knots = warp.knots.len() - 2;
+        }
+        let period = (1.0 - w) * pa + w * pb;
+        let m = ((period * fps).round() as usize).max(2);
+        let last = if k + 1 == count { m } else { m - 1 };
+        for j in 0..=last {
+            let u = j as f64 / m as f64;
+            let (fa, fb) = warp.map(u);
+            plan.push((offset + u * period, sa + fa * pa, sb + fb * pb));
+        }
+        periods.push(period);
+        offset += period;
+    }
+    let poses_a: Vec<Pose> = plan
+        .iter()
+        .map(|f| pose_unwrapped(rig, a, an_a.looping(), f.1))
+        .collect();
+    let mut poses_b: Vec<Pose> = plan
+        .iter()
+        .map(|f| pose_unwrapped(rig, b, an_b.looping(), f.2))
+        .collect();
+    // Space warp from the corresponding poses of the first cycle.
+    let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.skeleton[j]).collect();
+    let first_cycle = plan.iter().take_while(|f| f.0 <= periods[0] + 1e-9).count();
+    let (mut p, mut q) = (Vec::new(), Vec::new());
+    for i in 0..first_cycle {
+        let (wa, wb) = (rig.positions(&poses_a[i]), rig.positions(&poses_b[i]));
+        p.extend(joints.iter().map(|&j| wa[j]));
+        q.extend(joints.iter().map(|&j| wb[j]));
+    }
+    let t = align::fit(&p, &q);
+    for pose in &mut poses_b {
+        align::move_skeleton(rig, pose, &t.matrix());
+    }
+    let mut frames: Vec<Pose> = poses_a
+        .iter()
+        .zip(&poses_b)
+        .map(|(x, y)| mix(x, y, w))
+        .collect();
+    let dt = 1.0 / fps;
+    let before = positions_track(rig, &frames, dt);
+    let mut max_drop: f64 = 0.0;
+    let strength = cleanup_strength(w);
+    if opts.cleanup && !ch.legs.is_empty() && strength > 0.0 {
+        let times: Vec<f64> = plan.iter().map(|f| f.0).collect();
+        let root_path: Vec<DVec3> = frames.iter().map(|f| rig.positions(f)[rig.root]).collect();
+        let shift = root_path[root_path.len() - 1] - root_path[0];
+        // Planted: where both sources plant the foot, or the contact test finds it planted in
+        // the blend (before, and after a first pass, so that every contact the test sees on the
+        // result is pinned).
+        let mut planted: Vec<Vec<bool>> = (0..ch.legs.len())
+            .map(|l| {
+                let found = super::contacts::flags(&before, &ch.legs[l], ch.scale);
+                plan.iter()
+                    .enumerate()
+                    .map(|(i, f)| found[i] || (an_a.planted(l, f.1) && an_b.planted(l, f.2)))
+                    .collect()
+            })
+            .collect();
+        let raw: Vec<Vec<DVec3>> = (0..ch.legs.len())
+            .map(|l| {
+                let e = ch.legs[l].end();
+                (0..plan.len())
+                    .map(|i| {
+                        let pa: DVec3 = rig.positions(&poses_a[i])[e];
+                        let pb: DVec3 = rig.positions(&poses_b[i])[e];
+                        let now = rig.positions(&frames[i])[e];
+                        now.lerp(pa.lerp(pb, w), strength)
+                    })
+                    .collect()
+            })
+            .collect();
+        let unclean = frames.clone();
+        for pass in 0..CLEANUP_PASSES {
+            let goals: Vec<LegGoal> = planted
+                .iter()
+                .zip(&raw)
+                .map(|(p, t)| LegGoal {
+                    planted: p.clone(),
+                    target: t.clone(),
+                })
+                .collect();
+            let ground = cleanup::ground_velocity(&goals, &times);
+            let goals: Vec<LegGoal> = goals
+                .into_iter()
+                .map(|g| {
+                    let pinned =
+                        cleanup::pin(&g.planted, &g.target, &times, looping, ground, shift);
+                    let target = g
+                        .target
+                        .iter()
+                        .zip(&pinned)
+                        .map(|(t, p)| t.lerp(*p, strength))
+                        .collect();
+                    LegGoal { target, ..g }
+                })
+                .collect();
+            frames = unclean.clone();
+            let drop = cleanup::clean(rig, &ch.legs, &goals, &mut frames, ch.forward, looping);
+            max_drop = drop.iter().copied().fold(0.0, f64::max);
+            let after = positions_track(rig, &frames, dt);
+            let mut grew = false;
+            for (l, p) in planted.iter_mut().enumerate() {
+                let found = super::contacts::flags(&after, &ch.legs[l], ch.scale);
+                for (x, f) in p.iter_mut().zip(found) {
+                    grew |= f && !*x;
+                    *x |= f;
+                }
+            }
+            if !grew || pass + 1 == CLEANUP_PASSES {
+                break;
+            }
+        }
+    }
+    let back = t.scaled(w).matrix().inverse();
+    if t != FloorTransform::IDENTITY {
+        for pose in &mut frames {
+            align::move_skeleton(rig, pose, &back);
+        }
+    }
+    // Figures, all at the output rate.
+    let fig = |track: &Track| measure::figures(track, rig.root, &joints, &ch.legs, ch.scale);
+    let source = |clip: &Clip| {
+        let n = ((clip.duration() * fps).round() as usize).max(1);
+        let poses: Vec<Pose> = (0..=n)
+            .map(|i| clip.pose(rig, clip.start + i as f64 * clip.duration() / n as f64))
+            .collect();
+        positions_track(rig, &poses, clip.duration().max(1e-9) / n as f64)
+    };
+    let (track_a, track_b) = (source(a), source(b));
+    let (fig_a, fig_b) = (fig(&track_a), fig(&track_b));
+    let naive = {
+        let dur = (1.0 - w) * a.duration() + w * b.duration();
+        let n = ((dur * fps).round() as usize).max(1);
+        let poses: Vec<Pose> = (0..=n)
+            .map(|i| {
+                let u = i as f64 / n as f64;
+                mix(
+                    &a.pose(rig, a.start + u * a.duration()),
+                    &b.pose(rig, b.start + u * b.duration()),
+                    w,
+                )
+            })
+            .collect();
+        fig(&positions_track(rig, &poses, dur.max(1e-9) / n as f64))
+    };
+    let after_fig = fig(&positions_track(rig, &frames, dt));
+    let source_jerk = (1.0 - w) * fig_a.jerk + w * fig_b.jerk;
+    let clip_report =
+        |clip: &Clip, an: &Analysis, spans: &[(f64, f64)], figures: Figures| ClipReport {
+            name: clip.name.clone(),
+            duration: clip.duration(),
+            looping: an.looping(),
+            cycles: an
+                .cycles
+                .as_ref()
+                .map(|c| {
+                    c.spans
+                        .iter()
+                        .map(|&(start, period)| CycleReport { start, period })
+                        .collect()
+                })
+                .unwrap_or_default(),
+            synced_start: spans[0].0,
+            contacts: ch
+                .legs
+                .iter()
+                .zip(&an.contacts)
+                .map(|(l, c)| ContactReport {
+                    foot: l.name.clone(),
+                    side: l.side,
+                    count: c.len(),
+                    intervals: c.iter().map(|c| (c.start, c.end)).collect(),
+                })
+                .collect(),
+            figures,
+        };
+    let report = Report {
+        weight: w,
+        cycle_method: opts.cycles,
+        cleanup: opts.cleanup,
+        leg_scale: ch.scale,
+        forward: ch.forward.to_array(),
+        legs: ch
+            .legs
+            .iter()
+            .map(|l| LegReport {
+                foot: l.name.clone(),
+                side: l.side,
+                length: l.length,
+                chain: l.chain.iter().map(|&j| rig.names[j].clone()).collect(),
+            })
+            .collect(),
+        clips: [
+            clip_report(a, an_a, &spans_a, fig_a),
+            clip_report(b, an_b, &spans_b, fig_b),
+        ],
+        alignment_degrees: t.angle.to_degrees(),
+        alignment_translation: t.translation.to_array(),
+        naive,
+        result: ResultReport {
+            duration: offset,
+            frames: frames.len(),
+            fps,
+            looping,
+            cycle_periods: periods,
+            warp_knots: knots,
+            before_cleanup: fig(&before),
+            after_cleanup: after_fig,
+            jerk_ratio: if source_jerk > 0.0 {
+                after_fig.jerk / source_jerk
+            } else {
+                1.0
+            },
+            max_root_drop: max_drop / ch.scale,
+        },
+    };
+    Blended {
+        times: plan.iter().map(|f| f.0).collect(),
+        poses: frames,
+        looping,
+        report,
+    }
+}

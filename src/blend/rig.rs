@@ -1,0 +1,495 @@
+//! The character and its clips: every node of the scene as a joint (so any node a clip animates
+//! has a place), the skin in use marking the skeleton, and clips evaluated as local poses.
+
+use crate::read::{arr, Document};
+use anyhow::{bail, Result};
+use glam::{DMat4, DQuat, DVec3};
+use serde_json::Value;
+use std::collections::BTreeSet;
+
+/// World up: +Y in glTF and in the BVH files we read.
+pub const UP: DVec3 = DVec3::Y;
+
+/// A local transform.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    pub t: DVec3,
+    pub r: DQuat,
+    pub s: DVec3,
+}
+
+impl Trs {
+    pub const IDENTITY: Trs = Trs {
+        t: DVec3::ZERO,
+        r: DQuat::IDENTITY,
+        s: DVec3::ONE,
+    };
+
+    pub fn matrix(&self) -> DMat4 {
+        DMat4::from_scale_rotation_translation(self.s, self.r, self.t)
+    }
+
+    pub fn from_matrix(m: &DMat4) -> Trs {
+        let (s, r, t) = m.to_scale_rotation_translation();
+        Trs { t, r, s }
+    }
+}
+
+/// Local transforms (and morph weights) of every node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    pub local: Vec<Trs>,
+    /// Morph weights per node (empty for nodes without a mesh with targets).
+    pub weights: Vec<Vec<f64>>,
+}
+
+/// What a channel animates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Path {
+    Translation,
+    Rotation,
+    Scale,
+    Weights,
+}
+
+impl Path {
+    pub fn name(self) -> &'static str {
+        match self {
+            Path::Translation => "translation",
+            Path::Rotation => "rotation",
+            Path::Scale => "scale",
+            Path::Weights => "weights",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interp {
+    Step,
+    Linear,
+    Cubic,
+}
+
+/// One animated property: keys and values (`width` numbers per key; CUBICSPLINE keeps its
+/// in-tangent, value, out-tangent triples).
+#[derive(Clone, Debug)]
+pub struct Channel {
+    pub node: usize,
+    pub path: Path,
+    pub interp: Interp,
+    pub times: Vec<f64>,
+    pub values: Vec<f64>,
+    pub width: usize,
+}
+
+impl Channel {
+    /// The value at time `t` (clamped to the keys).
+    pub fn sample(&self, t: f64, out: &mut [f64]) {
+        let w = self.width;
+        let per_key = if self.interp == Interp::Cubic {
+            3 * w
+        } else {
+            w
+        };
+        let value = |k: usize, part: usize| &self.values[k * per_key + part * w..][..w];
+        let mid = if self.interp == Interp::Cubic { 1 } else { 0 };
+        let n = self.times.len();
+        if n == 1 || t <= self.times[0] {
+            out.copy_from_slice(value(0, mid));
+            return;
+        }
+        if t >= self.times[n - 1] {
+            out.copy_from_slice(value(n - 1, mid));
+            return;
+        }
+        let k = self.times.partition_point(|&x| x <= t) - 1;
+        let (t0, t1) = (self.times[k], self.times[k + 1]);
+        let dt = t1 - t0;
+        let u = if dt > 0.0 { (t - t0) / dt } else { 0.0 };
+        match self.interp {
+            Interp::Step => out.copy_from_slice(value(k, 0)),
+            Interp::Linear => {
+                let (a, b) = (value(k, 0), value(k + 1, 0));
+                if self.path == Path::Rotation {
+                    let qa = DQuat::from_xyzw(a[0], a[1], a[2], a[3]);
+                    let qb = DQuat::from_xyzw(b[0], b[1], b[2], b[3]);
+                    let q = slerp(qa, qb, u);
+                    out.copy_from_slice(&q.to_array());
+                } else {
+                    for c in 0..w {
+                        out[c] = a[c] + (b[c] - a[c]) * u;
+                    }
+                }
+            }
+            Interp::Cubic => {
+                let (p0, m0) = (value(k, 1), value(k, 2));
+                let (p1, m1) = (value(k + 1, 1), value(k + 1, 0));
+                let (u2, u3) = (u * u, u * u * u);
+                let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
+                let h10 = u3 - 2.0 * u2 + u;
+                let h01 = -2.0 * u3 + 3.0 * u2;
+                let h11 = u3 - u2;
+                for c in 0..w {
+                    out[c] = h00 * p0[c] + h10 * dt * m0[c] + h01 * p1[c] + h11 * dt * m1[c];
+                }
+                if self.path == Path::Rotation {
+                    let q = DQuat::from_slice(out).normalize();
+                    out.copy_from_slice(&q.to_array());
+                }
+            }
+        }
+    }
+}
+
+/// Shortest-path spherical interpolation (the hemisphere of `b` is flipped to `a`'s).
+pub fn slerp(a: DQuat, b: DQuat, u: f64) -> DQuat {
+    let b = if a.dot(b) < 0.0 { -b } else { b };
+    a.slerp(b, u).normalize()
+}
+
+/// An animation clip.
+#[derive(Clone, Debug)]
+pub struct Clip {
+    pub name: String,
+    /// Index of the animation in the file.
+    pub index: usize,
+    pub channels: Vec<Channel>,
+    pub start: f64,
+    pub end: f64,
+    /// Key rate (keys per second of the densest channel).
+    pub key_rate: f64,
+}
+
+impl Clip {
+    pub fn duration(&self) -> f64 {
+        self.end - self.start
+    }
+
+    /// The (node, path) pairs the clip animates.
+    pub fn animated(&self) -> BTreeSet<(usize, Path)> {
+        self.channels.iter().map(|c| (c.node, c.path)).collect()
+    }
+
+    /// The pose at time `t` (clamped to the clip): the rest pose with every channel applied.
+    pub fn pose(&self, rig: &Rig, t: f64) -> Pose {
+        let mut pose = rig.rest.clone();
+        let mut buf = [0.0f64; 4];
+        for c in &self.channels {
+            match c.path {
+                Path::Weights => {
+                    let w = &mut pose.weights[c.node];
+                    w.resize(c.width, 0.0);
+                    c.sample(t, w);
+                }
+                _ => {
+                    let v = &mut buf[..c.width];
+                    c.sample(t, v);
+                    let l = &mut pose.local[c.node];
+                    match c.path {
+                        Path::Translation => l.t = DVec3::from_slice(v),
+                        Path::Scale => l.s = DVec3::from_slice(v),
+                        _ => l.r = DQuat::from_slice(v).normalize(),
+                    }
+                }
+            }
+        }
+        pose
+    }
+}
+
+/// The scene as a joint hierarchy.
+#[derive(Clone, Debug)]
+pub struct Rig {
+    pub names: Vec<String>,
+    pub parent: Vec<Option<usize>>,
+    /// Every node, parents before children.
+    pub order: Vec<usize>,
+    pub rest: Pose,
+    /// Members of the skeleton in use (the skin's joints and their plain descendants).
+    pub skeleton: Vec<bool>,
+    /// The skeleton's topmost joint (where alignment moves the character).
+    pub root: usize,
+}
+
+impl Rig {
+    /// A rig from a parent list and a rest pose (nodes in any order).
+    pub fn new(names: Vec<String>, parent: Vec<Option<usize>>, rest: Pose) -> Result<Rig> {
+        let n = names.len();
+        let mut children = vec![Vec::new(); n];
+        for (i, p) in parent.iter().enumerate() {
+            if let Some(p) = *p {
+                children[p].push(i);
+            }
+        }
+        let mut order = Vec::with_capacity(n);
+        let mut stack: Vec<usize> = (0..n).rev().filter(|&i| parent[i].is_none()).collect();
+        while let Some(i) = stack.pop() {
+            order.push(i);
+            stack.extend(children[i].iter().rev());
+        }
+        if order.len() != n {
+            bail!("the node hierarchy has a cycle");
+        }
+        Ok(Rig {
+            names,
+            parent,
+            order,
+            rest,
+            skeleton: vec![true; n],
+            root: 0,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.names.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    /// World matrices of every node.
+    pub fn world(&self, pose: &Pose) -> Vec<DMat4> {
+        let mut w = vec![DMat4::IDENTITY; self.len()];
+        for &i in &self.order {
+            let m = pose.local[i].matrix();
+            w[i] = match self.parent[i] {
+                Some(p) => w[p] * m,
+                None => m,
+            };
+        }
+        w
+    }
+
+    /// World positions of every node.
+    pub fn positions(&self, pose: &Pose) -> Vec<DVec3> {
+        self.world(pose)
+            .iter()
+            .map(|m| m.w_axis.truncate())
+            .collect()
+    }
+
+    /// Skeleton children of joint `j`.
+    pub fn skeleton_children(&self, j: usize) -> Vec<usize> {
+        (0..self.len())
+            .filter(|&i| self.parent[i] == Some(j) && self.skeleton[i])
+            .collect()
+    }
+
+    /// World matrix of the parent of `j` (identity for a scene root).
+    pub fn parent_world(&self, world: &[DMat4], j: usize) -> DMat4 {
+        self.parent[j].map_or(DMat4::IDENTITY, |p| world[p])
+    }
+}
+
+/// Read every node and every animation of a glTF document.
+pub fn load_gltf(doc: &Document) -> Result<(Rig, Vec<Clip>)> {
+    let nodes = arr(&doc.json, "nodes");
+    let n = nodes.len();
+    let mut parent = vec![None; n];
+    for (i, node) in nodes.iter().enumerate() {
+        for c in arr(node, "children") {
+            let c = c.as_u64().unwrap_or(u64::MAX) as usize;
+            if c >= n {
+                bail!(doc.err(format!("node {i} has a child {c} that does not exist")));
+            }
+            if parent[c].is_some() {
+                bail!(doc.err(format!("node {c} has two parents")));
+            }
+            parent[c] = Some(i);
+        }
+    }
+    let num = |v: &Value, k: usize, d: f64| v.get(k).and_then(Value::as_f64).unwrap_or(d);
+    let mut local = Vec::with_capacity(n);
+    let mut weights = Vec::with_capacity(n);
+    for node in nodes {
+        let trs = if let Some(m) = node.get("matrix").and_then(Value::as_array) {
+            let cols: Vec<f64> = (0..16)
+                .map(|k| num(&Value::Array(m.clone()), k, 0.0))
+                .collect();
+            Trs::from_matrix(&DMat4::from_cols_slice(&cols))
+        } else {
+            let t = &node["translation"];
+            let r = &node["rotation"];
+            let s = &node["scale"];
+            Trs {
+                t: DVec3::new(num(t, 0, 0.0), num(t, 1, 0.0), num(t, 2, 0.0)),
+                r: DQuat::from_xyzw(
+                    num(r, 0, 0.0),
+                    num(r, 1, 0.0),
+                    num(r, 2, 0.0),
+                    num(r, 3, 1.0),
+                )
+                .normalize(),
+                s: DVec3::new(num(s, 0, 1.0), num(s, 1, 1.0), num(s, 2, 1.0)),
+            }
+        };
+        local.push(trs);
+        let mesh = node
+            .get("mesh")
+            .and_then(Value::as_u64)
+            .and_then(|m| doc.json["meshes"].get(m as usize));
+        let targets = mesh
+            .map(|m| arr(&m["primitives"][0], "targets").len())
+            .unwrap_or(0);
+        let w: Vec<f64> = node
+            .get("weights")
+            .or_else(|| mesh.and_then(|m| m.get("weights")))
+            .and_then(Value::as_array)
+            .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(0.0)).collect())
+            .unwrap_or_else(|| vec![0.0; targets]);
+        weights.push(w);
+    }
+    let names = nodes
+        .iter()
+        .enumerate()
+        .map(|(i, nd)| {
+            nd.get("name")
+                .and_then(Value::as_str)
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("node {i}"))
+        })
+        .collect();
+    let rig = Rig::new(names, parent, Pose { local, weights }).map_err(|e| doc.err(e))?;
+    let clips = arr(&doc.json, "animations")
+        .iter()
+        .enumerate()
+        .map(|(i, a)| read_clip(doc, &rig, i, a))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((rig, clips))
+}
+
+fn read_clip(doc: &Document, rig: &Rig, index: usize, anim: &Value) -> Result<Clip> {
+    let name = anim
+        .get("name")
+        .and_then(Value::as_str)
+        .map(str::to_owned)
+        .unwrap_or_else(|| format!("animation {index}"));
+    let samplers = arr(anim, "samplers");
+    let mut channels = Vec::new();
+    for ch in arr(anim, "channels") {
+        let Some(node) = ch["target"]["node"].as_u64().map(|v| v as usize) else {
+            continue; // a channel for an extension's target (KHR_animation_pointer)
+        };
+        if node >= rig.len() {
+            bail!(doc.err(format!(
+                "animation {name:?} targets node {node}, which does not exist"
+            )));
+        }
+        let path = match ch["target"]["path"].as_str().unwrap_or("") {
+            "translation" => Path::Translation,
+            "rotation" => Path::Rotation,
+            "scale" => Path::Scale,
+            "weights" => Path::Weights,
+            _ => continue,
+        };
+        let s = ch["sampler"]
+            .as_u64()
+            .and_then(|s| samplers.get(s as usize))
+            .ok_or_else(|| {
+                doc.err(format!(
+                    "animation {name:?} has a channel without a sampler"
+                ))
+            })?;
+        let interp = match s["interpolation"].as_str().unwrap_or("LINEAR") {
+            "STEP" => Interp::Step,
+            "CUBICSPLINE" => Interp::Cubic,
+            _ => Interp::Linear,
+        };
+        let input = s["input"].as_u64().unwrap_or(u64::MAX) as usize;
+        let output = s["output"].as_u64().unwrap_or(u64::MAX) as usize;
+        let (times, _) = doc.read_f64(input)?;
+        let (values, ncomp) = doc.read_f64(output)?;
+        if times.is_empty() {
+            bail!(doc.err(format!("animation {name:?} has a sampler without keys")));
+        }
+        let per_key_values =
+            values.len() / times.len() / if interp == Interp::Cubic { 3 } else { 1 };
+        let width = match path {
+            Path::Weights => per_key_values,
+            Path::Rotation => 4,
+            _ => 3,
+        };
+        if path != Path::Weights && ncomp != width || per_key_values != width || width == 0 {
+            bail!(doc.err(format!(
+                "animation {name:?}: the {} values of node {node} do not match its {} keys",
+                path.name(),
+                times.len()
+            )));
+        }
+        channels.push(Channel {
+            node,
+            path,
+            interp,
+            times,
+            values,
+            width,
+        });
+    }
+    Ok(clip_from_channels(name, index, channels))
+}
+
+/// A clip over its channels' time range, with the key rate of its densest channel.
+pub fn clip_from_channels(name: String, index: usize, channels: Vec<Channel>) -> Clip {
+    let start = channels
+        .iter()
+        .map(|c| c.times[0])
+        .fold(f64::INFINITY, f64::min);
+    let end = channels
+        .iter()
+        .map(|c| *c.times.last().unwrap())
+        .fold(f64::NEG_INFINITY, f64::max);
+    let key_rate = channels
+        .iter()
+        .filter(|c| c.times.len() > 1)
+        .map(|c| (c.times.len() - 1) as f64 / (c.times[c.times.len() - 1] - c.times[0]).max(1e-9))
+        .fold(0.0, f64::max);
+    let (start, end) = if start.is_finite() {
+        (start, end)
+    } else {
+        (0.0, 0.0)
+    };
+    Clip {
+        name,
+        index,
+        channels,
+        start,
+        end,
+        key_rate: if key_rate > 0.0 { key_rate } else { 30.0 },
+    }
+}
+
+/// Mark the skeleton of skin `skin`: its joints plus their descendants that carry nothing
+/// (end-of-chain helper nodes such as `LowerLeg.L_end`), and find its topmost joint.
+pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
+    let nodes = arr(&doc.json, "nodes");
+    let joints: BTreeSet<usize> = arr(&doc.json["skins"][skin], "joints")
+        .iter()
+        .filter_map(|j| j.as_u64().map(|j| j as usize))
+        .filter(|&j| j < rig.len())
+        .collect();
+    let plain = |i: usize| {
+        let nd = &nodes[i];
+        nd.get("mesh").is_none() && nd.get("camera").is_none() && nd.get("skin").is_none()
+    };
+    let mut member = vec![false; rig.len()];
+    for &i in &rig.order {
+        member[i] = joints.contains(&i)
+            || (plain(i) && rig.parent[i].is_some_and(|p| member[p]) && !joints.is_empty());
+    }
+    rig.root = rig.order.iter().copied().find(|&i| member[i]).unwrap_or(0);
+    rig.skeleton = member;
+}
+
+/// The skin joints of the document: one set per skin.
+pub fn skins(doc: &Document) -> Vec<BTreeSet<usize>> {
+    arr(&doc.json, "skins")
+        .iter()
+        .map(|s| {
+            arr(s, "joints")
+                .iter()
+                .filter_map(|j| j.as_u64().map(|j| j as usize))
+                .collect()
+        })
+        .collect()
+}

@@ -1,0 +1,168 @@
+//! Time warp by contact events: within a cycle, each foot's touchdown and lift-off in one clip is
+//! matched with the same event of the same foot in the other, and the phase map is piecewise
+//! linear between the matched events (keytimes), so feet land together in the blend. The
+//! blended cycle places each event at the weighted blend of its two phases.
+
+use super::contacts::Contact;
+
+/// Events closer than this (in phase) to each other or to a cycle end are not used as knots.
+pub const MIN_KNOT_GAP: f64 = 1e-3;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Kind {
+    Touchdown,
+    Liftoff,
+}
+
+/// A contact event at `phase` in [0, 1) of a cycle.
+#[derive(Clone, Copy, Debug)]
+pub struct Event {
+    pub leg: usize,
+    pub kind: Kind,
+    pub phase: f64,
+}
+
+/// The events of one cycle `(start, period)` from each leg's contacts (`looping` wraps them).
+pub fn events(contacts: &[Vec<Contact>], start: f64, period: f64, looping: bool) -> Vec<Event> {
+    let mut out = Vec::new();
+    for (leg, list) in contacts.iter().enumerate() {
+        for c in list {
+            for (kind, t) in [(Kind::Touchdown, c.start), (Kind::Liftoff, c.end)] {
+                let x = (t - start) / period;
+                if looping {
+                    out.push(Event {
+                        leg,
+                        kind,
+                        phase: x.rem_euclid(1.0),
+                    });
+                } else if (0.0..1.0).contains(&x) {
+                    out.push(Event {
+                        leg,
+                        kind,
+                        phase: x,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Piecewise-linear phase map of one blended cycle: knots (blended, A, B), increasing in all
+/// three, from (0, 0, 0) to (1, 1, 1).
+#[derive(Clone, Debug)]
+pub struct Warp {
+    pub knots: Vec<[f64; 3]>,
+}
+
+impl Warp {
+    /// Match `a`'s events with `b`'s and blend their phases with weight `w` (0 = all A).
+    pub fn new(a: &[Event], b: &[Event], w: f64) -> Warp {
+        let mut pairs: Vec<(f64, f64)> = Vec::new();
+        for ea in a {
+            let same = |e: &&Event| e.leg == ea.leg && e.kind == ea.kind;
+            let dist = |x: f64, y: f64| {
+                let d = (x - y).rem_euclid(1.0);
+                d.min(1.0 - d)
+            };
+            let Some(eb) = b
+                .iter()
+                .filter(same)
+                .min_by(|p, q| dist(p.phase, ea.phase).total_cmp(&dist(q.phase, ea.phase)))
+            else {
+                continue;
+            };
+            // Mutual nearest only.
+            let back = a
+                .iter()
+                .filter(|e| e.leg == eb.leg && e.kind == eb.kind)
+                .min_by(|p, q| dist(p.phase, eb.phase).total_cmp(&dist(q.phase, eb.phase)));
+            if back.map(|e| e.phase) != Some(ea.phase) {
+                continue;
+            }
+            let mut pb = eb.phase;
+            if pb - ea.phase > 0.5 {
+                pb -= 1.0;
+            } else if ea.phase - pb > 0.5 {
+                pb += 1.0;
+            }
+            let inside = |x: f64| (MIN_KNOT_GAP..=1.0 - MIN_KNOT_GAP).contains(&x);
+            if inside(ea.phase) && inside(pb) {
+                pairs.push((ea.phase, pb));
+            }
+        }
+        pairs.sort_by(|p, q| p.0.total_cmp(&q.0));
+        let kept = increasing(&pairs);
+        let mut knots = vec![[0.0, 0.0, 0.0]];
+        for (pa, pb) in kept {
+            let last = knots.last().unwrap();
+            if pa - last[1] >= MIN_KNOT_GAP && pb - last[2] >= MIN_KNOT_GAP {
+                knots.push([(1.0 - w) * pa + w * pb, pa, pb]);
+            }
+        }
+        knots.push([1.0, 1.0, 1.0]);
+        Warp { knots }
+    }
+
+    /// Phases in A and B at blended phase `u` in [0, 1].
+    pub fn map(&self, u: f64) -> (f64, f64) {
+        let u = u.clamp(0.0, 1.0);
+        let k = self
+            .knots
+            .windows(2)
+            .position(|w| u <= w[1][0])
+            .unwrap_or(self.knots.len() - 2);
+        let (p, q) = (self.knots[k], self.knots[k + 1]);
+        let f = if q[0] > p[0] {
+            (u - p[0]) / (q[0] - p[0])
+        } else {
+            0.0
+        };
+        (p[1] + f * (q[1] - p[1]), p[2] + f * (q[2] - p[2]))
+    }
+}
+
+/// The longest subsequence of `pairs` (sorted by their first value) whose second values
+/// increase too.
+fn increasing(pairs: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let n = pairs.len();
+    let mut len = vec![1usize; n];
+    let mut prev = vec![usize::MAX; n];
+    for i in 0..n {
+        for j in 0..i {
+            if pairs[j].1 < pairs[i].1 && pairs[j].0 < pairs[i].0 && len[j] + 1 > len[i] {
+                len[i] = len[j] + 1;
+                prev[i] = j;
+            }
+        }
+    }
+    let Some(mut i) = (0..n).max_by_key(|&i| (len[i], usize::MAX - i)) else {
+        return Vec::new();
+    };
+    let mut out = vec![pairs[i]];
+    while prev[i] != usize::MAX {
+        i = prev[i];
+        out.push(pairs[i]);
+    }
+    out.reverse();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weight_zero_is_identity_on_a_and_events_meet() {
+        let ev = |leg, kind, phase| Event { leg, kind, phase };
+        let a = [ev(0, Kind::Liftoff, 0.3), ev(1, Kind::Touchdown, 0.5)];
+        let b = [ev(0, Kind::Liftoff, 0.4), ev(1, Kind::Touchdown, 0.55)];
+        let w0 = Warp::new(&a, &b, 0.0);
+        for u in [0.0, 0.2, 0.3, 0.45, 0.9, 1.0] {
+            assert!((w0.map(u).0 - u).abs() < 1e-12);
+        }
+        let half = Warp::new(&a, &b, 0.5);
+        let (pa, pb) = half.map(0.35);
+        assert!((pa - 0.3).abs() < 1e-12 && (pb - 0.4).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,141 @@
+//! A clip sampled for analysis: world positions of every node at a fixed rate.
+//!
+//! A looping clip (last pose equal to the first, root motion aside) is sampled over one period
+//! without repeating its first frame, and frame indices wrap around; any other clip is sampled
+//! from its first to its last key.
+
+use super::rig::{Clip, Path, Pose, Rig};
+use glam::DVec3;
+
+/// Analysis rate floor, in samples per second (key rates above it are kept).
+pub const MIN_RATE: f64 = 120.0;
+
+/// How close the last pose must come to the first for a clip to loop: the largest joint
+/// displacement relative to the root, over the character's size.
+pub const LOOP_TOLERANCE: f64 = 0.03;
+
+pub struct Track {
+    pub start: f64,
+    pub dt: f64,
+    pub looping: bool,
+    /// World positions, frame by frame.
+    pub pos: Vec<Vec<DVec3>>,
+}
+
+impl Track {
+    pub fn new(rig: &Rig, clip: &Clip, looping: bool) -> Track {
+        let rate = clip.key_rate.max(MIN_RATE);
+        let dur = clip.duration();
+        let intervals = ((dur * rate).round() as usize).max(1);
+        let dt = if dur > 0.0 {
+            dur / intervals as f64
+        } else {
+            1.0 / rate
+        };
+        let frames = if looping { intervals } else { intervals + 1 };
+        let pos = (0..frames)
+            .map(|i| rig.positions(&clip.pose(rig, clip.start + i as f64 * dt)))
+            .collect();
+        Track {
+            start: clip.start,
+            dt,
+            looping,
+            pos,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.pos.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.pos.is_empty()
+    }
+
+    pub fn duration(&self) -> f64 {
+        self.len() as f64 * self.dt - if self.looping { 0.0 } else { self.dt }
+    }
+
+    pub fn time(&self, i: usize) -> f64 {
+        self.start + i as f64 * self.dt
+    }
+
+    /// Frame `i + k`, wrapped for a looping track and clamped otherwise.
+    pub fn step(&self, i: usize, k: isize) -> usize {
+        let n = self.len() as isize;
+        let j = i as isize + k;
+        if self.looping {
+            j.rem_euclid(n) as usize
+        } else {
+            j.clamp(0, n - 1) as usize
+        }
+    }
+
+    /// Velocity of node `j` at frame `i` (central difference).
+    pub fn velocity(&self, i: usize, j: usize) -> DVec3 {
+        let (a, b) = (self.step(i, -1), self.step(i, 1));
+        let span = if self.looping {
+            2.0
+        } else {
+            (b as f64 - a as f64).max(1.0)
+        };
+        let d = self.pos[b][j] - self.pos[a][j];
+        d / (span * self.dt)
+    }
+}
+
+/// Whether `clip` loops: its last pose equals its first, translations of the skeleton root's
+/// descendants compared relative to the root (root motion may move on).
+pub fn loops(rig: &Rig, clip: &Clip, size: f64) -> bool {
+    if clip.duration() <= 0.0 {
+        return false;
+    }
+    let a = rig.positions(&clip.pose(rig, clip.start));
+    let b = rig.positions(&clip.pose(rig, clip.end));
+    let (ra, rb) = (a[rig.root], b[rig.root]);
+    let worst = (0..rig.len())
+        .filter(|&j| rig.skeleton[j])
+        .map(|j| ((a[j] - ra) - (b[j] - rb)).length())
+        .fold(0.0, f64::max);
+    worst <= LOOP_TOLERANCE * size
+}
+
+/// The character's size: the height span of its skeleton in the rest pose, or its largest
+/// extent when it lies flat.
+pub fn size(rig: &Rig, pose: &Pose) -> f64 {
+    let p = rig.positions(pose);
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for j in (0..rig.len()).filter(|&j| rig.skeleton[j]) {
+        lo = lo.min(p[j]);
+        hi = hi.max(p[j]);
+    }
+    let ext = (hi - lo).max(DVec3::ZERO);
+    if ext.y > 0.25 * ext.max_element() {
+        ext.y
+    } else {
+        ext.max_element().max(1e-9)
+    }
+}
+
+/// The pose at `t` on an endless timeline: a looping clip repeats, its translations carried on
+/// by the displacement of each loop (root motion keeps going).
+pub fn pose_unwrapped(rig: &Rig, clip: &Clip, looping: bool, t: f64) -> Pose {
+    let dur = clip.duration();
+    if !looping || dur <= 0.0 {
+        return clip.pose(rig, t);
+    }
+    let k = ((t - clip.start) / dur).floor();
+    let local_t = t - k * dur;
+    let mut pose = clip.pose(rig, local_t.clamp(clip.start, clip.end));
+    if k != 0.0 {
+        for c in clip.channels.iter().filter(|c| c.path == Path::Translation) {
+            let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+            c.sample(clip.start, &mut a);
+            c.sample(clip.end, &mut b);
+            let d = DVec3::from_array(b) - DVec3::from_array(a);
+            pose.local[c.node].t += k * d;
+        }
+    }
+    pose
+}
