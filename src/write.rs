@@ -92,14 +92,20 @@ impl Output {
 
     /// Append an accessor to the document and return its index.
     pub fn push_accessor(&mut self, acc: Value) -> usize {
-        let accessors = self
+        self.push_to("accessors", acc)
+    }
+
+    /// Append `value` to the document's top-level array `key` (created if absent) and return
+    /// its index there.
+    pub fn push_to(&mut self, key: &str, value: Value) -> usize {
+        let entry = self
             .json
             .as_object_mut()
             .unwrap()
-            .entry("accessors")
+            .entry(key)
             .or_insert_with(|| json!([]));
-        let list = accessors.as_array_mut().unwrap();
-        list.push(acc);
+        let list = entry.as_array_mut().unwrap();
+        list.push(value);
         list.len() - 1
     }
 }

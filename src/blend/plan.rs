@@ -233,16 +233,18 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
     // Space warp from the corresponding poses of the first cycle.
     let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.skeleton[j]).collect();
     let first_cycle = plan.iter().take_while(|f| f.0 <= periods[0] + 1e-9).count();
+    let world_a: Vec<Vec<DVec3>> = poses_a.iter().map(|p| rig.positions(p)).collect();
     let (mut p, mut q) = (Vec::new(), Vec::new());
     for i in 0..first_cycle {
-        let (wa, wb) = (rig.positions(&poses_a[i]), rig.positions(&poses_b[i]));
-        p.extend(joints.iter().map(|&j| wa[j]));
+        let wb = rig.positions(&poses_b[i]);
+        p.extend(joints.iter().map(|&j| world_a[i][j]));
         q.extend(joints.iter().map(|&j| wb[j]));
     }
     let t = align::fit(&p, &q);
     for pose in &mut poses_b {
         align::move_skeleton(rig, pose, &t.matrix());
     }
+    let world_b: Vec<Vec<DVec3>> = poses_b.iter().map(|p| rig.positions(p)).collect();
     let mut frames: Vec<Pose> = poses_a
         .iter()
         .zip(&poses_b)
@@ -254,8 +256,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
     let strength = cleanup_strength(w);
     if opts.cleanup && !ch.legs.is_empty() && strength > 0.0 {
         let times: Vec<f64> = plan.iter().map(|f| f.0).collect();
-        let root_path: Vec<DVec3> = frames.iter().map(|f| rig.positions(f)[rig.root]).collect();
-        let shift = root_path[root_path.len() - 1] - root_path[0];
+        let shift = before.pos[before.len() - 1][rig.root] - before.pos[0][rig.root];
         // Planted: where both sources plant the foot, or the contact test finds it planted in
         // the blend (before, and after a first pass, so that every contact the test sees on the
         // result is pinned).
@@ -273,10 +274,8 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
                 let e = ch.legs[l].end();
                 (0..plan.len())
                     .map(|i| {
-                        let pa: DVec3 = rig.positions(&poses_a[i])[e];
-                        let pb: DVec3 = rig.positions(&poses_b[i])[e];
-                        let now = rig.positions(&frames[i])[e];
-                        now.lerp(pa.lerp(pb, w), strength)
+                        let blended = world_a[i][e].lerp(world_b[i][e], w);
+                        before.pos[i][e].lerp(blended, strength)
                     })
                     .collect()
             })

@@ -303,10 +303,8 @@ pub fn load_gltf(doc: &Document) -> Result<(Rig, Vec<Clip>)> {
     let mut local = Vec::with_capacity(n);
     let mut weights = Vec::with_capacity(n);
     for node in nodes {
-        let trs = if let Some(m) = node.get("matrix").and_then(Value::as_array) {
-            let cols: Vec<f64> = (0..16)
-                .map(|k| num(&Value::Array(m.clone()), k, 0.0))
-                .collect();
+        let trs = if node.get("matrix").is_some_and(Value::is_array) {
+            let cols: Vec<f64> = (0..16).map(|k| num(&node["matrix"], k, 0.0)).collect();
             Trs::from_matrix(&DMat4::from_cols_slice(&cols))
         } else {
             let t = &node["translation"];

@@ -5,7 +5,7 @@
 use super::rig::{Path, Pose, Rig, Trs};
 use crate::write::Output;
 use glam::DQuat;
-use serde_json::{json, Value};
+use serde_json::json;
 use std::collections::BTreeSet;
 
 /// A property whose values stay within this of the rest value is not given a channel (unless a
@@ -106,13 +106,8 @@ pub fn append_animation(
             "target": { "node": node, "path": path.name() }
         }));
     }
-    let anims = out
-        .json
-        .as_object_mut()
-        .unwrap()
-        .entry("animations")
-        .or_insert_with(|| json!([]));
-    let list: &mut Vec<Value> = anims.as_array_mut().unwrap();
-    list.push(json!({ "name": name, "channels": chans, "samplers": samplers }));
-    list.len() - 1
+    out.push_to(
+        "animations",
+        json!({ "name": name, "channels": chans, "samplers": samplers }),
+    )
 }
