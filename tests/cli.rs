@@ -120,28 +120,14 @@ fn fps_and_tweens_set_the_frame_count() {
         "-q",
     ]);
     assert_eq!(read_targets(&out, 0, 0).1.len(), 61);
-    run_ok(&[
-        "tween",
-        s(&sample("flag_wave.glb")),
-        "-o",
-        s(&out),
-        "--tweens",
-        "0",
-        "-q",
-    ]);
+    tween_quietly(&sample("flag_wave.glb"), &out, &["--tweens", "0"]);
     assert_eq!(read_targets(&out, 0, 0).1.len(), 5);
     // --keys targets ignores the animation: base + 4 targets at 0..4 s, 2 tweens between.
-    run_ok(&[
-        "tween",
-        s(&sample("flag_wave.glb")),
-        "-o",
-        s(&out),
-        "--keys",
-        "targets",
-        "--tweens",
-        "2",
-        "-q",
-    ]);
+    tween_quietly(
+        &sample("flag_wave.glb"),
+        &out,
+        &["--keys", "targets", "--tweens", "2"],
+    );
     assert_eq!(read_targets(&out, 0, 0).1.len(), 13);
     assert_valid(&out);
 }
@@ -151,7 +137,7 @@ fn everything_else_comes_through() {
     let dir = tempfile::tempdir().unwrap();
     let input = sample("flag_wave.glb");
     let out = out_in(&dir, "flag.glb");
-    run_ok(&["tween", s(&input), "-o", s(&out), "-q"]);
+    tween_quietly(&input, &out, &[]);
     let a = Document::open(&input).unwrap();
     let b = Document::open(&out).unwrap();
     for key in ["materials", "nodes", "scenes", "scene", "asset"] {
@@ -181,24 +167,8 @@ fn output_is_deterministic_for_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let a = out_in(&dir, "a.glb");
     let b = out_in(&dir, "b.glb");
-    run_ok(&[
-        "tween",
-        s(&sample("tube_bend.glb")),
-        "-o",
-        s(&a),
-        "--threads",
-        "1",
-        "-q",
-    ]);
-    run_ok(&[
-        "tween",
-        s(&sample("tube_bend.glb")),
-        "-o",
-        s(&b),
-        "--threads",
-        "2",
-        "-q",
-    ]);
+    tween_quietly(&sample("tube_bend.glb"), &a, &["--threads", "1"]);
+    tween_quietly(&sample("tube_bend.glb"), &b, &["--threads", "2"]);
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
 }
 
@@ -405,7 +375,7 @@ fn external_images_are_embedded_or_copied() {
     let input = fx.join("morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf");
     let dir = tempfile::tempdir().unwrap();
     let glb = dir.path().join("m.glb");
-    run_ok(&["tween", s(&input), "-o", s(&glb), "-q"]);
+    tween_quietly(&input, &glb, &[]);
     let doc = Document::open(&glb).unwrap();
     for img in doc.json["images"].as_array().unwrap() {
         assert!(
@@ -415,7 +385,7 @@ fn external_images_are_embedded_or_copied() {
     }
     let gltf_out = dir.path().join("sub/m.gltf");
     std::fs::create_dir_all(gltf_out.parent().unwrap()).unwrap();
-    run_ok(&["tween", s(&input), "-o", s(&gltf_out), "-q"]);
+    tween_quietly(&input, &gltf_out, &[]);
     for img in Document::open(&gltf_out).unwrap().json["images"]
         .as_array()
         .unwrap()
@@ -491,7 +461,7 @@ fn primitives_sharing_a_border_do_not_crack() {
     let dir = tempfile::tempdir().unwrap();
     let input = split_tube(dir.path(), true);
     let out = dir.path().join("out.glb");
-    run_ok(&["tween", s(&input), "-o", s(&out), "--tweens", "5", "-q"]);
+    tween_quietly(&input, &out, &["--tweens", "5"]);
     assert_valid(&out);
     let (b0, t0) = read_targets(&out, 0, 0);
     let (b1, t1) = read_targets(&out, 0, 1);
@@ -558,7 +528,7 @@ fn hard_edges_stay_hard_and_key_normals_are_kept() {
     .write(&input)
     .unwrap();
     let out = dir.path().join("out.glb");
-    run_ok(&["tween", s(&input), "-o", s(&out), "--tweens", "3", "-q"]);
+    tween_quietly(&input, &out, &["--tweens", "3"]);
     assert_valid(&out);
     let (doc, buffers, _) = gltf::import(&out).unwrap();
     let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
@@ -602,16 +572,11 @@ fn loop_closes_the_motion_and_extension_adds_frames() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("loop.glb");
     // flag_wave: 5 keys; --loop appends the first key again: 5 segments of 5 frames + 1.
-    run_ok(&[
-        "tween",
-        s(&sample("flag_wave.glb")),
-        "-o",
-        s(&out),
-        "--loop",
-        "--method",
-        "spline",
-        "-q",
-    ]);
+    tween_quietly(
+        &sample("flag_wave.glb"),
+        &out,
+        &["--loop", "--method", "spline"],
+    );
     assert_valid(&out);
     let (_, t) = read_targets(&out, 0, 0);
     assert_eq!(t.len(), 26);
@@ -621,17 +586,11 @@ fn loop_closes_the_motion_and_extension_adds_frames() {
         }
     }
     let ext = dir.path().join("ext.glb");
-    run_ok(&[
-        "tween",
-        s(&sample("bar_twist.glb")),
-        "-o",
-        s(&ext),
-        "--extend-before",
-        "0.5",
-        "--extend-after",
-        "0.4",
-        "-q",
-    ]);
+    tween_quietly(
+        &sample("bar_twist.glb"),
+        &ext,
+        &["--extend-before", "0.5", "--extend-after", "0.4"],
+    );
     assert_valid(&ext);
     assert_eq!(read_targets(&ext, 0, 0).1.len(), 6 + 2 + 2);
     let r = inbetween(&[
@@ -741,11 +700,11 @@ fn quantized_positions_are_read() {
     std::fs::write(&input, f).unwrap();
     assert_valid(&input);
     let out = dir.path().join("out.glb");
-    run_ok(&["tween", s(&input), "-o", s(&out), "-q"]);
+    tween_quietly(&input, &out, &[]);
     assert_valid(&out);
     // Same frames as the float file, in the quantized space (x1000), within the rounding.
     let plain = dir.path().join("plain.glb");
-    run_ok(&["tween", s(&sample("bar_twist.glb")), "-o", s(&plain), "-q"]);
+    tween_quietly(&sample("bar_twist.glb"), &plain, &[]);
     let (qb, qt) = read_targets_any(&out);
     let (pb, pt) = read_targets_any(&plain);
     for (qf, pf) in qt.iter().zip(&pt) {
@@ -789,7 +748,7 @@ fn constant_weight_animations_point_to_keys_targets() {
     assert_eq!(r.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&r.stderr).contains("--keys targets"));
     assert!(!out.exists());
-    run_ok(&["tween", s(&input), "-o", s(&out), "--keys", "targets", "-q"]);
+    tween_quietly(&input, &out, &["--keys", "targets"]);
     // The input has validator errors of its own (skin weights that do not sum to 1).
     assert_no_new_issues(&input, &out);
     // The skins and the other animations come through.

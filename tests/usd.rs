@@ -177,15 +177,7 @@ fn samples_as_usd_point_caches() {
 fn usd_stage_metadata_and_names() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("flag.usda");
-    run_ok(&[
-        "tween",
-        s(&sample("flag_wave.glb")),
-        "-o",
-        s(&out),
-        "--fps",
-        "30",
-        "-q",
-    ]);
+    tween_quietly(&sample("flag_wave.glb"), &out, &["--fps", "30"]);
     let text = std::fs::read_to_string(&out).unwrap();
     for line in [
         "defaultPrim = \"samples\"",
@@ -286,7 +278,7 @@ fn usdc_size_is_close_to_usd_core_resave() {
     .write(&keys)
     .unwrap();
     let ours = dir.path().join("cache.usdc");
-    run_ok(&["tween", s(&keys), "-o", s(&ours), "--tweens", "98", "-q"]); // 100 frames
+    tween_quietly(&keys, &ours, &["--tweens", "98"]); // 100 frames
     let resaved = dir.path().join("resaved.usdc");
     let script =
         "import sys\nfrom pxr import Sdf\nSdf.Layer.FindOrOpen(sys.argv[1]).Export(sys.argv[2])\n";

@@ -181,3 +181,16 @@ pub fn morph_meshes(path: &Path) -> Vec<inbetween::keyframes::MorphMesh> {
     };
     inbetween::keyframes::find_morph_meshes(&doc, &opts).unwrap()
 }
+
+/// `inbetween tween INPUT -o OUTPUT ARGS... -q`, insisting on success.
+pub fn tween_quietly(input: &Path, output: &Path, args: &[&str]) -> Output {
+    let mut all = vec![
+        "tween",
+        input.to_str().unwrap(),
+        "-o",
+        output.to_str().unwrap(),
+    ];
+    all.extend_from_slice(args);
+    all.push("-q");
+    run_ok(&all)
+}
