@@ -206,11 +206,15 @@ fn edited_glb(input: &Path, out: &Path, edit: impl FnOnce(&mut serde_json::Value
     let doc = Document::open(input).unwrap();
     let mut json = doc.json.clone();
     edit(&mut json);
-    let mut js = serde_json::to_vec(&json).unwrap();
+    write_glb(out, &json, &doc.buffers[0]);
+}
+
+/// Write `json` and `bin` as a GLB file, byte for byte as given.
+fn write_glb(path: &Path, json: &serde_json::Value, bin: &[u8]) {
+    let mut js = serde_json::to_vec(json).unwrap();
     while !js.len().is_multiple_of(4) {
         js.push(b' ');
     }
-    let bin = &doc.buffers[0];
     let total = 12 + 8 + js.len() + 8 + bin.len();
     let mut f = b"glTF".to_vec();
     f.extend(2u32.to_le_bytes());
@@ -221,7 +225,7 @@ fn edited_glb(input: &Path, out: &Path, edit: impl FnOnce(&mut serde_json::Value
     f.extend((bin.len() as u32).to_le_bytes());
     f.extend(0x004E4942u32.to_le_bytes());
     f.extend(bin);
-    std::fs::write(out, f).unwrap();
+    std::fs::write(path, f).unwrap();
 }
 
 #[test]
@@ -682,22 +686,8 @@ fn quantized_positions_are_read() {
     json["nodes"][0]["scale"] = serde_json::json!([0.001, 0.001, 0.001]);
     json["extensionsUsed"] = serde_json::json!(["KHR_mesh_quantization"]);
     json["extensionsRequired"] = serde_json::json!(["KHR_mesh_quantization"]);
-    let mut js = serde_json::to_vec(&json).unwrap();
-    while !js.len().is_multiple_of(4) {
-        js.push(b' ');
-    }
-    let total = 12 + 8 + js.len() + 8 + bin.len();
-    let mut f = b"glTF".to_vec();
-    f.extend(2u32.to_le_bytes());
-    f.extend((total as u32).to_le_bytes());
-    f.extend((js.len() as u32).to_le_bytes());
-    f.extend(0x4E4F534Au32.to_le_bytes());
-    f.extend(&js);
-    f.extend((bin.len() as u32).to_le_bytes());
-    f.extend(0x004E4942u32.to_le_bytes());
-    f.extend(&bin);
     let input = dir.path().join("quantized.glb");
-    std::fs::write(&input, f).unwrap();
+    write_glb(&input, &json, &bin);
     assert_valid(&input);
     let out = dir.path().join("out.glb");
     tween_quietly(&input, &out, &[]);
