@@ -64,6 +64,22 @@ impl Summary {
 }
 
 /// Run the tween job. Nothing is written unless every step succeeds.
+/// The `--report` file's path and contents, if one was asked for.
+fn report_file(
+    job: &TweenJob,
+    meshes: Vec<crate::report::MeshReport>,
+) -> Result<Option<(PathBuf, Vec<u8>)>> {
+    let Some(path) = &job.report else {
+        return Ok(None);
+    };
+    let report = crate::report::Report {
+        input: job.input.display().to_string(),
+        output: job.output.display().to_string(),
+        meshes,
+    };
+    Ok(Some((path.clone(), serde_json::to_vec_pretty(&report)?)))
+}
+
 pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let started = Instant::now();
     let format = write::format_for(&job.output)?;
@@ -112,11 +128,12 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
             progress.finish();
             let mut out = write::begin(&doc, container, &job.output)?;
             write::apply_frames(&mut out, &results)?;
-            write::finish(out, container, &job.output)?;
             for r in results {
                 stats.push(r.stats);
                 reports.extend(r.report);
             }
+            let report = report_file(job, std::mem::take(&mut reports))?;
+            write::finish_with(out, container, &job.output, report.into_iter().collect())?;
         }
         write::OutputFormat::Usd(usd_format) => {
             let fps = match job.timing {
@@ -148,16 +165,11 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
                 Ok(())
             })?;
             progress.finish();
+            // The report is complete only once the frames have streamed into the stage.
+            if let Some(file) = report_file(job, reports)? {
+                write::atomic_write(&[file])?;
+            }
         }
-    }
-    if let Some(path) = &job.report {
-        let report = crate::report::Report {
-            input: job.input.display().to_string(),
-            output: job.output.display().to_string(),
-            meshes: reports,
-        };
-        let text = serde_json::to_vec_pretty(&report)?;
-        write::atomic_write(&[(path.clone(), text)])?;
     }
     Ok(Summary {
         meshes: stats,

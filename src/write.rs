@@ -649,7 +649,17 @@ fn visit_accessor_refs(json: &mut Value, f: &mut dyn FnMut(&mut usize)) {
 }
 
 /// Serialize and write atomically: temporary files beside the target, renamed on success.
-pub fn finish(mut out: Output, container: Container, path: &Path) -> Result<()> {
+pub fn finish(out: Output, container: Container, path: &Path) -> Result<()> {
+    finish_with(out, container, path, Vec::new())
+}
+
+/// [`finish`], writing `extra` files (a report) in the same all-or-nothing step.
+pub fn finish_with(
+    mut out: Output,
+    container: Container,
+    path: &Path,
+    mut extra: Vec<(PathBuf, Vec<u8>)>,
+) -> Result<()> {
     let views = std::mem::take(&mut out.bin.views);
     let json = out.json.as_object_mut().unwrap();
     if views.is_empty() {
@@ -696,7 +706,8 @@ pub fn finish(mut out: Output, container: Container, path: &Path) -> Result<()> 
                 file.extend_from_slice(&0x004E_4942u32.to_le_bytes());
                 file.extend_from_slice(&bin);
             }
-            atomic_write(&[(path.to_path_buf(), file)])
+            extra.push((path.to_path_buf(), file));
+            atomic_write(&extra)
         }
         Container::Gltf => {
             let js = serde_json::to_vec_pretty(&out.json)?;
@@ -705,6 +716,7 @@ pub fn finish(mut out: Output, container: Container, path: &Path) -> Result<()> 
                 files.push((path.with_file_name(name), bin));
             }
             files.push((path.to_path_buf(), js));
+            files.extend(extra);
             atomic_write(&files)
         }
     }

@@ -69,3 +69,37 @@ fn open_meshes_report_no_volume() {
     assert!(frames(&r).iter().all(|f| f["volume_change"].is_null()));
     assert_eq!(frames(&r).len(), 41);
 }
+
+#[test]
+fn an_unwritable_report_leaves_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.glb");
+    let rep = dir.path().join("missing/report.json");
+    let o = inbetween(&[
+        "tween",
+        sample("bar_twist.glb").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&o.stderr).trim().lines().count(), 1);
+    assert!(!out.exists() && !rep.exists());
+    if let Some(fx) = fixtures() {
+        let o = inbetween(&[
+            "blend",
+            fx.join("skinned/Fox.glb").to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--clips",
+            "Walk",
+            "Run",
+            "--report",
+            rep.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(!out.exists() && !rep.exists());
+    }
+}

@@ -137,14 +137,11 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
     let channels = super::write::channels(&rig, &blended.poses, &animated);
     let mut out = write::begin(&doc, container, &job.output)?;
     super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);
-    let report_bytes = match &job.report {
-        Some(path) => Some((path.clone(), serde_json::to_vec_pretty(&blended.report)?)),
-        None => None,
+    let report = match &job.report {
+        Some(path) => vec![(path.clone(), serde_json::to_vec_pretty(&blended.report)?)],
+        None => Vec::new(),
     };
-    write::finish(out, container, &job.output)?;
-    if let Some(file) = report_bytes {
-        write::atomic_write(&[file])?;
-    }
+    write::finish_with(out, container, &job.output, report)?;
     Ok(BlendSummary {
         name,
         report: blended.report,
