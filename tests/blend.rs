@@ -85,10 +85,12 @@ fn planted_feet_slide_less_than_the_sources_and_a_fifth_of_a_naive_blend() {
                 assert!(planted > 0, "no planted foot measured on the blend");
                 assert!(after <= worse, "{after} > worse source {worse}");
                 if r["naive"]["sliding"]["count"].as_u64().unwrap() == 0 {
-                    eprintln!("  the naive blend has no planted frame to compare with");
-                } else {
-                    assert!(after <= 0.2 * naive, "{after} > 0.2 x naive {naive}");
+                    // Robot w=0.75: the run's contacts last under two frames, so the naive
+                    // blend has no planted step; the blend must then not slide at all.
+                    eprintln!("  the naive blend has no planted step (its figure is 0)");
                 }
+                // 1e-6 leg: what the analytic IK leaves of a pinned foot's motion.
+                assert!(after <= 0.2 * naive + 1e-6, "{after} > 0.2 x naive {naive}");
                 assert!(r["result"]["looping"].as_bool().unwrap());
                 if w == 0.5 {
                     assert_no_new_issues(&src, &out);
@@ -197,77 +199,100 @@ fn clean_up_touches_only_the_legs() {
     assert!(leg_changed, "clean-up changed no leg joint");
 }
 
-/// Stride intervals from foot contacts: (touchdown, next touchdown of the same foot), the
-/// height falling through 30% of its range after rising above 60% of it.
-fn contact_strides(path: &Path) -> Vec<(f64, f64)> {
-    let (rig, clip) = bvh::read(path).unwrap();
-    let (ch, an) = analyze::analyze(&rig, &[&clip], CycleMethod::Legs);
-    let tr = &an[0].track;
-    let mut strides = Vec::new();
-    for leg in &ch.legs {
-        let h: Vec<f64> = tr.pos.iter().map(|p| p[leg.end()].y).collect();
-        let mut s = h.clone();
-        s.sort_by(f64::total_cmp);
-        let (lo, hi) = (s[s.len() / 50], s[s.len() * 9 / 10]);
-        let (low, high) = (lo + 0.3 * (hi - lo), lo + 0.6 * (hi - lo));
-        let mut downs = Vec::new();
-        let mut up = false;
-        for i in 1..h.len() {
-            up |= h[i] > high;
-            if up && h[i - 1] > low && h[i] <= low {
-                downs.push(tr.time(i - 1) + (h[i - 1] - low) / (h[i - 1] - h[i]) * tr.dt);
-                up = false;
+/// Strides of the foot `end` from its contacts: (touchdown, next touchdown). Written apart from
+/// `cycles::touchdowns` for captures that move over the floor (no ground velocity, no check of
+/// the other legs): a stance is where the foot's horizontal speed in the world is below 10% of
+/// its 98th percentile (until it passes 50% again), its touchdown the frame from which the foot
+/// stays within 5% of a leg of its median stance position. (The toe settles over about 0.1 s:
+/// within 3% of the mid-stance position and a 20% speed gives strides up to 2.6% shorter.)
+fn contact_strides(track: &track::Track, end: usize, leg: f64) -> Vec<(f64, f64)> {
+    let flat = |i: usize| {
+        let p = track.pos[i][end];
+        (p.x, p.z)
+    };
+    let speed: Vec<f64> = (0..track.len())
+        .map(|i| {
+            let v = track.velocity(i, end);
+            v.x.hypot(v.z)
+        })
+        .collect();
+    let mut s = speed.clone();
+    s.sort_by(f64::total_cmp);
+    let fast = s[s.len() * 98 / 100];
+    let mut stances = Vec::new();
+    let mut from = None;
+    for (i, &v) in speed.iter().enumerate() {
+        match from {
+            None if v <= 0.1 * fast => from = Some(i),
+            Some(f) if v > 0.5 * fast => {
+                stances.push((f, i));
+                from = None;
             }
+            _ => {}
         }
-        strides.extend(downs.windows(2).map(|w| (w[0], w[1])));
     }
-    strides
+    let downs: Vec<f64> = stances
+        .iter()
+        .skip(1)
+        .map(|&(f, e)| {
+            let median = |mut v: Vec<f64>| {
+                v.sort_by(f64::total_cmp);
+                v[v.len() / 2]
+            };
+            let mid = (
+                median((f..e).map(|i| flat(i).0).collect()),
+                median((f..e).map(|i| flat(i).1).collect()),
+            );
+            let mut k = f;
+            while k > 0 {
+                let p = flat(k - 1);
+                if (p.0 - mid.0).hypot(p.1 - mid.1) >= 0.05 * leg {
+                    break;
+                }
+                k -= 1;
+            }
+            track.time(k)
+        })
+        .collect();
+    downs
+        .windows(2)
+        .map(|w| (w[0], w[1]))
+        .filter(|(a, b)| (0.25..=2.5).contains(&(b - a)))
+        .collect()
 }
 
 #[test]
 fn stride_periods_of_motion_capture_match_foot_contacts() {
     let Some(fx) = fixtures() else { return };
     for file in [
-        // bvh11_131_01_start_walk_stop: a cycle is found (4.60 s + 1.18 s) but this helper
-        // finds no touchdown in its shuffling feet, so it is not compared here.
         "bvh/kevinxie4c_walk.bvh",
+        "bvh/bvh11_131_01_start_walk_stop.bvh",
+        // kevinxie4c_cmu_run_filtered (a run, not a walk) has one touchdown per foot after its
+        // first stance: no contact stride to compare with (its cycle, from the feet's forward
+        // offsets, is 0.771 s).
     ] {
-        let path = fx.join(file);
-        let (rig, clip) = bvh::read(&path).unwrap();
-        let (_, an) = analyze::analyze(&rig, &[&clip], CycleMethod::Legs);
+        let (rig, clip) = bvh::read(&fx.join(file)).unwrap();
+        let (ch, an) = analyze::analyze(&rig, &[&clip], CycleMethod::Legs);
         let spans = &an[0].cycles.as_ref().expect("cycles found").spans;
-        // Each contact stride against the detected cycle overlapping it most.
-        let mut errors = Vec::new();
-        for (t0, t1) in contact_strides(&path) {
-            let overlap = |s: &(f64, f64)| (t1.min(s.0 + s.1) - t0.max(s.0)).max(0.0);
-            if let Some(best) = spans
+        // A cycle starts as the first leg steps: its contact stride starting nearest the cycle.
+        let strides = contact_strides(&an[0].track, ch.legs[0].end(), ch.scale);
+        for &(start, period) in spans {
+            let (t0, t1) = *strides
                 .iter()
-                .max_by(|a, b| overlap(a).total_cmp(&overlap(b)))
-            {
-                if overlap(best) >= 0.5 * (t1 - t0) {
-                    let err = (best.1 - (t1 - t0)).abs() / (t1 - t0);
-                    eprintln!(
-                        "{file}: contact stride {:.4} s, cycle {:.4} s ({:.2}%)",
-                        t1 - t0,
-                        best.1,
-                        100.0 * err
-                    );
-                    errors.push(err);
-                }
-            }
+                .min_by(|a, b| (a.0 - start).abs().total_cmp(&(b.0 - start).abs()))
+                .unwrap_or_else(|| panic!("{file}: no contact stride"));
+            assert!(
+                (t0 - start).abs() <= 0.25 * period,
+                "{file}: cycle at {start:.3} s, nearest contact stride at {t0:.3} s"
+            );
+            let err = (period - (t1 - t0)).abs() / (t1 - t0);
+            eprintln!(
+                "{file}: cycle {start:.3} s + {period:.4} s, contact stride {t0:.3} s + {:.4} s ({:.2}%)",
+                t1 - t0,
+                100.0 * err
+            );
+            assert!(err <= 0.02, "{file}: period error {err}");
         }
-        assert!(
-            !errors.is_empty(),
-            "{file}: no contact stride overlaps a cycle"
-        );
-        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
-        eprintln!(
-            "{file}: {} cycles, mean period error {:.2}% over {} strides",
-            spans.len(),
-            100.0 * mean,
-            errors.len()
-        );
-        assert!(mean <= 0.02, "{file}: mean period error {mean}");
     }
 }
 

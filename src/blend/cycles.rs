@@ -2,11 +2,14 @@
 //! at the maxima of one leg's signal (one per stride, so left and right are never confused).
 //!
 //! * `legs` (default, any rig): each foot's forward offset from the root; a cycle starts when
-//!   the first leg (left, longest) is furthest forward.
+//!   the first leg (left, longest) is furthest forward. On a clip that does not loop the strides
+//!   are then taken from the first leg's touchdowns (see [`touchdowns`]) where every leg steps
+//!   once between two of them: sharper events than the broad peak of a forward offset.
 //! * `thigh` (the seed's method): the angle between the two longest opposite legs' thighs,
 //!   signed by which knee is ahead; a cycle starts at the widest stride with the left leg ahead.
 
 use super::legs::{Leg, Side};
+use super::rig::UP;
 use super::track::Track;
 use glam::DVec3;
 use serde::Serialize;
@@ -29,6 +32,18 @@ pub const START_WINDOW: f64 = 0.25;
 /// ... and rises this much above the lowest value within half of [`MAX_PERIOD`] on both sides
 /// (leg scales for `legs`, radians for `thigh`).
 pub const MIN_SWING: f64 = 0.15;
+
+/// A foot is in stance while its horizontal speed over the ground is below this fraction of
+/// its fast swing speed (98th percentile) ...
+pub const STANCE_SPEED: f64 = 0.1;
+/// ... and swings once it passes this fraction; a touchdown is a swing ending in stance.
+pub const SWING_SPEED: f64 = 0.5;
+
+/// Shortest stance, in seconds.
+pub const MIN_STANCE: f64 = 0.1;
+/// A foot has touched down once it stays within this distance of where it stands, in leg
+/// scales.
+pub const LANDING: f64 = 0.05;
 
 /// Cycles found in one clip: (start time, period) per cycle.
 #[derive(Clone, Debug, Serialize)]
@@ -113,6 +128,25 @@ pub fn detect(
                 .collect(),
         });
     }
+    if method == CycleMethod::Legs {
+        let downs: Vec<Vec<f64>> = legs
+            .iter()
+            .map(|l| touchdowns(track, l.end(), legs, scale))
+            .collect();
+        let spans: Vec<(f64, f64)> = downs[0]
+            .windows(2)
+            .map(|w| (w[0], w[1] - w[0]))
+            .filter(|&(s, p)| {
+                (MIN_PERIOD..=MAX_PERIOD).contains(&p)
+                    && downs[1..]
+                        .iter()
+                        .all(|d| d.iter().filter(|&&t| t > s && t < s + p).count() == 1)
+            })
+            .collect();
+        if !spans.is_empty() {
+            return Some(Cycles { spans });
+        }
+    }
     // Starts: prominent maxima of the reference signal (steps, not shuffles), a stride apart.
     let raw = &raw_reference;
     let near = ((START_WINDOW / track.dt).round() as usize).max(1);
@@ -135,6 +169,79 @@ pub fn detect(
         .filter(|&(_, p)| (MIN_PERIOD..=MAX_PERIOD).contains(&p))
         .collect();
     (!spans.is_empty()).then_some(Cycles { spans })
+}
+
+/// Touchdowns of the foot `end` on a clip that does not loop (seconds). A stance lasts from the
+/// foot's horizontal speed over the ground falling below [`STANCE_SPEED`] until it passes
+/// [`SWING_SPEED`], at least [`MIN_STANCE`]; every stance but the first has a touchdown (the
+/// first may have begun before the clip, and its first frames are often caught mid-swing). Its
+/// touchdown is the first moment from which the foot stays within [`LANDING`] of the stance's
+/// spot (median position): from positions, so a capture's jitter in speed does not move it.
+/// The ground's velocity is the median velocity of the lowest foot of `legs`: zero for a clip
+/// with root motion, the treadmill's for one in place. `scale` is the leg scale.
+pub fn touchdowns(track: &Track, end: usize, legs: &[Leg], scale: f64) -> Vec<f64> {
+    let n = track.len();
+    let flat = |v: DVec3| v - UP * v.dot(UP);
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let lowest: Vec<DVec3> = (0..n)
+        .map(|i| {
+            let foot = legs
+                .iter()
+                .map(|l| l.end())
+                .min_by(|&a, &b| track.pos[i][a].y.total_cmp(&track.pos[i][b].y))
+                .unwrap_or(end);
+            flat(track.velocity(i, foot))
+        })
+        .collect();
+    let ground = DVec3::new(
+        median(lowest.iter().map(|v| v.x).collect()),
+        0.0,
+        median(lowest.iter().map(|v| v.z).collect()),
+    );
+    let at = |i: usize| flat(track.pos[i][end]) - ground * track.time(i);
+    let speed: Vec<f64> = (0..n)
+        .map(|i| (flat(track.velocity(i, end)) - ground).length())
+        .collect();
+    let fast = {
+        let mut s = speed.clone();
+        s.sort_by(f64::total_cmp);
+        s[(n - 1) * 98 / 100]
+    };
+    let (stance, swing) = (STANCE_SPEED * fast, SWING_SPEED * fast);
+    // Stances: from the speed falling below `stance` until it passes `swing` again.
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let mut from: Option<usize> = None;
+    for (i, &v) in speed.iter().enumerate() {
+        match from {
+            None if v <= stance => from = Some(i),
+            Some(f) if v > swing => {
+                runs.push((f, i));
+                from = None;
+            }
+            _ => {}
+        }
+    }
+    runs.extend(from.map(|f| (f, n)));
+    let min_run = ((MIN_STANCE / track.dt).ceil() as usize).max(1);
+    runs.retain(|&(f, e)| e - f >= min_run);
+    let mut downs = Vec::new();
+    for &(first, last) in runs.iter().skip(1) {
+        let p: Vec<DVec3> = (first..last).map(at).collect();
+        let spot = DVec3::new(
+            median(p.iter().map(|v| v.x).collect()),
+            0.0,
+            median(p.iter().map(|v| v.z).collect()),
+        );
+        let mut k = first;
+        while k > 0 && (at(k - 1) - spot).length() < LANDING * scale {
+            k -= 1;
+        }
+        downs.push(track.time(k));
+    }
+    downs
 }
 
 /// Zero-mean, unit-variance copy; `None` for a flat signal.

@@ -53,22 +53,39 @@ fn flat(v: DVec3) -> DVec3 {
     v - UP * v.dot(UP)
 }
 
-pub fn figures(track: &Track, root: usize, joints: &[usize], legs: &[Leg], scale: f64) -> Figures {
+/// Figures of `track`. A foot counts as planted where the contact test finds it planted or,
+/// per leg and frame, `expected` says it should be (empty: nothing more), so a motion whose
+/// feet never settle is still measured where its sources plant them.
+pub fn figures(
+    track: &Track,
+    root: usize,
+    joints: &[usize],
+    legs: &[Leg],
+    scale: f64,
+    expected: &[Vec<bool>],
+) -> Figures {
     let n = track.len();
     let dt = track.dt;
     let flags: Vec<Vec<bool>> = legs
         .iter()
-        .map(|l| contacts::flags(track, l, scale))
+        .enumerate()
+        .map(|(l, leg)| {
+            let mut f = contacts::flags(track, leg, scale);
+            if let Some(e) = expected.get(l) {
+                for (x, &y) in f.iter_mut().zip(e) {
+                    *x |= y;
+                }
+            }
+            f
+        })
         .collect();
-    let steps = if track.looping {
-        n
-    } else {
-        n.saturating_sub(1)
-    };
+    // On a looping track the step from the last frame back to the first is left out: with root
+    // motion the feet jump back there by a loop's travel.
+    let steps = n.saturating_sub(1);
     let mut planted_moves = Vec::new();
     for (leg, f) in legs.iter().zip(&flags) {
         for i in 0..steps {
-            let k = track.step(i, 1);
+            let k = i + 1;
             if f[i] && f[k] {
                 planted_moves.push(flat(track.pos[k][leg.end()] - track.pos[i][leg.end()]));
             }

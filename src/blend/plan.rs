@@ -159,6 +159,14 @@ fn cycles_used(clip: &Clip, an: &Analysis) -> Vec<(f64, f64)> {
             }
         }
     }
+    // Consecutive cycles tile the clip, so the blend's source time never jumps between them.
+    for k in 1..spans.len() {
+        let (s, p) = spans[k - 1];
+        let gap = spans[k].0 - s;
+        if (gap - p).abs() <= 0.5 * p {
+            spans[k - 1].1 = gap;
+        }
+    }
     spans
 }
 
@@ -171,13 +179,31 @@ fn cycle_at(spans: &[(f64, f64)], looping: bool, k: usize) -> (f64, f64) {
     }
 }
 
-fn positions_track(rig: &Rig, poses: &[Pose], dt: f64) -> Track {
+/// Joint positions of `poses`, one every `dt`; a looping motion (last pose = first) becomes a
+/// looping track without the repeated pose, so speeds and steps at its ends wrap as it plays.
+fn positions_track(rig: &Rig, poses: &[Pose], dt: f64, looping: bool) -> Track {
+    let looping = looping && poses.len() > 2;
+    let poses = if looping {
+        &poses[..poses.len() - 1]
+    } else {
+        poses
+    };
     Track {
         start: 0.0,
         dt,
-        looping: false,
+        looping,
         pos: poses.iter().map(|p| rig.positions(p)).collect(),
     }
+}
+
+/// Contact flags of `leg` per pose of `poses` (see [`positions_track`]; the repeated last pose
+/// of a loop gets the first one's flag).
+fn contact_flags(track: &Track, count: usize, leg: &super::legs::Leg, scale: f64) -> Vec<bool> {
+    let mut f = super::contacts::flags(track, leg, scale);
+    while f.len() < count {
+        f.push(f[0]);
+    }
+    f
 }
 
 /// Blend clip `a` with clip `b` (weight `opts.weight` on `b`).
@@ -251,22 +277,33 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
         .map(|(x, y)| mix(x, y, w))
         .collect();
     let dt = 1.0 / fps;
-    let before = positions_track(rig, &frames, dt);
+    let before = positions_track(rig, &frames, dt, false);
+    let before_loop = positions_track(rig, &frames, dt, looping);
+    // Where the sources plant each foot by weighted vote (the source of more weight decides,
+    // either at 0.5), per output frame: the clean-up pins these and the figures measure
+    // sliding there too (a naive blend's feet may never settle enough for the contact test).
+    let vote = |l: usize, ta: f64, tb: f64| {
+        let x = |p: bool| if p { 1.0 } else { 0.0 };
+        (1.0 - w) * x(an_a.planted(l, ta)) + w * x(an_b.planted(l, tb)) >= 0.5
+    };
+    let per_frame = |f: &dyn Fn(usize, f64, f64) -> bool| -> Vec<Vec<bool>> {
+        (0..ch.legs.len())
+            .map(|l| plan.iter().map(|p| f(l, p.1, p.2)).collect())
+            .collect()
+    };
+    let voted = per_frame(&vote);
     let mut max_drop: f64 = 0.0;
     let strength = cleanup_strength(w);
     if opts.cleanup && !ch.legs.is_empty() && strength > 0.0 {
         let times: Vec<f64> = plan.iter().map(|f| f.0).collect();
         let shift = before.pos[before.len() - 1][rig.root] - before.pos[0][rig.root];
-        // Planted: where both sources plant the foot, or the contact test finds it planted in
+        // Planted: where the sources plant the foot by vote, or the contact test finds it in
         // the blend (before, and after a first pass, so that every contact the test sees on the
         // result is pinned).
         let mut planted: Vec<Vec<bool>> = (0..ch.legs.len())
             .map(|l| {
-                let found = super::contacts::flags(&before, &ch.legs[l], ch.scale);
-                plan.iter()
-                    .enumerate()
-                    .map(|(i, f)| found[i] || (an_a.planted(l, f.1) && an_b.planted(l, f.2)))
-                    .collect()
+                let found = contact_flags(&before_loop, plan.len(), &ch.legs[l], ch.scale);
+                found.iter().zip(&voted[l]).map(|(x, y)| x | y).collect()
             })
             .collect();
         let raw: Vec<Vec<DVec3>> = (0..ch.legs.len())
@@ -308,10 +345,10 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
             frames = unclean.clone();
             let drop = cleanup::clean(rig, &ch.legs, &goals, &mut frames, ch.forward, looping);
             max_drop = drop.iter().copied().fold(0.0, f64::max);
-            let after = positions_track(rig, &frames, dt);
+            let after = positions_track(rig, &frames, dt, looping);
             let mut grew = false;
             for (l, p) in planted.iter_mut().enumerate() {
-                let found = super::contacts::flags(&after, &ch.legs[l], ch.scale);
+                let found = contact_flags(&after, plan.len(), &ch.legs[l], ch.scale);
                 for (x, f) in p.iter_mut().zip(found) {
                     grew |= f && !*x;
                     *x |= f;
@@ -329,32 +366,37 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
         }
     }
     // Figures, all at the output rate.
-    let fig = |track: &Track| measure::figures(track, rig.root, &joints, &ch.legs, ch.scale);
-    let source = |clip: &Clip| {
+    let fig = |track: &Track, expected: &[Vec<bool>]| {
+        measure::figures(track, rig.root, &joints, &ch.legs, ch.scale, expected)
+    };
+    let source = |clip: &Clip, looping: bool| {
         let n = ((clip.duration() * fps).round() as usize).max(1);
         let poses: Vec<Pose> = (0..=n)
             .map(|i| clip.pose(rig, clip.start + i as f64 * clip.duration() / n as f64))
             .collect();
-        positions_track(rig, &poses, clip.duration().max(1e-9) / n as f64)
+        positions_track(rig, &poses, clip.duration().max(1e-9) / n as f64, looping)
     };
-    let (track_a, track_b) = (source(a), source(b));
-    let (fig_a, fig_b) = (fig(&track_a), fig(&track_b));
+    let (track_a, track_b) = (source(a, an_a.looping()), source(b, an_b.looping()));
+    let (fig_a, fig_b) = (fig(&track_a, &[]), fig(&track_b, &[]));
     let naive = {
         let dur = (1.0 - w) * a.duration() + w * b.duration();
         let n = ((dur * fps).round() as usize).max(1);
+        let at = |i: usize| {
+            let u = i as f64 / n as f64;
+            (a.start + u * a.duration(), b.start + u * b.duration())
+        };
         let poses: Vec<Pose> = (0..=n)
-            .map(|i| {
-                let u = i as f64 / n as f64;
-                mix(
-                    &a.pose(rig, a.start + u * a.duration()),
-                    &b.pose(rig, b.start + u * b.duration()),
-                    w,
-                )
-            })
+            .map(|i| mix(&a.pose(rig, at(i).0), &b.pose(rig, at(i).1), w))
             .collect();
-        fig(&positions_track(rig, &poses, dur.max(1e-9) / n as f64))
+        let expected: Vec<Vec<bool>> = (0..ch.legs.len())
+            .map(|l| (0..=n).map(|i| vote(l, at(i).0, at(i).1)).collect())
+            .collect();
+        fig(
+            &positions_track(rig, &poses, dur.max(1e-9) / n as f64, looping),
+            &expected,
+        )
     };
-    let after_fig = fig(&positions_track(rig, &frames, dt));
+    let after_fig = fig(&positions_track(rig, &frames, dt, looping), &voted);
     let source_jerk = (1.0 - w) * fig_a.jerk + w * fig_b.jerk;
     let clip_report =
         |clip: &Clip, an: &Analysis, spans: &[(f64, f64)], figures: Figures| ClipReport {
@@ -415,7 +457,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
             looping,
             cycle_periods: periods,
             warp_knots: knots,
-            before_cleanup: fig(&before),
+            before_cleanup: fig(&before_loop, &voted),
             after_cleanup: after_fig,
             jerk_ratio: if source_jerk > 0.0 {
                 after_fig.jerk / source_jerk
