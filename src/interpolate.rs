@@ -20,7 +20,7 @@ pub enum Method {
     /// Vertex lerp between consecutive keys (BlendShape baseline).
     Linear,
     /// C1 spline across all keys in gradient space (rotation logs and stretches by Catmull-Rom,
-    /// same solve, centroids on the spline). Not yet the default: see the README.
+    /// same solve; each component turns about its pivot). The default.
     Spline,
 }
 

@@ -43,7 +43,7 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
         #[arg(long)]
         fps: Option<f64>,
         /// Interpolation method.
-        #[arg(long, value_enum, default_value_t = Method::Seed)]
+        #[arg(long, value_enum, default_value_t = Method::Spline)]
         method: Method,
         /// Where the keys come from.
         #[arg(long, value_enum, default_value_t = KeySource::Auto)]

@@ -529,6 +529,17 @@ impl Placement {
         })
     }
 
+    /// Number of connected components.
+    pub fn component_count(&self) -> usize {
+        self.size.len()
+    }
+
+    /// Component of vertex `v` (None for a vertex no valid triangle touches).
+    pub fn component_of(&self, v: usize) -> Option<usize> {
+        let c = self.component[v];
+        (c != u32::MAX).then_some(c as usize)
+    }
+
     /// Vertex centroid of every component in pose `x`.
     pub fn centroids(&self, x: &[DVec3]) -> Vec<DVec3> {
         let mut sum = vec![DVec3::ZERO; self.size.len()];

@@ -5,11 +5,16 @@
 //! does for b alone). The rotation logs (relative to key a, whose own log is 0) and the
 //! stretches (key a's is I) are interpolated with a non-uniform Catmull-Rom spline (a cubic
 //! Hermite whose tangents are the neighbours' differences over their time spans), so the motion
-//! is C1 across keys; positions come from the same Poisson solve as the seed's, and every
-//! connected component's centroid follows the same spline through the keys' centroids.
+//! is C1 across keys; positions come from the same Poisson solve as the seed's.
+//!
+//! Paths: every connected component turns about a pivot (the point its mean rotation from key
+//! a to the other knots leaves in place, least squares), which itself follows the spline; its
+//! centroid c(u) = p(u) + R(u) (c_a - p), with R(u) the component's area-weighted mean log
+//! interpolated like the triangles'. An arm swinging about the shoulder moves on the arc, a
+//! rigid motion follows its screw, and the keys' centroids are met exactly.
 //!
 //! Ends: without a looping track, a missing neighbour is mirrored (log -r, stretch 2I - S,
-//! centroid 2c_a - c_b), which gives the end key the chord's tangent. A looping track (last
+//! pivot 2p_a - p_b), which gives the end key the chord's tangent. A looping track (last
 //! key equal to the first) wraps around. Rotation branches across keys: each neighbour's log
 //! is taken on the branch (angle + 2 pi k about its axis) closest to the linear continuation
 //! of the segment's own log.
@@ -24,6 +29,19 @@ use std::f64::consts::PI;
 
 /// Weight each triangle's term by its reference area.
 const WEIGHTED: bool = true;
+
+/// Pull of a component's pivot towards its centroid (dimensionless, against |I - R|^2 of its
+/// rotations): keeps the system solvable for a component that does not turn; small enough not
+/// to move the pivot of a 0.1-degree turn.
+const PIVOT_PULL: f64 = 1e-12;
+
+/// A component turns as one when its triangles' rotation logs from key a to b scatter (area-
+/// weighted RMS about their mean) by at most this fraction of the mean's angle: its centroid
+/// follows the pivot path ...
+const RIGID_SPREAD: f64 = 0.05;
+/// ... and not at all from this fraction on (a flapping bird's body has no one rotation: its
+/// centroid follows the spline through the keys' centroids); smoothly between.
+const LOOSE_SPREAD: f64 = 0.25;
 
 /// All keys of a track (welded positions) and their times.
 pub struct SplineTrack<'a> {
@@ -45,13 +63,24 @@ struct Tri {
     sg: [[DVec3; 2]; 3],
 }
 
+struct Path {
+    centroid: DVec3,
+    pivot: [DVec3; 4],
+    log: [DVec3; 3],
+    /// Centroids at prev, a, b, next (the path of a component that does not turn as one).
+    centroids: [DVec3; 4],
+    /// How far the pivot path is followed, 0 to 1 (see [`RIGID_SPREAD`], [`LOOSE_SPREAD`]).
+    rigid: f64,
+}
+
 pub struct SplineSegment {
     /// Times of prev, a, b, next (prev and next may be mirrored or wrapped).
     t: [f64; 4],
     tris: Vec<Tri>,
     placement: Placement,
-    /// Centroids of prev, a, b, next per component.
-    centroids: Vec<[DVec3; 4]>,
+    /// Per component: its centroid at key a, its pivots at prev, a, b, next and its mean
+    /// rotation logs (relative to key a) at prev, b, next.
+    paths: Vec<Path>,
     /// Positions of a and b, for vertices no valid triangle touches.
     x: [Vec<DVec3>; 2],
 }
@@ -306,23 +335,135 @@ impl<'a> SplineTrack<'a> {
         });
         let valid: Vec<[u32; 3]> = per.iter().flatten().map(|t| t.corners).collect();
         let placement = Placement::new(self.pattern, n, grads, &valid)?;
-        // Centroids of the four knots; a missing neighbour is mirrored.
-        let mirror = |p: &[DVec3], q: &[DVec3]| -> Vec<DVec3> {
-            p.iter().zip(q).map(|(a, b)| 2.0 * *a - *b).collect()
-        };
-        let kp = prev.map_or_else(|| mirror(x0, x1), |(k, _)| self.keys[k].clone());
-        let kn = next.map_or_else(|| mirror(x1, x0), |(k, _)| self.keys[k].clone());
-        let c = [kp.as_slice(), x0, x1, kn.as_slice()].map(|x| placement.centroids(x));
-        let centroids = (0..c[0].len())
-            .map(|i| [c[0][i], c[1][i], c[2][i], c[3][i]])
-            .collect();
+        let paths = self.paths(
+            &per,
+            &placement,
+            x0,
+            x1,
+            prev.is_some(),
+            next.is_some(),
+            [prev.map(|(k, _)| k), next.map(|(k, _)| k)],
+        );
         Ok(SplineSegment {
             t,
             tris: per.into_iter().flatten().collect(),
             placement,
-            centroids,
+            paths,
             x: [x0.clone(), x1.clone()],
         })
+    }
+
+    /// Each component's path (see the module): mean logs of its triangles (weighted by area)
+    /// and pivots at the knots; `around` are the keys of prev and next where they exist.
+    #[allow(clippy::too_many_arguments)]
+    fn paths(
+        &self,
+        per: &[Option<Tri>],
+        placement: &Placement,
+        x0: &[DVec3],
+        x1: &[DVec3],
+        has_prev: bool,
+        has_next: bool,
+        around: [Option<usize>; 2],
+    ) -> Vec<Path> {
+        let m = placement.component_count();
+        let mut logs = vec![[DVec3::ZERO; 3]; m];
+        let mut weight = vec![0.0; m];
+        for tri in per.iter().flatten() {
+            let Some(c) = placement.component_of(tri.corners[0] as usize) else {
+                continue;
+            };
+            let [a, b, d] = tri.corners.map(|v| x0[v as usize]);
+            let area = 0.5 * (b - a).cross(d - a).length();
+            for (l, r) in logs[c].iter_mut().zip(tri.r) {
+                *l += r * area;
+            }
+            weight[c] += area;
+        }
+        for (l, w) in logs.iter_mut().zip(&weight) {
+            if *w > 0.0 {
+                *l = l.map(|r| r / *w);
+            }
+        }
+        let mut spread = vec![0.0; m];
+        for tri in per.iter().flatten() {
+            let Some(c) = placement.component_of(tri.corners[0] as usize) else {
+                continue;
+            };
+            let [a, b, d] = tri.corners.map(|v| x0[v as usize]);
+            let area = 0.5 * (b - a).cross(d - a).length();
+            spread[c] += area * (tri.r[1] - logs[c][1]).length_squared();
+        }
+        let ca = placement.centroids(x0);
+        let cb = placement.centroids(x1);
+        let cp = around[0].map(|k| placement.centroids(&self.keys[k]));
+        let cn = around[1].map(|k| placement.centroids(&self.keys[k]));
+        (0..m)
+            .map(|c| {
+                let rot = |r: DVec3| {
+                    let angle = r.length();
+                    if angle > 0.0 {
+                        axis_angle_matrix(r / angle, angle)
+                    } else {
+                        DMat3::IDENTITY
+                    }
+                };
+                // Knots that exist: (rotation from key a, centroid).
+                let mut knots = vec![(rot(logs[c][1]), cb[c])];
+                if has_prev {
+                    knots.extend(cp.as_ref().map(|p| (rot(logs[c][0]), p[c])));
+                }
+                if has_next {
+                    knots.extend(cn.as_ref().map(|n| (rot(logs[c][2]), n[c])));
+                }
+                // Pivot: (I - R_j) p = c_j - R_j c_a for every knot j, least squares; along the
+                // segment's axis (where the turn to b leaves it free) it stays level with c_a.
+                let axis = logs[c][1].normalize_or_zero();
+                let along = DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
+                let mut lhs = DMat3::IDENTITY * PIVOT_PULL + along;
+                let mut rhs = ca[c] * PIVOT_PULL + along * ca[c];
+                for (r, cj) in &knots {
+                    let k = DMat3::IDENTITY - *r;
+                    lhs += k.transpose() * k;
+                    rhs += k.transpose() * (*cj - *r * ca[c]);
+                }
+                let p = lhs.inverse() * rhs;
+                let at = |r: DVec3, cj: DVec3| cj - rot(r) * (ca[c] - p);
+                let pb = at(logs[c][1], cb[c]);
+                let pp = match &cp {
+                    Some(cp) if has_prev => at(logs[c][0], cp[c]),
+                    _ => 2.0 * p - pb,
+                };
+                let pn = match &cn {
+                    Some(cn) if has_next => at(logs[c][2], cn[c]),
+                    _ => 2.0 * pb - p,
+                };
+                let scatter = (spread[c] / weight[c].max(f64::MIN_POSITIVE)).sqrt();
+                let angle = logs[c][1].length();
+                let rigid = if angle > 0.0 {
+                    let x = ((LOOSE_SPREAD - scatter / angle) / (LOOSE_SPREAD - RIGID_SPREAD))
+                        .clamp(0.0, 1.0);
+                    x * x * (3.0 - 2.0 * x)
+                } else {
+                    0.0
+                };
+                let cpc = match &cp {
+                    Some(cp) if has_prev => cp[c],
+                    _ => 2.0 * ca[c] - cb[c],
+                };
+                let cnc = match &cn {
+                    Some(cn) if has_next => cn[c],
+                    _ => 2.0 * cb[c] - ca[c],
+                };
+                Path {
+                    centroid: ca[c],
+                    pivot: [pp, p, pb, pn],
+                    log: logs[c],
+                    centroids: [cpc, ca[c], cb[c], cnc],
+                    rigid,
+                }
+            })
+            .collect()
     }
 
     /// The frame at u in [0, 1] of segment a (built anew: use [`SplineSegment`] for several).
@@ -358,9 +499,23 @@ impl SplineSegment {
             scatter(&mut rhs, tri.corners, v[0], v[1]);
         }
         let centroids: Vec<DVec3> = self
-            .centroids
+            .paths
             .iter()
-            .map(|k| k[0] * w[0] + k[1] * w[1] + k[2] * w[2] + k[3] * w[3])
+            .map(|path| {
+                let k = path.pivot;
+                // The pivot now; the centroid keeps its offset from the pivot, turned.
+                let p = k[0] * w[0] + k[1] * w[1] + k[2] * w[2] + k[3] * w[3];
+                let r = path.log[0] * w[0] + path.log[1] * w[2] + path.log[2] * w[3];
+                let angle = r.length();
+                let rot = if angle > 0.0 {
+                    axis_angle_matrix(r / angle, angle)
+                } else {
+                    DMat3::IDENTITY
+                };
+                let c = path.centroids;
+                let spline = c[0] * w[0] + c[1] * w[1] + c[2] * w[2] + c[3] * w[3];
+                spline.lerp(p + rot * (path.centroid - k[1]), path.rigid)
+            })
             .collect();
         self.placement
             .place(rhs, &centroids, |v| self.x[0][v].lerp(self.x[1][v], u))

@@ -41,7 +41,7 @@ fn samples_tween_to_valid_files_with_the_computed_frames() {
             assert_valid(&out);
             // Frames from the library, expanded to input vertices.
             let meshes = morph_meshes(&input);
-            let opts = TweenOptions::new(Method::Seed, Timing::Tweens(tweens));
+            let opts = TweenOptions::new(Method::Spline, Timing::Tweens(tweens));
             let (welded, frames) =
                 track_frames_welded(&meshes[0], &meshes[0].tracks[0], &opts).unwrap();
             let (base, targets) = read_targets(&out, 0, 0);
@@ -178,7 +178,7 @@ fn summary_unless_quiet() {
     let out = out_in(&dir, "a.glb");
     let r = run_ok(&["tween", s(&sample("bar_twist.glb")), "-o", s(&out)]);
     let err = String::from_utf8_lossy(&r.stderr);
-    assert!(err.contains("6 frames") && err.contains("seed"), "{err}");
+    assert!(err.contains("6 frames") && err.contains("spline"), "{err}");
     let r = run_ok(&[
         "tween",
         s(&sample("bar_twist.glb")),
