@@ -27,6 +27,16 @@ use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
+/// A rotation below this angle (radians) counts as none when its branch is chosen: its axis is
+/// the noise of single-precision positions (about 1e-7 relative).
+const NO_TURN: f64 = 1e-5;
+
+/// A component some triangle of which turns by more than this (radians, from key a to b)
+/// interpolates its rotations as a twist about the component's mean axis after a swing
+/// (see [`twist_swing`]); below it, as logs (the same to second order, and measured a little
+/// better on the morph-keyframe birds).
+const SPLIT_ABOVE: f64 = std::f64::consts::PI;
+
 /// Weight each triangle's term by its reference area.
 const WEIGHTED: bool = true;
 
@@ -61,6 +71,11 @@ struct Tri {
     g: [DVec3; 2],
     /// S_j g for j = prev, b, next and both gradients.
     sg: [[DVec3; 2]; 3],
+    /// Where the component is split (see [`SPLIT_ABOVE`]): the twist angles of prev, b, next
+    /// about `axis` (any number of turns), `r` then holding the swings' logs; otherwise `axis`
+    /// is zero and `r` the rotations' logs.
+    twist: [f64; 3],
+    axis: DVec3,
 }
 
 struct Path {
@@ -83,6 +98,32 @@ pub struct SplineSegment {
     paths: Vec<Path>,
     /// Positions of a and b, for vertices no valid triangle touches.
     x: [Vec<DVec3>; 2],
+}
+
+/// The rotation with log `r` as a twist about `axis` after a swing: R = twist(angle) swing,
+/// the swing's axis across `axis`; the twist angle as many turns as `r` makes about `axis`
+/// (the caller then makes the turns agree across neighbouring triangles). A part turned by
+/// nearly 360 degrees, whose own rotation axis the shear of its neighbours tilts anywhere,
+/// keeps a twist near 360 degrees about `axis` and a small swing, so it passes 180 degrees
+/// about `axis` half way.
+fn twist_swing(r: DVec3, axis: DVec3) -> (f64, DVec3) {
+    let q = glam::DQuat::from_scaled_axis(r);
+    let along = q.xyz().dot(axis);
+    let norm = (q.w * q.w + along * along).sqrt();
+    if norm < 1e-12 {
+        // A half-turn swing: no twist can be told apart.
+        return (0.0, r);
+    }
+    let principal = 2.0 * along.atan2(q.w);
+    let turns = ((r.dot(axis) - principal) / (2.0 * PI)).round();
+    let twist = glam::DQuat::from_xyzw(axis.x * along, axis.y * along, axis.z * along, q.w) / norm;
+    let swing = twist.conjugate() * q;
+    (principal + 2.0 * PI * turns, quat_log(swing))
+}
+
+/// `angle` plus the whole turns that bring it nearest to `target`.
+fn nearest_turn(angle: f64, target: f64) -> f64 {
+    angle + 2.0 * PI * ((target - angle) / (2.0 * PI)).round()
 }
 
 /// Hermite weights of (prev, a, b, next) at u in [0, 1] for knot times t.
@@ -115,7 +156,8 @@ pub fn is_loop(keys: &[Vec<DVec3>]) -> bool {
 /// The branch of log `r` (angle + 2 pi k about its axis) closest to `target`.
 fn closest_branch(r: DVec3, target: DVec3) -> DVec3 {
     let angle = r.length();
-    let axis = if angle > 1e-12 {
+    // Below NO_TURN the axis is the noise of single-precision positions: any axis will do.
+    let axis = if angle > NO_TURN {
         r / angle
     } else {
         target.try_normalize().unwrap_or(DVec3::X)
@@ -176,7 +218,10 @@ impl<'a> SplineTrack<'a> {
     /// neighbour it was reached from (Baxter, Barla & Anjyo 2008). A part that turns by 180
     /// degrees or more between two keys then turns the long way everywhere, instead of some
     /// triangles taking the short way and the surface crumpling.
-    fn consistent_branches(&self, per: &mut [Option<Tri>]) {
+    /// Returns the order the triangles were settled in, each with the one it was reached from
+    /// (u32::MAX for a region's first).
+    fn consistent_branches(&self, per: &mut [Option<Tri>]) -> Vec<(u32, u32)> {
+        let mut order = Vec::with_capacity(per.len());
         let m = per.len();
         let mut edges: std::collections::HashMap<(u32, u32), Vec<u32>> =
             std::collections::HashMap::with_capacity(3 * m / 2);
@@ -221,6 +266,7 @@ impl<'a> SplineTrack<'a> {
                     continue;
                 }
                 done[t as usize] = true;
+                order.push((t, from));
                 if from != u32::MAX {
                     let target = per[from as usize].as_ref().map_or(DVec3::ZERO, |x| x.r[1]);
                     if let Some(tri) = per[t as usize].as_mut() {
@@ -244,6 +290,7 @@ impl<'a> SplineTrack<'a> {
                 }
             }
         }
+        order
     }
 
     /// Prepare segment a (keys a and a + 1).
@@ -303,11 +350,13 @@ impl<'a> SplineTrack<'a> {
                         [sb * g[0], sb * g[1]],
                         [sn * g[0], sn * g[1]],
                     ],
+                    twist: [0.0; 3],
+                    axis: DVec3::X,
                 })
             })
             .collect();
         let mut per = per;
-        self.consistent_branches(&mut per);
+        let order = self.consistent_branches(&mut per);
         for tri in per.iter_mut().flatten() {
             let rb = tri.r[1];
             tri.r[0] = match prev {
@@ -344,9 +393,63 @@ impl<'a> SplineTrack<'a> {
             next.is_some(),
             [prev.map(|(k, _)| k), next.map(|(k, _)| k)],
         );
+        // Twist and swing per triangle about its component's axis; the twist angles (one
+        // number each) are unwrapped over the same settling order as the logs' branches.
+        let mut turn = vec![0.0f64; placement.component_count()];
+        for tri in per.iter().flatten() {
+            if let Some(c) = placement.component_of(tri.corners[0] as usize) {
+                turn[c] = turn[c].max(tri.r[1].length());
+            }
+        }
+        per.par_iter_mut().flatten().for_each(|tri| {
+            let c = placement.component_of(tri.corners[0] as usize);
+            if c.is_none_or(|c| turn[c] <= SPLIT_ABOVE) {
+                // Logs as they are (axis zero: see `frame`).
+                tri.axis = DVec3::ZERO;
+                return;
+            }
+            let axis = c
+                .map(|c| paths[c].log[1].normalize_or_zero())
+                .filter(|a| *a != DVec3::ZERO)
+                .unwrap_or(DVec3::X);
+            tri.axis = axis;
+            for j in 0..3 {
+                let (t, s) = twist_swing(tri.r[j], axis);
+                tri.twist[j] = t;
+                tri.r[j] = s;
+            }
+        });
+        for &(t, from) in &order {
+            let target = if from == u32::MAX {
+                0.0
+            } else {
+                per[from as usize].as_ref().map_or(0.0, |x| x.twist[1])
+            };
+            if let Some(tri) = per[t as usize].as_mut() {
+                tri.twist[1] = nearest_turn(tri.twist[1], target);
+            }
+        }
+        for tri in per.iter_mut().flatten() {
+            let phi = tri.twist[1];
+            tri.twist[0] = match prev {
+                Some((_, tp)) => nearest_turn(tri.twist[0], phi * ((tp - ta) / (tb - ta))),
+                None => -phi,
+            };
+            tri.twist[2] = match next {
+                Some((_, tn)) => nearest_turn(tri.twist[2], phi * ((tn - ta) / (tb - ta))),
+                None => 2.0 * phi,
+            };
+            if prev.is_none() {
+                tri.r[0] = -tri.r[1];
+            }
+            if next.is_none() {
+                tri.r[2] = 2.0 * tri.r[1];
+            }
+        }
+        let tris: Vec<Tri> = per.into_iter().flatten().collect();
         Ok(SplineSegment {
             t,
-            tris: per.into_iter().flatten().collect(),
+            tris,
             placement,
             paths,
             x: [x0.clone(), x1.clone()],
@@ -484,11 +587,18 @@ impl SplineSegment {
         let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
         for tri in &self.tris {
             let r = tri.r[0] * w[0] + tri.r[1] * w[2] + tri.r[2] * w[3];
-            let angle = r.length();
-            let rot = if angle > 0.0 {
-                axis_angle_matrix(r / angle, angle)
+            let rot = if tri.axis == DVec3::ZERO {
+                let angle = r.length();
+                if angle > 0.0 {
+                    axis_angle_matrix(r / angle, angle)
+                } else {
+                    DMat3::IDENTITY
+                }
             } else {
-                DMat3::IDENTITY
+                let twist = tri.twist[0] * w[0] + tri.twist[1] * w[2] + tri.twist[2] * w[3];
+                let q = glam::DQuat::from_axis_angle(tri.axis, twist)
+                    * glam::DQuat::from_scaled_axis(r);
+                DMat3::from_quat(q)
             };
             let v: [DVec3; 2] = std::array::from_fn(|k| {
                 rot * (tri.sg[0][k] * w[0]
