@@ -121,6 +121,24 @@ fn twist_swing(r: DVec3, axis: DVec3) -> (f64, DVec3) {
     (principal + 2.0 * PI * turns, quat_log(swing))
 }
 
+/// The values of prev and next (`v[0]`, `v[2]`; `v[1]` is b's, key a's is zero) on the branch
+/// `nearest` picks closest to the linear continuation of b's over their times, or mirrored
+/// (-b, 2b) where the neighbour is missing.
+fn around<T>(
+    v: &mut [T; 3],
+    [prev, next]: [Option<(usize, f64)>; 2],
+    [ta, tb]: [f64; 2],
+    nearest: impl Fn(T, T) -> T,
+) where
+    T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Neg<Output = T>,
+{
+    let b = v[1];
+    v[0] = prev.map_or(-b, |(_, tp)| nearest(v[0], b * ((tp - ta) / (tb - ta))));
+    v[2] = next.map_or(b * 2.0, |(_, tn)| {
+        nearest(v[2], b * ((tn - ta) / (tb - ta)))
+    });
+}
+
 /// `angle` plus the whole turns that bring it nearest to `target`.
 fn nearest_turn(angle: f64, target: f64) -> f64 {
     angle + 2.0 * PI * ((target - angle) / (2.0 * PI)).round()
@@ -358,15 +376,7 @@ impl<'a> SplineTrack<'a> {
         let mut per = per;
         let order = self.consistent_branches(&mut per);
         for tri in per.iter_mut().flatten() {
-            let rb = tri.r[1];
-            tri.r[0] = match prev {
-                Some((_, tp)) => closest_branch(tri.r[0], rb * ((tp - ta) / (tb - ta))),
-                None => -rb,
-            };
-            tri.r[2] = match next {
-                Some((_, tn)) => closest_branch(tri.r[2], rb * ((tn - ta) / (tb - ta))),
-                None => rb * 2.0,
-            };
+            around(&mut tri.r, [prev, next], [ta, tb], closest_branch);
         }
         let n = x0.len();
         // A = sum w g g^T: pass sqrt(w) g (the stored g carry w).
@@ -430,15 +440,7 @@ impl<'a> SplineTrack<'a> {
             }
         }
         for tri in per.iter_mut().flatten() {
-            let phi = tri.twist[1];
-            tri.twist[0] = match prev {
-                Some((_, tp)) => nearest_turn(tri.twist[0], phi * ((tp - ta) / (tb - ta))),
-                None => -phi,
-            };
-            tri.twist[2] = match next {
-                Some((_, tn)) => nearest_turn(tri.twist[2], phi * ((tn - ta) / (tb - ta))),
-                None => 2.0 * phi,
-            };
+            around(&mut tri.twist, [prev, next], [ta, tb], nearest_turn);
             if prev.is_none() {
                 tri.r[0] = -tri.r[1];
             }
