@@ -472,14 +472,19 @@ impl<'a> SplineTrack<'a> {
         around: [Option<usize>; 2],
     ) -> Vec<Path> {
         let m = placement.component_count();
+        // Each triangle with its component and reference area.
+        let members: Vec<(&Tri, usize, f64)> = per
+            .iter()
+            .flatten()
+            .filter_map(|tri| {
+                let c = placement.component_of(tri.corners[0] as usize)?;
+                let [a, b, d] = tri.corners.map(|v| x0[v as usize]);
+                Some((tri, c, 0.5 * (b - a).cross(d - a).length()))
+            })
+            .collect();
         let mut logs = vec![[DVec3::ZERO; 3]; m];
         let mut weight = vec![0.0; m];
-        for tri in per.iter().flatten() {
-            let Some(c) = placement.component_of(tri.corners[0] as usize) else {
-                continue;
-            };
-            let [a, b, d] = tri.corners.map(|v| x0[v as usize]);
-            let area = 0.5 * (b - a).cross(d - a).length();
+        for &(tri, c, area) in &members {
             for (l, r) in logs[c].iter_mut().zip(tri.r) {
                 *l += r * area;
             }
@@ -491,12 +496,7 @@ impl<'a> SplineTrack<'a> {
             }
         }
         let mut spread = vec![0.0; m];
-        for tri in per.iter().flatten() {
-            let Some(c) = placement.component_of(tri.corners[0] as usize) else {
-                continue;
-            };
-            let [a, b, d] = tri.corners.map(|v| x0[v as usize]);
-            let area = 0.5 * (b - a).cross(d - a).length();
+        for &(tri, c, area) in &members {
             spread[c] += area * (tri.r[1] - logs[c][1]).length_squared();
         }
         let ca = placement.centroids(x0);
