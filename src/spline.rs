@@ -101,11 +101,11 @@ pub struct SplineSegment {
 }
 
 /// The rotation with log `r` as a twist about `axis` after a swing: R = twist(angle) swing,
-/// the swing's axis across `axis`; the twist angle as many turns as `r` makes about `axis`
-/// (the caller then makes the turns agree across neighbouring triangles). A part turned by
-/// nearly 360 degrees, whose own rotation axis the shear of its neighbours tilts anywhere,
-/// keeps a twist near 360 degrees about `axis` and a small swing, so it passes 180 degrees
-/// about `axis` half way.
+/// the swing's axis across `axis`; the twist angle in (-2 pi, 2 pi], the caller choosing its
+/// whole turns so that they agree across neighbouring triangles. A part turned by nearly 360
+/// degrees, whose own rotation axis the shear of its neighbours tilts anywhere, then keeps a
+/// twist near 360 degrees about `axis` and a small swing, so it passes 180 degrees about
+/// `axis` half way.
 fn twist_swing(r: DVec3, axis: DVec3) -> (f64, DVec3) {
     let q = glam::DQuat::from_scaled_axis(r);
     let along = q.xyz().dot(axis);
@@ -114,11 +114,9 @@ fn twist_swing(r: DVec3, axis: DVec3) -> (f64, DVec3) {
         // A half-turn swing: no twist can be told apart.
         return (0.0, r);
     }
-    let principal = 2.0 * along.atan2(q.w);
-    let turns = ((r.dot(axis) - principal) / (2.0 * PI)).round();
     let twist = glam::DQuat::from_xyzw(axis.x * along, axis.y * along, axis.z * along, q.w) / norm;
     let swing = twist.conjugate() * q;
-    (principal + 2.0 * PI * turns, quat_log(swing))
+    (2.0 * along.atan2(q.w), quat_log(swing))
 }
 
 /// The values of prev and next (`v[0]`, `v[2]`; `v[1]` is b's, key a's is zero) on the branch
@@ -137,6 +135,16 @@ fn around<T>(
     v[2] = next.map_or(b * 2.0, |(_, tn)| {
         nearest(v[2], b * ((tn - ta) / (tb - ta)))
     });
+}
+
+/// The rotation matrix of log `r` (angle times axis).
+fn rotation(r: DVec3) -> DMat3 {
+    let angle = r.length();
+    if angle > 0.0 {
+        axis_angle_matrix(r / angle, angle)
+    } else {
+        DMat3::IDENTITY
+    }
 }
 
 /// `angle` plus the whole turns that bring it nearest to `target`.
@@ -324,20 +332,27 @@ impl<'a> SplineTrack<'a> {
             tb,
             next.map_or(2.0 * tb - ta, |p| p.1),
         ];
-        let per: Vec<Option<Tri>> = self
+        // Reference areas: each triangle's residual is weighted by its area (the continuous
+        // Poisson energy), in the right-hand side and in A below; components' mean rotations
+        // are weighted by it too.
+        let areas: Vec<f64> = self
             .triangles
             .par_iter()
             .map(|&[i, j, k]| {
+                let [a, b, c] = [i, j, k].map(|v| x0[v as usize]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .collect();
+        let weight = |area: f64| if WEIGHTED { area } else { 1.0 };
+        let per: Vec<Option<Tri>> = self
+            .triangles
+            .par_iter()
+            .zip(&areas)
+            .map(|(&[i, j, k], &area)| {
                 let v = frame(x0[i as usize], x0[j as usize], x0[k as usize])?;
                 let v_inv = v.inverse();
                 let g3 = gradient_operator(&v_inv);
-                // Each triangle's residual weighted by its reference area (the continuous
-                // Poisson energy), applied to the right-hand side here and to A below.
-                let area = 0.5
-                    * (x0[j as usize] - x0[i as usize])
-                        .cross(x0[k as usize] - x0[i as usize])
-                        .length();
-                let w = if WEIGHTED { area } else { 1.0 };
+                let w = weight(area);
                 let g = [g3[1] * w, g3[2] * w];
                 let rs = |key: usize| -> (DVec3, DMat3) {
                     let x = &self.keys[key];
@@ -380,15 +395,9 @@ impl<'a> SplineTrack<'a> {
         }
         let n = x0.len();
         // A = sum w g g^T: pass sqrt(w) g (the stored g carry w).
-        let grads = per.iter().map(|t| {
+        let grads = per.iter().zip(&areas).map(|(t, &area)| {
             t.as_ref().map(|t| {
-                let [a, b, c] = t.corners.map(|v| x0[v as usize]);
-                let w = if WEIGHTED {
-                    0.5 * (b - a).cross(c - a).length()
-                } else {
-                    1.0
-                };
-                let s = 1.0 / w.sqrt();
+                let s = 1.0 / weight(area).sqrt();
                 [-(t.g[0] + t.g[1]) * s, t.g[0] * s, t.g[1] * s]
             })
         });
@@ -396,11 +405,10 @@ impl<'a> SplineTrack<'a> {
         let placement = Placement::new(self.pattern, n, grads, &valid)?;
         let paths = self.paths(
             &per,
+            &areas,
             &placement,
             x0,
             x1,
-            prev.is_some(),
-            next.is_some(),
             [prev.map(|(k, _)| k), next.map(|(k, _)| k)],
         );
         // Twist and swing per triangle about its component's axis; the twist angles (one
@@ -435,11 +443,11 @@ impl<'a> SplineTrack<'a> {
             } else {
                 per[from as usize].as_ref().map_or(0.0, |x| x.twist[1])
             };
-            if let Some(tri) = per[t as usize].as_mut() {
+            if let Some(tri) = per[t as usize].as_mut().filter(|x| x.axis != DVec3::ZERO) {
                 tri.twist[1] = nearest_turn(tri.twist[1], target);
             }
         }
-        for tri in per.iter_mut().flatten() {
+        for tri in per.iter_mut().flatten().filter(|x| x.axis != DVec3::ZERO) {
             around(&mut tri.twist, [prev, next], [ta, tb], nearest_turn);
             if prev.is_none() {
                 tri.r[0] = -tri.r[1];
@@ -458,28 +466,26 @@ impl<'a> SplineTrack<'a> {
         })
     }
 
-    /// Each component's path (see the module): mean logs of its triangles (weighted by area)
-    /// and pivots at the knots; `around` are the keys of prev and next where they exist.
-    #[allow(clippy::too_many_arguments)]
+    /// Each component's path (see the module): mean logs of its triangles (weighted by their
+    /// `areas`, indexed like `per`) and pivots at the knots; `around` are the keys of prev and
+    /// next where they exist.
     fn paths(
         &self,
         per: &[Option<Tri>],
+        areas: &[f64],
         placement: &Placement,
         x0: &[DVec3],
         x1: &[DVec3],
-        has_prev: bool,
-        has_next: bool,
         around: [Option<usize>; 2],
     ) -> Vec<Path> {
         let m = placement.component_count();
         // Each triangle with its component and reference area.
         let members: Vec<(&Tri, usize, f64)> = per
             .iter()
-            .flatten()
-            .filter_map(|tri| {
-                let c = placement.component_of(tri.corners[0] as usize)?;
-                let [a, b, d] = tri.corners.map(|v| x0[v as usize]);
-                Some((tri, c, 0.5 * (b - a).cross(d - a).length()))
+            .zip(areas)
+            .filter_map(|(tri, &area)| {
+                let tri = tri.as_ref()?;
+                Some((tri, placement.component_of(tri.corners[0] as usize)?, area))
             })
             .collect();
         let mut logs = vec![[DVec3::ZERO; 3]; m];
@@ -505,22 +511,10 @@ impl<'a> SplineTrack<'a> {
         let cn = around[1].map(|k| placement.centroids(&self.keys[k]));
         (0..m)
             .map(|c| {
-                let rot = |r: DVec3| {
-                    let angle = r.length();
-                    if angle > 0.0 {
-                        axis_angle_matrix(r / angle, angle)
-                    } else {
-                        DMat3::IDENTITY
-                    }
-                };
                 // Knots that exist: (rotation from key a, centroid).
-                let mut knots = vec![(rot(logs[c][1]), cb[c])];
-                if has_prev {
-                    knots.extend(cp.as_ref().map(|p| (rot(logs[c][0]), p[c])));
-                }
-                if has_next {
-                    knots.extend(cn.as_ref().map(|n| (rot(logs[c][2]), n[c])));
-                }
+                let mut knots = vec![(rotation(logs[c][1]), cb[c])];
+                knots.extend(cp.as_ref().map(|p| (rotation(logs[c][0]), p[c])));
+                knots.extend(cn.as_ref().map(|n| (rotation(logs[c][2]), n[c])));
                 // Pivot: (I - R_j) p = c_j - R_j c_a for every knot j, least squares; along the
                 // segment's axis (where the turn to b leaves it free) it stays level with c_a.
                 let axis = logs[c][1].normalize_or_zero();
@@ -533,14 +527,14 @@ impl<'a> SplineTrack<'a> {
                     rhs += k.transpose() * (*cj - *r * ca[c]);
                 }
                 let p = lhs.inverse() * rhs;
-                let at = |r: DVec3, cj: DVec3| cj - rot(r) * (ca[c] - p);
+                let at = |r: DVec3, cj: DVec3| cj - rotation(r) * (ca[c] - p);
                 let pb = at(logs[c][1], cb[c]);
                 let pp = match &cp {
-                    Some(cp) if has_prev => at(logs[c][0], cp[c]),
+                    Some(cp) => at(logs[c][0], cp[c]),
                     _ => 2.0 * p - pb,
                 };
                 let pn = match &cn {
-                    Some(cn) if has_next => at(logs[c][2], cn[c]),
+                    Some(cn) => at(logs[c][2], cn[c]),
                     _ => 2.0 * pb - p,
                 };
                 let scatter = (spread[c] / weight[c].max(f64::MIN_POSITIVE)).sqrt();
@@ -553,11 +547,11 @@ impl<'a> SplineTrack<'a> {
                     0.0
                 };
                 let cpc = match &cp {
-                    Some(cp) if has_prev => cp[c],
+                    Some(cp) => cp[c],
                     _ => 2.0 * ca[c] - cb[c],
                 };
                 let cnc = match &cn {
-                    Some(cn) if has_next => cn[c],
+                    Some(cn) => cn[c],
                     _ => 2.0 * cb[c] - ca[c],
                 };
                 Path {
@@ -590,12 +584,7 @@ impl SplineSegment {
         for tri in &self.tris {
             let r = tri.r[0] * w[0] + tri.r[1] * w[2] + tri.r[2] * w[3];
             let rot = if tri.axis == DVec3::ZERO {
-                let angle = r.length();
-                if angle > 0.0 {
-                    axis_angle_matrix(r / angle, angle)
-                } else {
-                    DMat3::IDENTITY
-                }
+                rotation(r)
             } else {
                 let twist = tri.twist[0] * w[0] + tri.twist[1] * w[2] + tri.twist[2] * w[3];
                 let q = glam::DQuat::from_axis_angle(tri.axis, twist)
@@ -617,13 +606,7 @@ impl SplineSegment {
                 let k = path.pivot;
                 // The pivot now; the centroid keeps its offset from the pivot, turned.
                 let p = k[0] * w[0] + k[1] * w[1] + k[2] * w[2] + k[3] * w[3];
-                let r = path.log[0] * w[0] + path.log[1] * w[2] + path.log[2] * w[3];
-                let angle = r.length();
-                let rot = if angle > 0.0 {
-                    axis_angle_matrix(r / angle, angle)
-                } else {
-                    DMat3::IDENTITY
-                };
+                let rot = rotation(path.log[0] * w[0] + path.log[1] * w[2] + path.log[2] * w[3]);
                 let c = path.centroids;
                 let spline = c[0] * w[0] + c[1] * w[1] + c[2] * w[2] + c[3] * w[3];
                 spline.lerp(p + rot * (path.centroid - k[1]), path.rigid)
