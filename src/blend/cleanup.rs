@@ -6,7 +6,7 @@
 //! rotations.
 
 use super::legs::Leg;
-use super::rig::{Pose, Rig, UP};
+use super::rig::{flat, Pose, Rig, UP};
 use glam::{DMat4, DQuat, DVec3};
 
 /// Frames over which a contact's correction fades in before touchdown and out after lift-off.
@@ -28,7 +28,7 @@ pub fn ground_velocity(goals: &[LegGoal], times: &[f64]) -> DVec3 {
         for j in 0..times.len().saturating_sub(1) {
             if g.planted[j] && g.planted[j + 1] && times[j + 1] > times[j] {
                 let d = g.target[j + 1] - g.target[j];
-                sum += (d - UP * d.dot(UP)) / (times[j + 1] - times[j]);
+                sum += flat(d) / (times[j + 1] - times[j]);
                 count += 1;
             }
         }
@@ -53,7 +53,6 @@ pub fn pin(
     loop_shift: DVec3,
 ) -> Vec<DVec3> {
     let n = planted.len();
-    let flat = |v: DVec3| v - UP * v.dot(UP);
     let loop_time = times[n - 1] - times[0];
     let mut out = target.to_vec();
     let distinct = if looping && n > 1 { n - 1 } else { n };

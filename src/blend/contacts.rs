@@ -2,7 +2,7 @@
 //! moves vertically. Horizontal speed is not part of the test, so sliding can be measured on
 //! the contacts it finds.
 
-use super::legs::{Leg, FLOOR_PERCENTILE};
+use super::legs::{self, Leg};
 use super::track::Track;
 use serde::Serialize;
 
@@ -24,9 +24,7 @@ pub struct Contact {
 /// Per-frame contact flags of `leg` on `track`; `scale` is the character's leg length.
 pub fn flags(track: &Track, leg: &Leg, scale: f64) -> Vec<bool> {
     let e = leg.end();
-    let mut h: Vec<f64> = track.pos.iter().map(|p| p[e].y).collect();
-    h.sort_by(f64::total_cmp);
-    let floor = h[((h.len() - 1) as f64 * FLOOR_PERCENTILE) as usize];
+    let floor = legs::floor(track.pos.iter().map(|p| p[e].y).collect());
     let mut f: Vec<bool> = (0..track.len())
         .map(|i| {
             track.pos[i][e].y - floor <= HEIGHT_TOLERANCE * scale

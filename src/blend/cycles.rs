@@ -9,7 +9,7 @@
 //!   signed by which knee is ahead; a cycle starts at the widest stride with the left leg ahead.
 
 use super::legs::{Leg, Side};
-use super::rig::UP;
+use super::rig::flat;
 use super::track::Track;
 use glam::DVec3;
 use serde::Serialize;
@@ -49,15 +49,6 @@ pub const LANDING: f64 = 0.05;
 #[derive(Clone, Debug, Serialize)]
 pub struct Cycles {
     pub spans: Vec<(f64, f64)>,
-}
-
-impl Cycles {
-    /// Median period.
-    pub fn period(&self) -> f64 {
-        let mut p: Vec<f64> = self.spans.iter().map(|s| s.1).collect();
-        p.sort_by(f64::total_cmp);
-        p.get(p.len() / 2).copied().unwrap_or(0.0)
-    }
 }
 
 /// Find the cycles of `track` by `method`; `None` when no periodic leg motion is found.
@@ -129,9 +120,10 @@ pub fn detect(
         });
     }
     if method == CycleMethod::Legs {
+        let ground = ground_velocity(track, legs);
         let downs: Vec<Vec<f64>> = legs
             .iter()
-            .map(|l| touchdowns(track, l.end(), legs, scale))
+            .map(|l| touchdowns(track, l.end(), ground, scale))
             .collect();
         let spans: Vec<(f64, f64)> = downs[0]
             .windows(2)
@@ -171,36 +163,49 @@ pub fn detect(
     (!spans.is_empty()).then_some(Cycles { spans })
 }
 
-/// Touchdowns of the foot `end` on a clip that does not loop (seconds). A stance lasts from the
-/// foot's horizontal speed over the ground falling below [`STANCE_SPEED`] until it passes
-/// [`SWING_SPEED`], at least [`MIN_STANCE`]; every stance but the first has a touchdown (the
-/// first may have begun before the clip, and its first frames are often caught mid-swing). Its
-/// touchdown is the first moment from which the foot stays within [`LANDING`] of the stance's
-/// spot (median position): from positions, so a capture's jitter in speed does not move it.
-/// The ground's velocity is the median velocity of the lowest foot of `legs`: zero for a clip
-/// with root motion, the treadmill's for one in place. `scale` is the leg scale.
-pub fn touchdowns(track: &Track, end: usize, legs: &[Leg], scale: f64) -> Vec<f64> {
-    let n = track.len();
-    let flat = |v: DVec3| v - UP * v.dot(UP);
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let lowest: Vec<DVec3> = (0..n)
-        .map(|i| {
+/// Median of `v` (not empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Horizontal median of `points` (not empty), per axis.
+fn flat_median(points: &[DVec3]) -> DVec3 {
+    DVec3::new(
+        median(points.iter().map(|v| v.x).collect()),
+        0.0,
+        median(points.iter().map(|v| v.z).collect()),
+    )
+}
+
+/// Velocity of the ground under the feet: the median horizontal velocity of the lowest foot of
+/// `legs`; zero for a clip with root motion, the treadmill's for one in place.
+fn ground_velocity(track: &Track, legs: &[Leg]) -> DVec3 {
+    let lowest: Vec<DVec3> = (0..track.len())
+        .filter_map(|i| {
             let foot = legs
                 .iter()
                 .map(|l| l.end())
-                .min_by(|&a, &b| track.pos[i][a].y.total_cmp(&track.pos[i][b].y))
-                .unwrap_or(end);
-            flat(track.velocity(i, foot))
+                .min_by(|&a, &b| track.pos[i][a].y.total_cmp(&track.pos[i][b].y))?;
+            Some(flat(track.velocity(i, foot)))
         })
         .collect();
-    let ground = DVec3::new(
-        median(lowest.iter().map(|v| v.x).collect()),
-        0.0,
-        median(lowest.iter().map(|v| v.z).collect()),
-    );
+    if lowest.is_empty() {
+        DVec3::ZERO
+    } else {
+        flat_median(&lowest)
+    }
+}
+
+/// Touchdowns of the foot `end` on a clip that does not loop (seconds). A stance lasts from the
+/// foot's horizontal speed over the ground (moving at `ground`, see [`ground_velocity`])
+/// falling below [`STANCE_SPEED`] until it passes [`SWING_SPEED`], at least [`MIN_STANCE`];
+/// every stance but the first has a touchdown (the first may have begun before the clip, and
+/// its first frames are often caught mid-swing). Its touchdown is the first moment from which
+/// the foot stays within [`LANDING`] of the stance's spot (median position): from positions,
+/// so a capture's jitter in speed does not move it. `scale` is the leg scale.
+pub fn touchdowns(track: &Track, end: usize, ground: DVec3, scale: f64) -> Vec<f64> {
+    let n = track.len();
     let at = |i: usize| flat(track.pos[i][end]) - ground * track.time(i);
     let speed: Vec<f64> = (0..n)
         .map(|i| (flat(track.velocity(i, end)) - ground).length())
@@ -229,12 +234,7 @@ pub fn touchdowns(track: &Track, end: usize, legs: &[Leg], scale: f64) -> Vec<f6
     runs.retain(|&(f, e)| e - f >= min_run);
     let mut downs = Vec::new();
     for &(first, last) in runs.iter().skip(1) {
-        let p: Vec<DVec3> = (first..last).map(at).collect();
-        let spot = DVec3::new(
-            median(p.iter().map(|v| v.x).collect()),
-            0.0,
-            median(p.iter().map(|v| v.z).collect()),
-        );
+        let spot = flat_median(&(first..last).map(at).collect::<Vec<_>>());
         let mut k = first;
         while k > 0 && (at(k - 1) - spot).length() < LANDING * scale {
             k -= 1;

@@ -1,7 +1,7 @@
 //! Legs found from the skeleton alone: chains from a branching joint down to a leaf that comes
 //! near the floor. Works for bipeds and quadrupeds and for any joint naming.
 
-use super::rig::{Rig, UP};
+use super::rig::{flat, Rig, UP};
 use super::track::Track;
 use glam::DVec3;
 use serde::Serialize;
@@ -17,6 +17,12 @@ pub const SPAN_FRACTION: f64 = 0.2;
 pub const LENGTH_FRACTION: f64 = 0.6;
 /// Percentile of a joint's heights taken as its floor (robust to a frame through the ground).
 pub const FLOOR_PERCENTILE: f64 = 0.02;
+
+/// The floor of a joint from its `heights`: their [`FLOOR_PERCENTILE`] percentile.
+pub fn floor(mut heights: Vec<f64>) -> f64 {
+    heights.sort_by(f64::total_cmp);
+    heights[((heights.len() - 1) as f64 * FLOOR_PERCENTILE) as usize]
+}
 
 /// Hips closer than this fraction of the character's size to the body's mid-plane are centred.
 pub const SIDE_FRACTION: f64 = 0.02;
@@ -70,12 +76,12 @@ pub fn find(rig: &Rig, tracks: &[&Track], size: f64) -> (Vec<Leg>, DVec3) {
         chains.push(chain);
     }
     let floor_of = |j: usize| {
-        let mut h: Vec<f64> = tracks
-            .iter()
-            .flat_map(|t| t.pos.iter().map(move |p| p[j].y))
-            .collect();
-        h.sort_by(f64::total_cmp);
-        h[((h.len() - 1) as f64 * FLOOR_PERCENTILE) as usize]
+        floor(
+            tracks
+                .iter()
+                .flat_map(|t| t.pos.iter().map(move |p| p[j].y))
+                .collect(),
+        )
     };
     let floor = chains
         .iter()
@@ -152,7 +158,6 @@ pub fn find(rig: &Rig, tracks: &[&Track], size: f64) -> (Vec<Leg>, DVec3) {
 /// (in stance), so forward is against their mean low-phase velocity; failing that, the root's
 /// travel; failing that, glTF's +Z.
 fn forward(rig: &Rig, legs: &[Leg], tracks: &[&Track]) -> DVec3 {
-    let flat = |v: DVec3| v - UP * v.dot(UP);
     let mut sum = DVec3::ZERO;
     for t in tracks {
         for leg in legs {

@@ -8,7 +8,7 @@
 
 use super::contacts;
 use super::legs::Leg;
-use super::rig::UP;
+use super::rig::flat;
 use super::track::Track;
 use glam::DVec3;
 use serde::Serialize;
@@ -47,10 +47,6 @@ pub struct Figures {
     pub ground_speed: f64,
     /// Mean magnitude of the joints' third derivative of position, leg scales per second cubed.
     pub jerk: f64,
-}
-
-fn flat(v: DVec3) -> DVec3 {
-    v - UP * v.dot(UP)
 }
 
 /// Figures of `track`. A foot counts as planted where the contact test finds it planted or,

@@ -179,20 +179,28 @@ fn cycle_at(spans: &[(f64, f64)], looping: bool, k: usize) -> (f64, f64) {
     }
 }
 
-/// Joint positions of `poses`, one every `dt`; a looping motion (last pose = first) becomes a
-/// looping track without the repeated pose, so speeds and steps at its ends wrap as it plays.
+/// Joint positions of `poses`, one every `dt` (see [`track_of`]).
 fn positions_track(rig: &Rig, poses: &[Pose], dt: f64, looping: bool) -> Track {
-    let looping = looping && poses.len() > 2;
-    let poses = if looping {
-        &poses[..poses.len() - 1]
-    } else {
-        poses
-    };
+    track_of(
+        poses.iter().map(|p| rig.positions(p)).collect(),
+        dt,
+        looping,
+    )
+}
+
+/// A track of joint positions `pos`, one frame every `dt`; a looping motion (last frame =
+/// first) becomes a looping track without the repeated frame, so speeds and steps at its ends
+/// wrap as it plays.
+fn track_of(mut pos: Vec<Vec<DVec3>>, dt: f64, looping: bool) -> Track {
+    let looping = looping && pos.len() > 2;
+    if looping {
+        pos.pop();
+    }
     Track {
         start: 0.0,
         dt,
         looping,
-        pos: poses.iter().map(|p| rig.positions(p)).collect(),
+        pos,
     }
 }
 
@@ -278,7 +286,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
         .collect();
     let dt = 1.0 / fps;
     let before = positions_track(rig, &frames, dt, false);
-    let before_loop = positions_track(rig, &frames, dt, looping);
+    let before_loop = track_of(before.pos.clone(), dt, looping);
     // Where the sources plant each foot by weighted vote (the source of more weight decides,
     // either at 0.5), per output frame: the clean-up pins these and the figures measure
     // sliding there too (a naive blend's feet may never settle enough for the contact test).
@@ -286,12 +294,9 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
         let x = |p: bool| if p { 1.0 } else { 0.0 };
         (1.0 - w) * x(an_a.planted(l, ta)) + w * x(an_b.planted(l, tb)) >= 0.5
     };
-    let per_frame = |f: &dyn Fn(usize, f64, f64) -> bool| -> Vec<Vec<bool>> {
-        (0..ch.legs.len())
-            .map(|l| plan.iter().map(|p| f(l, p.1, p.2)).collect())
-            .collect()
-    };
-    let voted = per_frame(&vote);
+    let voted: Vec<Vec<bool>> = (0..ch.legs.len())
+        .map(|l| plan.iter().map(|p| vote(l, p.1, p.2)).collect())
+        .collect();
     let mut max_drop: f64 = 0.0;
     let strength = cleanup_strength(w);
     if opts.cleanup && !ch.legs.is_empty() && strength > 0.0 {

@@ -10,6 +10,11 @@ use std::collections::BTreeSet;
 /// World up: +Y in glTF and in the BVH files we read.
 pub const UP: DVec3 = DVec3::Y;
 
+/// The horizontal part of `v` (across [`UP`]).
+pub fn flat(v: DVec3) -> DVec3 {
+    v - UP * v.dot(UP)
+}
+
 /// A local transform.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Trs {
