@@ -12,8 +12,8 @@
 use crate::interpolate::{Method, Segment};
 use crate::keyframes::MorphMesh;
 use crate::solve::Pattern;
-use crate::spline::{is_loop, SplineTrack};
-use crate::tween::key_poses;
+use crate::spline::is_loop;
+use crate::tween::{key_poses, Timing, TweenOptions};
 use crate::weld::{bbox_diagonal, rms_rel, Welded};
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -82,19 +82,9 @@ pub fn evaluate(mesh: &MorphMesh, step: usize, methods: &[&str]) -> Result<MeshS
     let looped = is_loop(&kept_keys);
     let mut scores = Vec::new();
     for &method in methods {
-        let spline = match method {
-            "spline" => Some(SplineTrack::new(
-                &kept_keys,
-                &kept_times,
-                looped,
-                &pattern,
-                &welded.triangles,
-            )?),
-            _ => None,
-        };
         let mut errs = Vec::new();
-        let mut seed_cache: Option<(usize, Segment)> = None;
-        let mut spline_cache: Option<(usize, crate::spline::SplineSegment)> = None;
+        // The segment of kept keys a, a + 1 last built (dropped keys come in order).
+        let mut cache: Option<(usize, Segment)> = None;
         for &i in &dropped {
             let a = i / step; // index into kept
             let (ia, ib) = (kept[a], kept[a + 1]);
@@ -127,24 +117,26 @@ pub fn evaluate(mesh: &MorphMesh, step: usize, methods: &[&str]) -> Result<MeshS
                         })
                         .collect()
                 }
-                "seed" => {
-                    if seed_cache.as_ref().is_none_or(|(k, _)| *k != a) {
-                        let s = Segment::new(
-                            Method::Seed,
-                            keys[ia].clone(),
-                            keys[ib].clone(),
+                "seed" | "spline" => {
+                    if cache.as_ref().is_none_or(|(k, _)| *k != a) {
+                        let m = if method == "seed" {
+                            Method::Seed
+                        } else {
+                            Method::Spline
+                        };
+                        let opts = TweenOptions::new(m, Timing::Tweens(0));
+                        let s = Segment::for_key_pair(
+                            &opts,
+                            &kept_keys,
+                            &kept_times,
+                            a,
+                            a + 1,
                             Some(&pattern),
                             &welded.triangles,
                         )?;
-                        seed_cache = Some((a, s));
+                        cache = Some((a, s));
                     }
-                    seed_cache.as_ref().unwrap().1.frame(t)
-                }
-                "spline" => {
-                    if spline_cache.as_ref().is_none_or(|(k, _)| *k != a) {
-                        spline_cache = Some((a, spline.as_ref().expect("built above").segment(a)?));
-                    }
-                    spline_cache.as_ref().unwrap().1.frame(t)
+                    cache.as_ref().unwrap().1.frame(t)
                 }
                 m => bail!("unknown method {m:?} (known: {})", METHODS.join(", ")),
             };

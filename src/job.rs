@@ -63,7 +63,6 @@ impl Summary {
     }
 }
 
-/// Run the tween job. Nothing is written unless every step succeeds.
 /// The `--report` file's path and contents, if one was asked for.
 fn report_file(
     job: &TweenJob,
@@ -80,6 +79,8 @@ fn report_file(
     Ok(Some((path.clone(), serde_json::to_vec_pretty(&report)?)))
 }
 
+/// Run the tween job. Nothing is written unless every step succeeds (a `.usd*` output is
+/// written before its `--report`, whose figures exist only once the frames have streamed).
 pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let started = Instant::now();
     let format = write::format_for(&job.output)?;

@@ -128,38 +128,33 @@ pub fn plan(times: &[f64], opts: &TweenOptions) -> Vec<FrameAt> {
     if frames.len() < 2 {
         return frames;
     }
-    let first = frames[0];
-    let spacing = frames[1].time - first.time;
     let span = |f: &FrameAt| times[f.key_b] - times[f.key_a];
-    if before > 0.0 && spacing > 0.0 {
-        let n = (before / spacing + 1e-9).floor() as usize;
-        let ext: Vec<FrameAt> = (1..=n)
-            .rev()
+    // `seconds` more of the segment of `from`, at `spacing` (negative: backwards in time),
+    // nearest to `from` first.
+    let continued = |from: FrameAt, spacing: f64, seconds: f64| -> Vec<FrameAt> {
+        let n = (seconds.max(0.0) / spacing.abs() + 1e-9).floor() as usize;
+        (1..=n)
             .map(|k| {
-                let time = first.time - k as f64 * spacing;
+                let time = from.time + k as f64 * spacing;
                 FrameAt {
                     time,
-                    key_a: first.key_a,
-                    key_b: first.key_b,
-                    t: (time - times[first.key_a]) / span(&first),
+                    key_a: from.key_a,
+                    key_b: from.key_b,
+                    t: (time - times[from.key_a]) / span(&from),
                 }
             })
-            .collect();
+            .collect()
+    };
+    let spacing = frames[1].time - frames[0].time;
+    if spacing > 0.0 {
+        let mut ext = continued(frames[0], -spacing, before);
+        ext.reverse();
         frames.splice(0..0, ext);
     }
     let last = frames[frames.len() - 1];
     let spacing = last.time - frames[frames.len() - 2].time;
-    if after > 0.0 && spacing > 0.0 {
-        let n = (after / spacing + 1e-9).floor() as usize;
-        frames.extend((1..=n).map(|k| {
-            let time = last.time + k as f64 * spacing;
-            FrameAt {
-                time,
-                key_a: last.key_a,
-                key_b: last.key_b,
-                t: (time - times[last.key_a]) / span(&last),
-            }
-        }));
+    if spacing > 0.0 {
+        frames.extend(continued(last, spacing, after));
     }
     frames
 }
@@ -248,10 +243,7 @@ pub fn tween_mesh(
         ..Default::default()
     };
     let started = Instant::now();
-    let pattern = match opts.method {
-        Method::Seed | Method::Spline => Some(Pattern::new(welded.n, &welded.triangles)?),
-        Method::Linear => None,
-    };
+    let pattern = pattern_for(opts.method, &welded)?;
     stats.setup += started.elapsed();
     let base_normals: Option<Vec<DVec3>> = mesh.pose_normals(&vec![0.0; mesh.target_count]);
     let has_normal_targets = mesh
@@ -484,6 +476,14 @@ fn frame_deltas(
         .collect()
 }
 
+/// The solve's sparsity pattern of `welded`, for the methods that solve (`seed`, `spline`).
+fn pattern_for(method: Method, welded: &Welded) -> Result<Option<Pattern>> {
+    Ok(match method {
+        Method::Seed | Method::Spline => Some(Pattern::new(welded.n, &welded.triangles)?),
+        Method::Linear => None,
+    })
+}
+
 /// Welded positions of every frame of one track (for tests and benchmarks).
 pub fn track_frames_welded(
     mesh: &MorphMesh,
@@ -491,10 +491,7 @@ pub fn track_frames_welded(
     opts: &TweenOptions,
 ) -> Result<(Welded, Vec<Vec<DVec3>>)> {
     let welded = Welded::build(mesh);
-    let pattern = match opts.method {
-        Method::Seed | Method::Spline => Some(Pattern::new(welded.n, &welded.triangles)?),
-        Method::Linear => None,
-    };
+    let pattern = pattern_for(opts.method, &welded)?;
     let keys: Vec<Vec<DVec3>> = key_poses(mesh, track)
         .iter()
         .map(|k| welded.weld(k))
