@@ -3,7 +3,8 @@
 //! For each size, a closed tube bent 150 degrees and twisted 60 degrees between two keys:
 //! * symbolic analysis (weld, pattern, AMD ordering) once per mesh;
 //! * set-up of a key pair: per-triangle polar decomposition plus the numeric factorization;
-//! * per-frame time of `seed` and `linear` on one thread (median over frames at t in (0,1));
+//! * set-up of a `spline` segment with a full window of keys (8);
+//! * per-frame time of `seed`, `spline` and `linear` on one thread (median over frames at t in (0,1));
 //! * frames per second with every thread;
 //! * peak resident memory of the process so far;
 //! * where python3 with numpy/scipy is available, the same workload through
@@ -41,6 +42,9 @@ pub struct BenchRow {
     pub seed_frame_ms: f64,
     /// Fastest single seed frame (the VM's noise only ever adds time).
     pub seed_frame_min_ms: f64,
+    /// Set-up of a spline segment in the middle of 8 keys (the two keys alternating): the
+    /// polar decompositions of its whole window plus the numeric factorization.
+    pub spline_setup_s: f64,
     pub spline_frame_ms: f64,
     /// Fastest single spline frame.
     pub spline_frame_min_ms: f64,
@@ -146,6 +150,15 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
             let spline =
                 Segment::for_key_pair(&opts, &keys, &[0.0, 1.0], 0, 1, Some(&pattern), &triangles)?;
             (row.spline_frame_ms, row.spline_frame_min_ms) = time_frames(&spline);
+            let keys: Vec<Vec<DVec3>> = (0..8)
+                .map(|k| if k % 2 == 0 { x0.clone() } else { x1.clone() })
+                .collect();
+            let times: Vec<f64> = (0..8).map(f64::from).collect();
+            let t = Instant::now();
+            let middle =
+                Segment::for_key_pair(&opts, &keys, &times, 3, 4, Some(&pattern), &triangles)?;
+            row.spline_setup_s = t.elapsed().as_secs_f64();
+            std::hint::black_box(middle);
         }
         row.threads = rayon::current_num_threads();
         let count = (4 * row.threads).max(opts.frames);
@@ -240,19 +253,20 @@ fn run_peer(
 /// A markdown table of the rows.
 pub fn table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| triangles | vertices | nnz(L) | symbolic s | set-up s | seed ms/frame (1 thread, median / min) | spline ms/frame (median / min) | spline / seed (min) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| triangles | vertices | nnz(L) | symbolic s | set-up s | spline set-up s (8 keys) | seed ms/frame (1 thread, median / min) | spline ms/frame (median / min) | spline / seed (min) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let opt = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));
         let ratio =
             |p: Option<f64>, ours: f64| p.map_or("-".to_string(), |p| format!("{:.0}x", p / ours));
         s += &format!(
-            "| {} | {} | {} | {:.3} | {:.3} | {:.2} / {:.2} | {:.2} / {:.2} | {:.2}x | {:.3} | {:.0} ({} threads) | {:.0} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} / {:.2} | {:.2} / {:.2} | {:.2}x | {:.3} | {:.0} ({} threads) | {:.0} | {} | {} | {} | {} |\n",
             r.triangles,
             r.vertices,
             r.factor_nonzeros,
             r.symbolic_s,
             r.setup_s,
+            r.spline_setup_s,
             r.seed_frame_ms,
             r.seed_frame_min_ms,
             r.spline_frame_ms,

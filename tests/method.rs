@@ -329,7 +329,9 @@ fn eval_spline_beats_linear_and_positional_catmull_rom() {
             spline < poscr,
             "{file} step {step}: spline {spline} vs poscr {poscr}"
         );
-        if file == "Flamingo.glb" {
+        // Issue 5's goal (20% below poscr) holds except on Parrot at step 3, where four keys
+        // per wing beat leave every interpolant tried near poscr (see README, "Methods").
+        if (file, step) != ("Parrot.glb", 3) {
             assert!(
                 spline <= 0.8 * poscr,
                 "{file} step {step}: spline {spline} vs poscr {poscr}"
