@@ -170,11 +170,12 @@ pub struct SplineTrack<'a> {
 /// Per valid triangle of a segment.
 struct Tri {
     corners: [u32; 3],
-    /// Rotation logs relative to key a of keys prev, b, next.
+    /// Rotation logs relative to key a: prev's stand-in, b's, next's stand-in (see
+    /// [`Window`]; the stand-ins give the Hermite form its end tangents).
     r: [DVec3; 3],
     /// Gradient operator at corners 1 and 2 of the reference triangle (corner 0: minus sum).
     g: [DVec3; 2],
-    /// S_j g for j = prev, b, next and both gradients.
+    /// S_j g for j = prev's stand-in, b, next's stand-in and both gradients.
     sg: [[DVec3; 2]; 3],
     /// Where the component is split (see [`SPLIT_ABOVE`]): the twist angles of prev, b, next
     /// about `axis` (any number of turns), `r` then holding the swings' logs; otherwise `axis`
@@ -187,14 +188,15 @@ struct Path {
     centroid: DVec3,
     pivot: [DVec3; 4],
     log: [DVec3; 3],
-    /// Centroids at prev, a, b, next (the path of a component that does not turn as one).
+    /// Centroids at prev, a, b, next (prev and next: the stand-ins of [`Window`]; the path of a
+    /// component that does not turn as one).
     centroids: [DVec3; 4],
     /// How far the pivot path is followed, 0 to 1 (see [`RIGID_SPREAD`], [`LOOSE_SPREAD`]).
     rigid: f64,
 }
 
 pub struct SplineSegment {
-    /// Times of prev, a, b, next (prev and next may be mirrored or wrapped).
+    /// Times of the stand-ins for prev (one span before a), a, b and next (one span after b).
     t: [f64; 4],
     tris: Vec<Tri>,
     placement: Placement,
@@ -566,7 +568,8 @@ impl<'a> SplineTrack<'a> {
         // The other keys of the window, unrolled outward from a and b, reduced to the stand-ins
         // for prev and next; the components' mean logs at every window key on the way.
         let mut logs = vec![[DVec3::ZERO; MAX_WINDOW]; components];
-        let chunk = (per.len() / (4 * rayon::current_num_threads())).max(1024);
+        // Fixed chunks: the sums, and so the output, do not depend on the number of threads.
+        let chunk = 4096;
         let sums: Vec<std::collections::HashMap<usize, [DVec3; MAX_WINDOW]>> = per
             .par_chunks_mut(chunk)
             .zip(areas.par_chunks(chunk))
