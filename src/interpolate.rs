@@ -19,8 +19,8 @@ pub enum Method {
     Seed,
     /// Vertex lerp between consecutive keys (BlendShape baseline).
     Linear,
-    /// C1 spline across all keys in gradient space (rotation logs and stretches by Catmull-Rom,
-    /// same solve; each component turns about its pivot). The default.
+    /// C1 spline across all keys in gradient space (rotation logs and stretches by cubic Hermite
+    /// with C2-spline tangents, same solve; each component turns about its pivot). The default.
     Spline,
 }
 

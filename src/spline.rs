@@ -72,11 +72,9 @@ struct Window {
     times: Vec<f64>,
     /// Position of key a (key b follows it).
     a: usize,
-    /// Coefficients over the window's values of the stand-ins for prev and next in the Hermite
-    /// form of [`weights`] (knots one span before a and after b): v_prev = v_b - 2 h m_a and
-    /// v_next = v_a + 2 h m_b, h = t_b - t_a and m the tangents (d/dt).
-    prev: Vec<f64>,
-    next: Vec<f64>,
+    /// Coefficients over the window's values of the segment's tangents at a and at b, per unit
+    /// of its parameter u (h m, h = t_b - t_a and m the derivative in time).
+    tangents: [Vec<f64>; 2],
 }
 
 impl Window {
@@ -170,38 +168,36 @@ pub struct SplineTrack<'a> {
 /// Per valid triangle of a segment.
 struct Tri {
     corners: [u32; 3],
-    /// Rotation logs relative to key a: prev's stand-in, b's, next's stand-in (see
-    /// [`Window`]; the stand-ins give the Hermite form its end tangents).
+    /// Rotation logs relative to key a (whose own is zero): the tangent at a, b's log, the
+    /// tangent at b (per unit of u, see [`hermite`]).
     r: [DVec3; 3],
     /// Gradient operator at corners 1 and 2 of the reference triangle (corner 0: minus sum).
     g: [DVec3; 2],
-    /// S_j g for j = prev's stand-in, b, next's stand-in and both gradients.
+    /// S g for both gradients and S the stretch's tangent at a, b's stretch, its tangent at b
+    /// (key a's stretch is I).
     sg: [[DVec3; 2]; 3],
-    /// Where the component is split (see [`SPLIT_ABOVE`]): the twist angles of prev, b, next
-    /// about `axis` (any number of turns), `r` then holding the swings' logs; otherwise `axis`
-    /// is zero and `r` the rotations' logs.
+    /// Where the component is split (see [`SPLIT_ABOVE`]): the twist about `axis` (tangent at
+    /// a, b's angle with any number of turns, tangent at b), `r` then holding the swings' logs;
+    /// otherwise `axis` is zero and `r` the rotations' logs.
     twist: [f64; 3],
     axis: DVec3,
 }
 
+/// A component's path; each `[a, tangent at a, b, tangent at b]` (see [`hermite`]).
 struct Path {
     centroid: DVec3,
     pivot: [DVec3; 4],
+    /// Mean rotation log relative to key a (a's own is zero): `[tangent at a, b, tangent at b]`.
     log: [DVec3; 3],
-    /// Centroids at prev, a, b, next (prev and next: the stand-ins of [`Window`]; the path of a
-    /// component that does not turn as one).
+    /// Centroids (the path of a component that does not turn as one).
     centroids: [DVec3; 4],
     /// How far the pivot path is followed, 0 to 1 (see [`RIGID_SPREAD`], [`LOOSE_SPREAD`]).
     rigid: f64,
 }
 
 pub struct SplineSegment {
-    /// Times of the stand-ins for prev (one span before a), a, b and next (one span after b).
-    t: [f64; 4],
     tris: Vec<Tri>,
     placement: Placement,
-    /// Per component: its centroid at key a, its pivots at prev, a, b, next and its mean
-    /// rotation logs (relative to key a) at prev, b, next.
     paths: Vec<Path>,
     /// Positions of a and b, for vertices no valid triangle touches.
     x: [Vec<DVec3>; 2],
@@ -241,22 +237,21 @@ fn nearest_turn(angle: f64, target: f64) -> f64 {
     angle + 2.0 * PI * ((target - angle) / (2.0 * PI)).round()
 }
 
-/// Hermite weights of (prev, a, b, next) at u in [0, 1] for knot times t.
-pub fn weights(t: [f64; 4], u: f64) -> [f64; 4] {
+/// Cubic Hermite basis at u in [0, 1]: the weights of the value at a, the tangent at a, the
+/// value at b and the tangent at b (tangents per unit of u).
+fn hermite(u: f64) -> [f64; 4] {
     let (u2, u3) = (u * u, u * u * u);
-    let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
-    let h10 = u3 - 2.0 * u2 + u;
-    let h01 = -2.0 * u3 + 3.0 * u2;
-    let h11 = u3 - u2;
-    let span = t[2] - t[1];
-    let alpha = span / (t[2] - t[0]);
-    let beta = span / (t[3] - t[1]);
     [
-        -h10 * alpha,
-        h00 - h11 * beta,
-        h01 + h10 * alpha,
-        h11 * beta,
+        2.0 * u3 - 3.0 * u2 + 1.0,
+        u3 - 2.0 * u2 + u,
+        -2.0 * u3 + 3.0 * u2,
+        u3 - u2,
     ]
+}
+
+/// sum_j w_j v_j.
+fn hermite_point(w: [f64; 4], v: [DVec3; 4]) -> DVec3 {
+    v[0] * w[0] + v[1] * w[1] + v[2] * w[2] + v[3] * w[3]
 }
 
 /// True when a track's last key repeats its first (RMS difference below 1e-6 of the first key's
@@ -419,20 +414,13 @@ impl<'a> SplineTrack<'a> {
             full[from..=to].copy_from_slice(&tangent_weights(&times[from..=to], c - from));
             full
         };
-        let (ma, mb) = (tangent(ia), tangent(ia + 1));
         let h = times[ia + 1] - times[ia];
-        let unit = |c: usize| (0..n).map(move |i| if i == c { 1.0 } else { 0.0 });
-        let prev = unit(ia + 1)
-            .zip(&ma)
-            .map(|(e, m)| e - 2.0 * h * m)
-            .collect();
-        let next = unit(ia).zip(&mb).map(|(e, m)| e + 2.0 * h * m).collect();
+        let tangents = [ia, ia + 1].map(|c| tangent(c).iter().map(|m| h * m).collect());
         Window {
             keys,
             times,
             a: ia,
-            prev,
-            next,
+            tangents,
         }
     }
 
@@ -442,9 +430,6 @@ impl<'a> SplineTrack<'a> {
         let (x0, x1) = (&self.keys[a], &self.keys[b]);
         let win = self.window(a);
         let (ia, nw) = (win.a, win.keys.len());
-        let (ta, tb) = (self.times[a], self.times[b]);
-        // The stand-ins for prev and next sit one span out (see `Window::prev`).
-        let t = [2.0 * ta - tb, ta, tb, 2.0 * tb - ta];
         // Reference areas: each triangle's residual is weighted by its area (the continuous
         // Poisson energy), in the right-hand side and in A below; components' mean rotations
         // are weighted by it too.
@@ -472,27 +457,31 @@ impl<'a> SplineTrack<'a> {
             frame(x0[i as usize], x0[j as usize], x0[k as usize]).map(|v| v.inverse())
         };
         // First key b alone: its branches are made consistent across the surface before the
-        // other keys are unrolled from it.
-        let mut per: Vec<Option<Tri>> = self
+        // other keys are unrolled from it. Its stretch is kept aside for the tangents.
+        let (mut per, stretch_b): (Vec<Option<Tri>>, Vec<DMat3>) = self
             .triangles
             .par_iter()
             .zip(&areas)
             .map(|(&corners, &area)| {
-                let v_inv = inverse(corners)?;
+                let Some(v_inv) = inverse(corners) else {
+                    return (None, DMat3::IDENTITY);
+                };
                 let g3 = gradient_operator(&v_inv);
                 let w = weight(area);
                 let g = [g3[1] * w, g3[2] * w];
                 let (rb, sb) = rs(&v_inv, corners, b);
-                Some(Tri {
+                let tri = Tri {
                     corners,
                     r: [DVec3::ZERO, rb, DVec3::ZERO],
                     g,
-                    sg: [[sb * g[0], sb * g[1]]; 3],
+                    // Set with the tangents below.
+                    sg: [[DVec3::ZERO; 2]; 3],
                     twist: [0.0; 3],
                     axis: DVec3::ZERO,
-                })
+                };
+                (Some(tri), sb)
             })
-            .collect();
+            .unzip();
         let order = self.consistent_branches(&mut per);
         let n = x0.len();
         // A = sum w g g^T: pass sqrt(w) g (the stored g carry w).
@@ -565,8 +554,8 @@ impl<'a> SplineTrack<'a> {
                 tri.twist[1] = nearest_turn(tri.twist[1], target);
             }
         }
-        // The other keys of the window, unrolled outward from a and b, reduced to the stand-ins
-        // for prev and next; the components' mean logs at every window key on the way.
+        // The other keys of the window, unrolled outward from a and b, reduced to the tangents
+        // at a and b; the components' mean logs at every window key on the way.
         let mut logs = vec![[DVec3::ZERO; MAX_WINDOW]; components];
         // Fixed chunks: the sums, and so the output, do not depend on the number of threads.
         let chunk = 4096;
@@ -574,21 +563,24 @@ impl<'a> SplineTrack<'a> {
             .par_chunks_mut(chunk)
             .zip(areas.par_chunks(chunk))
             .zip(full_b.par_chunks(chunk))
-            .map(|((tris, areas), full_b)| {
+            .zip(stretch_b.par_chunks(chunk))
+            .map(|(((tris, areas), full_b), stretch_b)| {
                 let mut sums = std::collections::HashMap::new();
-                for ((tri, &area), &full_b) in tris.iter_mut().zip(areas).zip(full_b) {
+                let each = tris.iter_mut().zip(areas).zip(full_b).zip(stretch_b);
+                for (((tri, &area), &full_b), &sb) in each {
                     let Some(tri) = tri.as_mut() else { continue };
+                    // Recomputed rather than kept from the first pass (72 bytes a triangle).
                     let Some(v_inv) = inverse(tri.corners) else {
                         continue;
                     };
                     let mut log = [DVec3::ZERO; MAX_WINDOW];
                     let mut stretch = [DMat3::IDENTITY; MAX_WINDOW];
+                    (log[ia + 1], stretch[ia + 1]) = (full_b, sb);
                     for (w, &key) in win.keys.iter().enumerate() {
-                        if w != ia {
+                        if w != ia && w != ia + 1 {
                             (log[w], stretch[w]) = rs(&v_inv, tri.corners, key);
                         }
                     }
-                    log[ia + 1] = full_b;
                     unroll(&mut log[..nw], &win.times, ia, closest_branch);
                     if let Some(c) = placement.component_of(tri.corners[0] as usize) {
                         let sum: &mut [DVec3; MAX_WINDOW] =
@@ -608,22 +600,26 @@ impl<'a> SplineTrack<'a> {
                             };
                         }
                         unroll(&mut twist[..nw], &win.times, ia, nearest_turn);
+                        let [ta, tb] = &win.tangents;
                         tri.twist = [
-                            win.combine(&win.prev, |w| twist[w]),
+                            win.combine(ta, |w| twist[w]),
                             tri.twist[1],
-                            win.combine(&win.next, |w| twist[w]),
+                            win.combine(tb, |w| twist[w]),
                         ];
                     }
+                    let [ta, tb] = &win.tangents;
                     tri.r = [
-                        win.combine(&win.prev, |w| values[w]),
+                        win.combine(ta, |w| values[w]),
                         values[ia + 1],
-                        win.combine(&win.next, |w| values[w]),
+                        win.combine(tb, |w| values[w]),
                     ];
-                    let sp = win.combine(&win.prev, |w| stretch[w]);
-                    let sn = win.combine(&win.next, |w| stretch[w]);
-                    let sb = stretch[ia + 1];
                     let g = tri.g;
-                    tri.sg = [sp, sb, sn].map(|s| [s * g[0], s * g[1]]);
+                    tri.sg = [
+                        win.combine(ta, |w| stretch[w]),
+                        stretch[ia + 1],
+                        win.combine(tb, |w| stretch[w]),
+                    ]
+                    .map(|s| [s * g[0], s * g[1]]);
                 }
                 sums
             })
@@ -648,7 +644,6 @@ impl<'a> SplineTrack<'a> {
         let paths = self.paths(&win, &logs, &scatter, &placement);
         let tris: Vec<Tri> = per.into_iter().flatten().collect();
         Ok(SplineSegment {
-            t,
             tris,
             placement,
             paths,
@@ -699,26 +694,16 @@ impl<'a> SplineTrack<'a> {
                 } else {
                     0.0
                 };
-                let out = |coef: &[f64], f: &dyn Fn(usize) -> DVec3| win.combine(coef, f);
+                let [ta, tb] = &win.tangents;
+                let path = |f: &dyn Fn(usize) -> DVec3| {
+                    [f(ia), win.combine(ta, f), f(ia + 1), win.combine(tb, f)]
+                };
+                let [_, la, lb, lt] = path(&|j| log[j]);
                 Path {
                     centroid: ca,
-                    pivot: [
-                        out(&win.prev, &pivot),
-                        p,
-                        pivot(ia + 1),
-                        out(&win.next, &pivot),
-                    ],
-                    log: [
-                        out(&win.prev, &|j| log[j]),
-                        log[ia + 1],
-                        out(&win.next, &|j| log[j]),
-                    ],
-                    centroids: [
-                        out(&win.prev, &|j| centroids[j][c]),
-                        ca,
-                        centroids[ia + 1][c],
-                        out(&win.next, &|j| centroids[j][c]),
-                    ],
+                    pivot: path(&|j| if j == ia { p } else { pivot(j) }),
+                    log: [la, lb, lt],
+                    centroids: path(&|j| centroids[j][c]),
                     rigid,
                 }
             })
@@ -739,21 +724,21 @@ impl SplineSegment {
     }
 
     pub fn frame(&self, u: f64) -> Vec<DVec3> {
-        let w = weights(self.t, u);
+        let w = hermite(u);
         let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
         for tri in &self.tris {
-            let r = tri.r[0] * w[0] + tri.r[1] * w[2] + tri.r[2] * w[3];
+            let r = tri.r[0] * w[1] + tri.r[1] * w[2] + tri.r[2] * w[3];
             let rot = if tri.axis == DVec3::ZERO {
                 rotation(r)
             } else {
-                let twist = tri.twist[0] * w[0] + tri.twist[1] * w[2] + tri.twist[2] * w[3];
+                let twist = tri.twist[0] * w[1] + tri.twist[1] * w[2] + tri.twist[2] * w[3];
                 let q = glam::DQuat::from_axis_angle(tri.axis, twist)
                     * glam::DQuat::from_scaled_axis(r);
                 DMat3::from_quat(q)
             };
             let v: [DVec3; 2] = std::array::from_fn(|k| {
-                rot * (tri.sg[0][k] * w[0]
-                    + tri.g[k] * w[1]
+                rot * (tri.g[k] * w[0]
+                    + tri.sg[0][k] * w[1]
                     + tri.sg[1][k] * w[2]
                     + tri.sg[2][k] * w[3])
             });
@@ -763,13 +748,12 @@ impl SplineSegment {
             .paths
             .iter()
             .map(|path| {
-                let k = path.pivot;
                 // The pivot now; the centroid keeps its offset from the pivot, turned.
-                let p = k[0] * w[0] + k[1] * w[1] + k[2] * w[2] + k[3] * w[3];
-                let rot = rotation(path.log[0] * w[0] + path.log[1] * w[2] + path.log[2] * w[3]);
-                let c = path.centroids;
-                let spline = c[0] * w[0] + c[1] * w[1] + c[2] * w[2] + c[3] * w[3];
-                spline.lerp(p + rot * (path.centroid - k[1]), path.rigid)
+                let p = hermite_point(w, path.pivot);
+                let [la, lb, lt] = path.log;
+                let rot = rotation(hermite_point(w, [DVec3::ZERO, la, lb, lt]));
+                let spline = hermite_point(w, path.centroids);
+                spline.lerp(p + rot * (path.centroid - path.pivot[0]), path.rigid)
             })
             .collect();
         self.placement
@@ -803,14 +787,13 @@ mod tests {
     }
 
     #[test]
-    fn hermite_weights_interpolate_the_keys_and_sum_to_one() {
-        let t = [-1.0, 0.0, 1.0, 2.5];
+    fn hermite_basis_interpolates_the_keys_and_its_value_weights_sum_to_one() {
         for u in [0.0, 0.3, 0.7, 1.0] {
-            let w = weights(t, u);
-            assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            let w = hermite(u);
+            assert!((w[0] + w[2] - 1.0).abs() < 1e-12);
         }
-        assert_eq!(weights(t, 0.0), [0.0, 1.0, 0.0, 0.0]);
-        let w1 = weights(t, 1.0);
+        assert_eq!(hermite(0.0), [1.0, 0.0, 0.0, 0.0]);
+        let w1 = hermite(1.0);
         assert!(
             w1[0].abs() < 1e-15
                 && w1[1].abs() < 1e-15
