@@ -3,8 +3,9 @@
 //! For each size, a closed tube bent 150 degrees and twisted 60 degrees between two keys:
 //! * symbolic analysis (weld, pattern, AMD ordering) once per mesh;
 //! * set-up of a key pair: per-triangle polar decomposition plus the numeric factorization;
-//! * set-up of a `spline` segment with a full window of keys (8);
-//! * per-frame time of `seed`, `spline` and `linear` on one thread (median over frames at t in (0,1));
+//! * set-up of a `spline` segment in the middle of 8 keys (a full window: 4 keys besides its own);
+//! * per-frame time of `seed`, `spline` and `linear` on one thread (median over frames at t in (0,1)),
+//!   and spline / seed over frames timed back to back;
 //! * frames per second with every thread;
 //! * peak resident memory of the process so far;
 //! * where python3 with numpy/scipy is available, the same workload through
@@ -48,6 +49,9 @@ pub struct BenchRow {
     pub spline_frame_ms: f64,
     /// Fastest single spline frame.
     pub spline_frame_min_ms: f64,
+    /// Median over frames of spline time / seed time, the two timed back to back at the same
+    /// t (order alternating), so that the VM's drift between the two series cancels.
+    pub spline_seed_paired: f64,
     pub linear_frame_ms: f64,
     pub threads: usize,
     pub seed_fps_all_threads: f64,
@@ -123,20 +127,18 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
         let ts: Vec<f64> = (0..opts.frames)
             .map(|i| (i as f64 + 0.5) / opts.frames as f64)
             .collect();
+        let time_frame = |s: &Segment, t: f64| {
+            let start = Instant::now();
+            std::hint::black_box(s.frame(t));
+            start.elapsed().as_secs_f64() * 1e3
+        };
         // (median, minimum) milliseconds per frame.
         let time_frames = |s: &Segment| -> (f64, f64) {
             // Warm caches and clocks on a few frames first.
             for &t in ts.iter().take(5) {
                 std::hint::black_box(s.frame(t));
             }
-            let times: Vec<f64> = ts
-                .iter()
-                .map(|&t| {
-                    let start = Instant::now();
-                    std::hint::black_box(s.frame(t));
-                    start.elapsed().as_secs_f64() * 1e3
-                })
-                .collect();
+            let times: Vec<f64> = ts.iter().map(|&t| time_frame(s, t)).collect();
             let min = times.iter().copied().fold(f64::INFINITY, f64::min);
             (median(times), min)
         };
@@ -150,6 +152,20 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
             let spline =
                 Segment::for_key_pair(&opts, &keys, &[0.0, 1.0], 0, 1, Some(&pattern), &triangles)?;
             (row.spline_frame_ms, row.spline_frame_min_ms) = time_frames(&spline);
+            let ratios: Vec<f64> = ts
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| {
+                    if i % 2 == 0 {
+                        let seed_ms = time_frame(&seed, t);
+                        time_frame(&spline, t) / seed_ms
+                    } else {
+                        let spline_ms = time_frame(&spline, t);
+                        spline_ms / time_frame(&seed, t)
+                    }
+                })
+                .collect();
+            row.spline_seed_paired = median(ratios);
             let keys: Vec<Vec<DVec3>> = (0..8)
                 .map(|k| if k % 2 == 0 { x0.clone() } else { x1.clone() })
                 .collect();
@@ -253,14 +269,14 @@ fn run_peer(
 /// A markdown table of the rows.
 pub fn table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| triangles | vertices | nnz(L) | symbolic s | set-up s | spline set-up s (8 keys) | seed ms/frame (1 thread, median / min) | spline ms/frame (median / min) | spline / seed (min) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| triangles | vertices | nnz(L) | symbolic s | set-up s | spline set-up s (8 keys) | seed ms/frame (1 thread, median / min) | spline ms/frame (median / min) | spline / seed (min; paired median) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let opt = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));
         let ratio =
             |p: Option<f64>, ours: f64| p.map_or("-".to_string(), |p| format!("{:.0}x", p / ours));
         s += &format!(
-            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} / {:.2} | {:.2} / {:.2} | {:.2}x | {:.3} | {:.0} ({} threads) | {:.0} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} / {:.2} | {:.2} / {:.2} | {:.2}x; {:.2}x | {:.3} | {:.0} ({} threads) | {:.0} | {} | {} | {} | {} |\n",
             r.triangles,
             r.vertices,
             r.factor_nonzeros,
@@ -272,6 +288,7 @@ pub fn table(rows: &[BenchRow]) -> String {
             r.spline_frame_ms,
             r.spline_frame_min_ms,
             r.spline_frame_min_ms / r.seed_frame_min_ms,
+            r.spline_seed_paired,
             r.linear_frame_ms,
             r.seed_fps_all_threads,
             r.threads,
