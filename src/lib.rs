@@ -1,26 +1,18 @@
-//! inbetween: tween frames for glTF morph keyframes by the deformation-gradient method.
+//! inbetween: tween frames for glTF morph keyframes by the deformation-gradient method, and
+//! skeletal clip blending.
 //!
-//! The pipeline, one module per stage:
-//! [`read`] -> [`keyframes`] -> [`weld`] -> [`interpolate`] (with [`gradient`] and [`solve`])
-//! -> [`normals`] -> [`write`]; [`tween`] runs it for one mesh and [`job`] from file to file.
+//! The product path, one folder per command or format, each opening with its pipeline:
+//! [`gltf`] (read and write glTF) -> [`tween`] (keys -> frames -> morph animation) -> [`usd`]
+//! (point caches); [`blend`] (skeletal clips). Shared rooms: `output` (the one way files are
+//! written: staged, then renamed together) and `progress` (what the user sees while it runs).
+//! Developer tools apart: [`synth`], [`eval`], [`bench`].
 
-pub mod bench;
 pub mod blend;
-pub mod eval;
-pub mod gradient;
-pub mod interpolate;
-pub mod job;
-pub mod keyframes;
-pub mod normals;
-pub mod progress;
-pub mod read;
-pub mod report;
-pub mod solve;
-pub mod spline;
-pub mod synth;
+mod dev;
+pub mod gltf;
+mod output;
+mod progress;
 pub mod tween;
 pub mod usd;
-pub mod usdc;
-pub mod usdz;
-pub mod weld;
-pub mod write;
+
+pub use dev::{bench, eval, synth};

@@ -1,4 +1,5 @@
-//! Progress bar on stderr, drawn only when stderr is a terminal and `--quiet` is off.
+//! What the user sees while a command runs: a progress bar on stderr, drawn only when stderr is
+//! a terminal and `--quiet` is off, and the process figures of the summary line.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -41,4 +42,18 @@ impl Progress {
             b.finish_and_clear();
         }
     }
+}
+
+/// Peak resident set size of this process (VmHWM), in MiB; 0 where the system does not say.
+pub fn peak_rss_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .and_then(|k| k.parse::<f64>().ok())
+            })
+        })
+        .map_or(0.0, |kib| kib / 1024.0)
 }

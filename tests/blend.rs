@@ -4,29 +4,29 @@
 mod common;
 
 use common::*;
-use inbetween::blend::{analyze, bvh, cycles::CycleMethod, rig, track};
-use inbetween::read::Document;
-use inbetween::write::{self, Container};
+use inbetween::blend::{self, CycleMethod};
+use inbetween::gltf::Document;
+use inbetween::gltf::{self, Container};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// `file` with one more animation: clip `name` started half its duration later (looping).
 fn with_shifted_clip(file: &Path, name: &str, dir: &Path) -> (PathBuf, String) {
     let doc = Document::open(file).unwrap();
-    let (rig, clips) = rig::load_gltf(&doc).unwrap();
+    let (rig, clips) = blend::load_gltf(&doc).unwrap();
     let clip = clips.iter().find(|c| c.name == name).unwrap();
     let dur = clip.duration();
     let n = (dur * clip.key_rate).round() as usize;
     let times: Vec<f64> = (0..=n).map(|j| j as f64 * dur / n as f64).collect();
-    let poses: Vec<rig::Pose> = times
+    let poses: Vec<blend::Pose> = times
         .iter()
-        .map(|t| track::pose_unwrapped(&rig, clip, true, clip.start + 0.5 * dur + t))
+        .map(|t| blend::pose_unwrapped(&rig, clip, true, clip.start + 0.5 * dur + t))
         .collect();
     let shifted = format!("{name}_shifted");
     let out_path = dir.join("shifted.glb");
-    let mut out = write::begin(&doc, Container::Glb, &out_path).unwrap();
-    inbetween::blend::write::append_animation(&mut out, &shifted, &times, &poses, &clip.animated());
-    write::finish(out, Container::Glb, &out_path).unwrap();
+    let mut out = gltf::begin(&doc, Container::Glb, &out_path).unwrap();
+    blend::append_animation(&mut out, &shifted, &times, &poses, &clip.animated());
+    gltf::finish(out, Container::Glb, &out_path).unwrap();
     (out_path, shifted)
 }
 
@@ -113,24 +113,24 @@ fn planted_feet_slide_less_than_the_sources_and_a_fifth_of_a_naive_blend() {
 /// Largest difference between the blended clip at its keys and `source` at the warped times.
 fn distance_to_source(out: &Path, input: &Path, source: &str, start: f64) -> f64 {
     let doc_in = Document::open(input).unwrap();
-    let (rig, clips) = rig::load_gltf(&doc_in).unwrap();
+    let (rig, clips) = blend::load_gltf(&doc_in).unwrap();
     let src = clips.iter().find(|c| c.name == source).unwrap();
     let doc_out = Document::open(out).unwrap();
-    let (_, out_clips) = rig::load_gltf(&doc_out).unwrap();
+    let (_, out_clips) = blend::load_gltf(&doc_out).unwrap();
     let blended = out_clips.last().unwrap();
-    let size = track::size(&rig, &rig.rest);
+    let size = blend::size(&rig, &rig.rest);
     let times = blended.channels[0].times.clone();
     let mut worst: f64 = 0.0;
     for t in times {
         let got = blended.pose(&rig, t);
-        let want = track::pose_unwrapped(&rig, src, true, start + t);
+        let want = blend::pose_unwrapped(&rig, src, true, start + t);
         for (node, path) in src.animated() {
             let (g, w) = (got.local[node], want.local[node]);
             let d = match path {
-                rig::Path::Translation => (g.t - w.t).length() / size,
-                rig::Path::Rotation => (1.0 - g.r.dot(w.r).abs()).max(0.0).sqrt(),
-                rig::Path::Scale => (g.s - w.s).length(),
-                rig::Path::Weights => 0.0,
+                blend::Path::Translation => (g.t - w.t).length() / size,
+                blend::Path::Rotation => (1.0 - g.r.dot(w.r).abs()).max(0.0).sqrt(),
+                blend::Path::Scale => (g.s - w.s).length(),
+                blend::Path::Weights => 0.0,
             };
             worst = worst.max(d);
         }
@@ -180,7 +180,7 @@ fn clean_up_touches_only_the_legs() {
         .collect();
     let load = |p: &Path| {
         let doc = Document::open(p).unwrap();
-        let (rig, clips) = rig::load_gltf(&doc).unwrap();
+        let (rig, clips) = blend::load_gltf(&doc).unwrap();
         (rig, clips.last().unwrap().clone())
     };
     let ((rig, a), (_, b)) = (load(&with), load(&without));
@@ -200,12 +200,12 @@ fn clean_up_touches_only_the_legs() {
 }
 
 /// Strides of the foot `end` from its contacts: (touchdown, next touchdown). Written apart from
-/// `cycles::touchdowns` for captures that move over the floor (no ground velocity, no check of
+/// `blend::touchdowns` for captures that move over the floor (no ground velocity, no check of
 /// the other legs): a stance is where the foot's horizontal speed in the world is below 10% of
 /// its 98th percentile (until it passes 50% again), its touchdown the frame from which the foot
 /// stays within 5% of a leg of its median stance position. (The toe settles over about 0.1 s:
 /// within 3% of the mid-stance position and a 20% speed gives strides up to 2.6% shorter.)
-fn contact_strides(track: &track::Track, end: usize, leg: f64) -> Vec<(f64, f64)> {
+fn contact_strides(track: &blend::Track, end: usize, leg: f64) -> Vec<(f64, f64)> {
     let flat = |i: usize| {
         let p = track.pos[i][end];
         (p.x, p.z)
@@ -271,8 +271,8 @@ fn stride_periods_of_motion_capture_match_foot_contacts() {
         // first stance: no contact stride to compare with (its cycle, from the feet's forward
         // offsets, is 0.771 s).
     ] {
-        let (rig, clip) = bvh::read(&fx.join(file)).unwrap();
-        let (ch, an) = analyze::analyze(&rig, &[&clip], CycleMethod::Legs);
+        let (rig, clip) = blend::read_bvh(&fx.join(file)).unwrap();
+        let (ch, an) = blend::analyze(&rig, &[&clip], CycleMethod::Legs);
         let spans = &an[0].cycles.as_ref().expect("cycles found").spans;
         // A cycle starts as the first leg steps: its contact stride starting nearest the cycle.
         let strides = contact_strides(&an[0].track, ch.legs[0].end(), ch.scale);
@@ -307,7 +307,7 @@ fn fox_with_node0_clip(
 ) -> PathBuf {
     let doc = Document::open(fox).unwrap();
     let path = dir.join(file);
-    let mut out = write::begin(&doc, Container::Glb, &path).unwrap();
+    let mut out = gltf::begin(&doc, Container::Glb, &path).unwrap();
     let j = &mut out.json;
     let walk = &j["animations"][1];
     let rot = walk["channels"]
@@ -333,7 +333,7 @@ fn fox_with_node0_clip(
             "samplers": [sampler],
             "channels": [{"sampler": 0, "target": {"node": 0, "path": "rotation"}}]
         }));
-    write::finish(out, Container::Glb, &path).unwrap();
+    gltf::finish(out, Container::Glb, &path).unwrap();
     path
 }
 

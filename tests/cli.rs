@@ -5,8 +5,8 @@ mod common;
 
 use common::*;
 use glam::DVec3;
-use inbetween::interpolate::Method;
-use inbetween::read::Document;
+use inbetween::gltf::Document;
+use inbetween::tween::Method;
 use inbetween::tween::{track_frames_welded, Timing, TweenOptions};
 use std::path::{Path, PathBuf};
 

@@ -3,9 +3,9 @@
 mod common;
 
 use glam::{DMat3, DQuat, DVec3};
-use inbetween::interpolate::Method;
-use inbetween::keyframes::MorphMesh;
 use inbetween::synth::{self, KeyedMesh, KeyframeFile, Surface};
+use inbetween::tween::Method;
+use inbetween::tween::MorphMesh;
 use inbetween::tween::{track_frames_welded, Timing, TweenOptions};
 
 fn write_keys(surface: Surface, keys: Vec<Vec<DVec3>>) -> (tempfile::TempDir, std::path::PathBuf) {

@@ -2,7 +2,7 @@
 
 mod common;
 
-use inbetween::interpolate::Method;
+use inbetween::tween::Method;
 use inbetween::tween::{key_poses, schedule, track_frames_welded, Timing, TweenOptions};
 use serde_json::json;
 

@@ -3,7 +3,7 @@
 //! real capture; `blend` itself reads and writes glTF.
 
 use super::rig::{clip_from_channels, Channel, Clip, Interp, Path, Pose, Rig, Trs};
-use crate::read::at;
+use crate::gltf::at;
 use anyhow::Result;
 use glam::{DQuat, DVec3};
 use std::path::Path as FsPath;
@@ -20,32 +20,63 @@ pub fn read(path: &FsPath) -> Result<(Rig, Clip)> {
     parse(&text).map_err(|e| at(path, e))
 }
 
+/// The whitespace-separated words of a BVH file, each asked for by what it should be.
+struct Words<'a>(std::str::SplitWhitespace<'a>);
+
+impl<'a> Words<'a> {
+    fn next(&mut self, what: &str) -> Result<&'a str, String> {
+        self.0.next().ok_or_else(|| format!("ends before {what}"))
+    }
+}
+
+/// The joints of a BVH hierarchy: names, parents, offsets and the channels of each.
+#[derive(Default)]
+struct Hierarchy {
+    names: Vec<String>,
+    parent: Vec<Option<usize>>,
+    offsets: Vec<DVec3>,
+    dofs: Vec<(usize, Vec<Dof>)>,
+}
+
 fn parse(text: &str) -> Result<(Rig, Clip), String> {
-    let mut tokens = text.split_whitespace().peekable();
-    let mut next = |what: &str| tokens.next().ok_or_else(|| format!("ends before {what}"));
-    if next("HIERARCHY")? != "HIERARCHY" {
+    let mut words = Words(text.split_whitespace());
+    if words.next("HIERARCHY")? != "HIERARCHY" {
         return Err("not a BVH file (no HIERARCHY)".into());
     }
-    let mut names: Vec<String> = Vec::new();
-    let mut parent = Vec::new();
-    let mut offsets = Vec::new();
-    let mut dofs: Vec<(usize, Vec<Dof>)> = Vec::new();
+    let h = hierarchy(&mut words)?;
+    let channels = motion(&mut words, &h)?;
+    let n = h.names.len();
+    let rest = Pose {
+        local: h
+            .offsets
+            .iter()
+            .map(|&t| Trs { t, ..Trs::IDENTITY })
+            .collect(),
+        weights: vec![Vec::new(); n],
+    };
+    let rig = Rig::new(h.names, h.parent, rest).map_err(|e| e.to_string())?;
+    Ok((rig, clip_from_channels("motion".into(), 0, channels)))
+}
+
+/// The hierarchy, up to and including the word MOTION.
+fn hierarchy(words: &mut Words) -> Result<Hierarchy, String> {
+    let mut h = Hierarchy::default();
     let mut stack: Vec<usize> = Vec::new();
     let mut last: Option<usize> = None;
     loop {
-        let tok = next("MOTION")?;
+        let tok = words.next("MOTION")?;
         match tok {
             "ROOT" | "JOINT" | "End" => {
-                let name = next("a joint name")?.to_string();
+                let name = words.next("a joint name")?.to_string();
                 let name = if tok == "End" {
-                    format!("{}_end", last.map_or("", |l| names[l].as_str()))
+                    format!("{}_end", last.map_or("", |l| h.names[l].as_str()))
                 } else {
                     name
                 };
-                names.push(name);
-                parent.push(stack.last().copied());
-                offsets.push(DVec3::ZERO);
-                last = Some(names.len() - 1);
+                h.names.push(name);
+                h.parent.push(stack.last().copied());
+                h.offsets.push(DVec3::ZERO);
+                last = Some(h.names.len() - 1);
             }
             "{" => stack.push(last.ok_or("a brace before any joint")?),
             "}" => {
@@ -56,66 +87,70 @@ fn parse(text: &str) -> Result<(Rig, Clip), String> {
                 let j = last.ok_or("OFFSET outside a joint")?;
                 let mut v = [0.0; 3];
                 for x in &mut v {
-                    *x = num(next("an offset")?)?;
+                    *x = num(words.next("an offset")?)?;
                 }
-                offsets[j] = DVec3::from_array(v);
+                h.offsets[j] = DVec3::from_array(v);
             }
             "CHANNELS" => {
                 let j = last.ok_or("CHANNELS outside a joint")?;
-                let n: usize = next("a channel count")?
-                    .parse()
-                    .map_err(|_| "bad channel count")?;
-                let mut list = Vec::with_capacity(n);
-                for _ in 0..n {
-                    list.push(
-                        match next("a channel name")?.to_ascii_lowercase().as_str() {
-                            "xposition" => Dof::Pos(0),
-                            "yposition" => Dof::Pos(1),
-                            "zposition" => Dof::Pos(2),
-                            "xrotation" => Dof::Rot(DVec3::X),
-                            "yrotation" => Dof::Rot(DVec3::Y),
-                            "zrotation" => Dof::Rot(DVec3::Z),
-                            other => return Err(format!("unknown channel {other:?}")),
-                        },
-                    );
-                }
-                dofs.push((j, list));
+                h.dofs.push((j, channel_list(words)?));
             }
-            "MOTION" => break,
+            "MOTION" => return Ok(h),
             other => return Err(format!("unexpected {other:?} in the hierarchy")),
         }
     }
-    if next("Frames:")? != "Frames:" {
+}
+
+/// A CHANNELS line after its keyword: the count and the channel names.
+fn channel_list(words: &mut Words) -> Result<Vec<Dof>, String> {
+    let n: usize = words
+        .next("a channel count")?
+        .parse()
+        .map_err(|_| "bad channel count")?;
+    let mut list = Vec::with_capacity(n.min(6));
+    for _ in 0..n {
+        list.push(
+            match words.next("a channel name")?.to_ascii_lowercase().as_str() {
+                "xposition" => Dof::Pos(0),
+                "yposition" => Dof::Pos(1),
+                "zposition" => Dof::Pos(2),
+                "xrotation" => Dof::Rot(DVec3::X),
+                "yrotation" => Dof::Rot(DVec3::Y),
+                "zrotation" => Dof::Rot(DVec3::Z),
+                other => return Err(format!("unknown channel {other:?}")),
+            },
+        );
+    }
+    Ok(list)
+}
+
+/// The MOTION section: one channel per moved property of each joint, keyed every frame.
+fn motion(words: &mut Words, h: &Hierarchy) -> Result<Vec<Channel>, String> {
+    if words.next("Frames:")? != "Frames:" {
         return Err("no \"Frames:\" line".into());
     }
-    let frames: usize = next("a frame count")?
+    let frames: usize = words
+        .next("a frame count")?
         .parse()
         .map_err(|_| "bad frame count")?;
-    if next("Frame Time:")? != "Frame" || next("Frame Time:")? != "Time:" {
+    if words.next("Frame Time:")? != "Frame" || words.next("Frame Time:")? != "Time:" {
         return Err("no \"Frame Time:\" line".into());
     }
-    let dt = num(next("a frame time")?)?;
+    let dt = num(words.next("a frame time")?)?;
     if dt <= 0.0 || frames == 0 {
         return Err("no frames".into());
     }
-    let n = names.len();
-    let rest = Pose {
-        local: offsets
-            .iter()
-            .map(|&t| Trs { t, ..Trs::IDENTITY })
-            .collect(),
-        weights: vec![Vec::new(); n],
-    };
+    let n = h.names.len();
     let times: Vec<f64> = (0..frames).map(|f| f as f64 * dt).collect();
     let mut trans: Vec<Vec<f64>> = vec![Vec::new(); n];
     let mut rots: Vec<Vec<f64>> = vec![Vec::new(); n];
     for _ in 0..frames {
-        for (j, list) in &dofs {
-            let mut t = offsets[*j];
+        for (j, list) in &h.dofs {
+            let mut t = h.offsets[*j];
             let mut r = DQuat::IDENTITY;
             let mut moved = false;
             for d in list {
-                let v = num(next("frame values")?)?;
+                let v = num(words.next("frame values")?)?;
                 match *d {
                     Dof::Pos(c) => {
                         t[c] = v;
@@ -148,8 +183,7 @@ fn parse(text: &str) -> Result<(Rig, Clip), String> {
             }
         }
     }
-    let rig = Rig::new(names, parent, rest).map_err(|e| e.to_string())?;
-    Ok((rig, clip_from_channels("motion".into(), 0, channels)))
+    Ok(channels)
 }
 
 fn num(s: &str) -> Result<f64, String> {

@@ -9,6 +9,12 @@ use super::legs::Leg;
 use super::rig::{flat, Pose, Rig, UP};
 use glam::{DMat4, DQuat, DVec3};
 
+/// A thigh or shin shorter than this (scene units) is not bent by the IK.
+const MIN_BONE: f64 = 1e-12;
+/// A knee whose bones' cross product is below this fraction of their lengths' product (the
+/// sine of the knee angle, unitless) is straight: it bends about the sideways axis.
+const STRAIGHT_LEG: f64 = 1e-9;
+
 /// Frames over which a contact's correction fades in before touchdown and out after lift-off.
 pub const EASE_FRAMES: usize = 3;
 /// A leg is stretched to at most this fraction of its hip-knee-ankle length.
@@ -228,12 +234,13 @@ fn reach(rig: &Rig, leg: &Leg, pose: &mut Pose, world: &[DMat4], want: DVec3, fo
     let (pa, pb, pc) = (pos(a), pos(b), pos(c));
     let target = want - (pos(leg.end()) - pc);
     let (lab, lcb) = ((pb - pa).length(), (pc - pb).length());
-    if lab < 1e-12 || lcb < 1e-12 {
+    if lab < MIN_BONE || lcb < MIN_BONE {
         return;
     }
-    let lat = (target - pa)
-        .length()
-        .clamp((lab - lcb).abs() * 1.001 + 1e-12, MAX_STRETCH * (lab + lcb));
+    let lat = (target - pa).length().clamp(
+        (lab - lcb).abs() * 1.001 + MIN_BONE,
+        MAX_STRETCH * (lab + lcb),
+    );
     let ankle_world = rotation_of(&world[c]);
     // Knee: the interior angle that puts the ankle at distance `lat` from the hip.
     let current = (pa - pb).angle_between(pc - pb);
@@ -241,7 +248,7 @@ fn reach(rig: &Rig, leg: &Leg, pose: &mut Pose, world: &[DMat4], want: DVec3, fo
         .clamp(-1.0, 1.0)
         .acos();
     let mut axis = (pa - pb).cross(pc - pb);
-    if axis.length() < 1e-9 * lab * lcb {
+    if axis.length() < STRAIGHT_LEG * lab * lcb {
         axis = UP.cross(forward);
     }
     let r1 = DQuat::from_axis_angle(axis.normalize(), wanted - current);

@@ -14,10 +14,14 @@ use super::track::Track;
 use glam::DVec3;
 use serde::Serialize;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+/// How gait cycles are found (`--cycles`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CycleMethod {
+    /// From each foot's forward offset and touchdowns: any rig. The default.
+    #[default]
     Legs,
+    /// The seed paper's signed angle between the thighs (bipeds).
     Thigh,
 }
 

@@ -4,8 +4,8 @@
 use super::cycles::CycleMethod;
 use super::plan::{blend, BlendOptions, Report};
 use super::rig::{self, Clip, Path};
-use crate::read::Document;
-use crate::write::{self, OutputFormat};
+use crate::gltf::{self, Container, Document};
+use crate::output::{Format, Outputs};
 use anyhow::{bail, Result};
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -78,12 +78,11 @@ fn skeleton_nodes(clip: &Clip) -> BTreeSet<usize> {
 }
 
 pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
-    let container = match write::format_for(&job.output)? {
-        OutputFormat::Gltf(c) => c,
-        OutputFormat::Usd(_) => bail!(
+    let Some(container) = Container::of(Format::of(&job.output)?) else {
+        bail!(
             "{}: blend writes .gltf or .glb (a skeletal clip has no USD point-cache form here)",
             job.output.display()
-        ),
+        );
     };
     if !(0.0..=1.0).contains(&job.weight) {
         bail!("--weight {} is outside [0, 1]", job.weight);
@@ -135,13 +134,14 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
         .unwrap_or_else(|| format!("{}+{}", a.name, b.name));
     let animated: BTreeSet<(usize, Path)> = a.animated().union(&b.animated()).copied().collect();
     let channels = super::write::channels(&rig, &blended.poses, &animated);
-    let mut out = write::begin(&doc, container, &job.output)?;
+    let mut out = gltf::begin(&doc, container, &job.output)?;
     super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);
-    let report = match &job.report {
-        Some(path) => vec![(path.clone(), serde_json::to_vec_pretty(&blended.report)?)],
-        None => Vec::new(),
-    };
-    write::finish_with(out, container, &job.output, report)?;
+    let mut files = Outputs::new();
+    gltf::stage(out, container, &job.output, &mut files)?;
+    if let Some(path) = &job.report {
+        files.write(path, &serde_json::to_vec_pretty(&blended.report)?)?;
+    }
+    files.commit()?;
     Ok(BlendSummary {
         name,
         report: blended.report,

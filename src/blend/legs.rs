@@ -6,6 +6,10 @@ use super::track::Track;
 use glam::DVec3;
 use serde::Serialize;
 
+/// A summed foot velocity or root travel shorter than this (scene units per second, or scene
+/// units) gives no forward direction.
+const NO_DIRECTION: f64 = 1e-9;
+
 /// A chain end is a foot when its floor (a low percentile of its heights, [`FLOOR_PERCENTILE`])
 /// is within this fraction of the character's size of the lowest chain end's floor ...
 pub const LOW_FRACTION: f64 = 0.15;
@@ -172,14 +176,14 @@ fn forward(rig: &Rig, legs: &[Leg], tracks: &[&Track]) -> DVec3 {
             }
         }
     }
-    if sum.length() > 1e-9 {
+    if sum.length() > NO_DIRECTION {
         return sum.normalize();
     }
     let travel: DVec3 = tracks
         .iter()
         .map(|t| flat(t.pos[t.len() - 1][rig.root] - t.pos[0][rig.root]))
         .sum();
-    if travel.length() > 1e-9 {
+    if travel.length() > NO_DIRECTION {
         travel.normalize()
     } else {
         DVec3::Z

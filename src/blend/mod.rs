@@ -6,18 +6,26 @@
 //! [`measure`] -> [`write`]; [`plan`] runs the middle from clips to frames, [`job`] from file to
 //! file.
 
-pub mod align;
-pub mod analyze;
-pub mod bvh;
-pub mod cleanup;
-pub mod contacts;
-pub mod cycles;
-pub mod job;
-pub mod legs;
-pub mod measure;
-pub mod mix;
-pub mod plan;
-pub mod rig;
-pub mod timewarp;
-pub mod track;
-pub mod write;
+mod align;
+mod analyze;
+mod bvh;
+mod cleanup;
+mod contacts;
+mod cycles;
+mod job;
+mod legs;
+mod measure;
+mod mix;
+mod plan;
+mod rig;
+mod timewarp;
+mod track;
+mod write;
+
+pub use analyze::{analyze, Analysis, Character};
+pub use bvh::read as read_bvh;
+pub use cycles::{touchdowns, CycleMethod};
+pub use job::{run_blend, BlendJob, BlendSummary};
+pub use rig::{load_gltf, Clip, Path, Pose, Rig};
+pub use track::{pose_unwrapped, size, Track};
+pub use write::append_animation;

@@ -3,7 +3,7 @@
 //! and the figures of the report measured on the sources, a naive blend and the result.
 
 use super::align::{self, FloorTransform};
-use super::analyze::{analyze, Analysis};
+use super::analyze::{analyze, Analysis, Character};
 use super::cleanup::{self, LegGoal};
 use super::cycles::CycleMethod;
 use super::legs::Side;
@@ -29,7 +29,7 @@ impl BlendOptions {
     pub fn new(weight: f64) -> BlendOptions {
         BlendOptions {
             weight,
-            cycles: CycleMethod::Legs,
+            cycles: CycleMethod::default(),
             cleanup: true,
         }
     }
@@ -39,7 +39,6 @@ impl BlendOptions {
 pub struct Blended {
     pub times: Vec<f64>,
     pub poses: Vec<Pose>,
-    pub looping: bool,
     pub report: Report,
 }
 
@@ -130,13 +129,19 @@ pub fn cleanup_strength(w: f64) -> f64 {
     x * x * (3.0 - 2.0 * x)
 }
 
+/// Shortest duration (seconds) a clip is given where it divides: a clip of a single key time
+/// still has a frame spacing ...
+const MIN_DURATION: f64 = 1e-9;
+/// ... and a cycle of this period (seconds) when no cycle was found.
+const MIN_CYCLE: f64 = 1e-6;
+
 /// One clip's cycles as used: (start, period) per cycle, synchronised on a touchdown.
 fn cycles_used(clip: &Clip, an: &Analysis) -> Vec<(f64, f64)> {
     let mut spans = an
         .cycles
         .as_ref()
         .map(|c| c.spans.clone())
-        .unwrap_or_else(|| vec![(clip.start, clip.duration().max(1e-6))]);
+        .unwrap_or_else(|| vec![(clip.start, clip.duration().max(MIN_CYCLE))]);
     if an.looping() {
         spans.truncate(1);
     }
@@ -214,29 +219,40 @@ fn contact_flags(track: &Track, count: usize, leg: &super::legs::Leg, scale: f64
     f
 }
 
-/// Blend clip `a` with clip `b` (weight `opts.weight` on `b`).
-pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
-    let w = opts.weight;
-    let (ch, an) = analyze(rig, &[a, b], opts.cycles);
-    let (an_a, an_b) = (&an[0], &an[1]);
-    let spans_a = cycles_used(a, an_a);
-    let spans_b = cycles_used(b, an_b);
+/// The phase plan of a blend: per output frame (output time, time in A, time in B).
+struct Phase {
+    frames: Vec<(f64, f64, f64)>,
+    /// Duration of each blended cycle, seconds.
+    periods: Vec<f64>,
+    /// Matched contact events (time-warp knots) of the first cycle.
+    knots: usize,
+    duration: f64,
+    fps: f64,
+    looping: bool,
+}
+
+/// A cycle's phase must reach this far (seconds) past its period to count as the next cycle.
+const TIME_EPSILON: f64 = 1e-9;
+
+/// Pair the clips' cycles, warp each pair's phase by its matched contact events and sample the
+/// blended cycles at the faster clip's key rate.
+fn phase(a: &Clip, b: &Clip, an: [&Analysis; 2], spans: [&[(f64, f64)]; 2], w: f64) -> Phase {
+    let [an_a, an_b] = an;
+    let [spans_a, spans_b] = spans;
     let count = match (an_a.looping(), an_b.looping()) {
         (true, true) => 1,
         (true, false) => spans_b.len(),
         (false, true) => spans_a.len(),
         (false, false) => spans_a.len().min(spans_b.len()),
     };
-    let looping = an_a.looping() && an_b.looping();
     let fps = a.key_rate.max(b.key_rate);
-    // Phase plan: (output time, time in A, time in B) per frame.
-    let mut plan: Vec<(f64, f64, f64)> = Vec::new();
+    let mut frames: Vec<(f64, f64, f64)> = Vec::new();
     let mut periods = Vec::new();
     let mut knots = 0;
     let mut offset = 0.0;
     for k in 0..count {
-        let (sa, pa) = cycle_at(&spans_a, an_a.looping(), k);
-        let (sb, pb) = cycle_at(&spans_b, an_b.looping(), k);
+        let (sa, pa) = cycle_at(spans_a, an_a.looping(), k);
+        let (sb, pb) = cycle_at(spans_b, an_b.looping(), k);
         let warp = Warp::new(
             &timewarp::events(&an_a.contacts, sa, pa, an_a.looping()),
             &timewarp::events(&an_b.contacts, sb, pb, an_b.looping()),
@@ -251,22 +267,47 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
         for j in 0..=last {
             let u = j as f64 / m as f64;
             let (fa, fb) = warp.map(u);
-            plan.push((offset + u * period, sa + fa * pa, sb + fb * pb));
+            frames.push((offset + u * period, sa + fa * pa, sb + fb * pb));
         }
         periods.push(period);
         offset += period;
     }
-    let poses_a: Vec<Pose> = plan
-        .iter()
-        .map(|f| pose_unwrapped(rig, a, an_a.looping(), f.1))
-        .collect();
-    let mut poses_b: Vec<Pose> = plan
-        .iter()
-        .map(|f| pose_unwrapped(rig, b, an_b.looping(), f.2))
-        .collect();
-    // Space warp from the corresponding poses of the first cycle.
+    Phase {
+        frames,
+        periods,
+        knots,
+        duration: offset,
+        fps,
+        looping: an_a.looping() && an_b.looping(),
+    }
+}
+
+/// The two clips sampled on the phase plan, B carried onto A's floor frame by the closed-form
+/// fit of the first cycle's corresponding joint positions, and the world positions of both.
+struct Sources {
+    poses: [Vec<Pose>; 2],
+    world: [Vec<Vec<DVec3>>; 2],
+    fit: FloorTransform,
+    /// The skeleton's joints.
+    joints: Vec<usize>,
+}
+
+fn sources(rig: &Rig, clips: [&Clip; 2], an: [&Analysis; 2], phase: &Phase) -> Sources {
+    let sample = |k: usize, pick: fn(&(f64, f64, f64)) -> f64| -> Vec<Pose> {
+        phase
+            .frames
+            .iter()
+            .map(|f| pose_unwrapped(rig, clips[k], an[k].looping(), pick(f)))
+            .collect()
+    };
+    let poses_a = sample(0, |f| f.1);
+    let mut poses_b = sample(1, |f| f.2);
     let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.skeleton[j]).collect();
-    let first_cycle = plan.iter().take_while(|f| f.0 <= periods[0] + 1e-9).count();
+    let first_cycle = phase
+        .frames
+        .iter()
+        .take_while(|f| f.0 <= phase.periods[0] + TIME_EPSILON)
+        .count();
     let world_a: Vec<Vec<DVec3>> = poses_a.iter().map(|p| rig.positions(p)).collect();
     let (mut p, mut q) = (Vec::new(), Vec::new());
     for i in 0..first_cycle {
@@ -274,55 +315,72 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
         p.extend(joints.iter().map(|&j| world_a[i][j]));
         q.extend(joints.iter().map(|&j| wb[j]));
     }
-    let t = align::fit(&p, &q);
+    let fit = align::fit(&p, &q);
     for pose in &mut poses_b {
-        align::move_skeleton(rig, pose, &t.matrix());
+        align::move_skeleton(rig, pose, &fit.matrix());
     }
     let world_b: Vec<Vec<DVec3>> = poses_b.iter().map(|p| rig.positions(p)).collect();
-    let mut frames: Vec<Pose> = poses_a
-        .iter()
-        .zip(&poses_b)
-        .map(|(x, y)| mix(x, y, w))
-        .collect();
-    let dt = 1.0 / fps;
-    let before = positions_track(rig, &frames, dt, false);
-    let before_loop = track_of(before.pos.clone(), dt, looping);
-    // Where the sources plant each foot by weighted vote (the source of more weight decides,
-    // either at 0.5), per output frame: the clean-up pins these and the figures measure
-    // sliding there too (a naive blend's feet may never settle enough for the contact test).
-    let vote = |l: usize, ta: f64, tb: f64| {
-        let x = |p: bool| if p { 1.0 } else { 0.0 };
-        (1.0 - w) * x(an_a.planted(l, ta)) + w * x(an_b.planted(l, tb)) >= 0.5
-    };
-    let voted: Vec<Vec<bool>> = (0..ch.legs.len())
-        .map(|l| plan.iter().map(|p| vote(l, p.1, p.2)).collect())
-        .collect();
-    let mut max_drop: f64 = 0.0;
-    let strength = cleanup_strength(w);
-    if opts.cleanup && !ch.legs.is_empty() && strength > 0.0 {
+    Sources {
+        poses: [poses_a, poses_b],
+        world: [world_a, world_b],
+        fit,
+        joints,
+    }
+}
+
+/// What the clean-up works from: the character, the phase plan, the sources' foot positions,
+/// the blend before clean-up, and where the sources plant each foot by weighted vote.
+struct Cleanup<'a> {
+    rig: &'a Rig,
+    ch: &'a Character,
+    phase: &'a Phase,
+    src: &'a Sources,
+    before: &'a Track,
+    before_loop: &'a Track,
+    voted: &'a [Vec<bool>],
+    w: f64,
+}
+
+impl Cleanup<'_> {
+    /// Pin planted feet on `frames` (the blend before clean-up) by two-bone IK, repeating
+    /// until the contact test finds nothing new; returns the largest root drop needed.
+    fn run(&self, frames: &mut Vec<Pose>) -> f64 {
+        let (rig, ch, plan) = (self.rig, self.ch, &self.phase.frames);
+        let (strength, looping, dt) = (
+            cleanup_strength(self.w),
+            self.phase.looping,
+            1.0 / self.phase.fps,
+        );
         let times: Vec<f64> = plan.iter().map(|f| f.0).collect();
+        let before = self.before;
         let shift = before.pos[before.len() - 1][rig.root] - before.pos[0][rig.root];
         // Planted: where the sources plant the foot by vote, or the contact test finds it in
         // the blend (before, and after a first pass, so that every contact the test sees on the
         // result is pinned).
         let mut planted: Vec<Vec<bool>> = (0..ch.legs.len())
             .map(|l| {
-                let found = contact_flags(&before_loop, plan.len(), &ch.legs[l], ch.scale);
-                found.iter().zip(&voted[l]).map(|(x, y)| x | y).collect()
+                let found = contact_flags(self.before_loop, plan.len(), &ch.legs[l], ch.scale);
+                found
+                    .iter()
+                    .zip(&self.voted[l])
+                    .map(|(x, y)| x | y)
+                    .collect()
             })
             .collect();
+        let [world_a, world_b] = &self.src.world;
         let raw: Vec<Vec<DVec3>> = (0..ch.legs.len())
             .map(|l| {
                 let e = ch.legs[l].end();
                 (0..plan.len())
                     .map(|i| {
-                        let blended = world_a[i][e].lerp(world_b[i][e], w);
+                        let blended = world_a[i][e].lerp(world_b[i][e], self.w);
                         before.pos[i][e].lerp(blended, strength)
                     })
                     .collect()
             })
             .collect();
         let unclean = frames.clone();
+        let mut max_drop: f64 = 0.0;
         for pass in 0..CLEANUP_PASSES {
             let goals: Vec<LegGoal> = planted
                 .iter()
@@ -347,10 +405,10 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
                     LegGoal { target, ..g }
                 })
                 .collect();
-            frames = unclean.clone();
-            let drop = cleanup::clean(rig, &ch.legs, &goals, &mut frames, ch.forward, looping);
+            *frames = unclean.clone();
+            let drop = cleanup::clean(rig, &ch.legs, &goals, frames, ch.forward, looping);
             max_drop = drop.iter().copied().fold(0.0, f64::max);
-            let after = positions_track(rig, &frames, dt, looping);
+            let after = positions_track(rig, frames, dt, looping);
             let mut grew = false;
             for (l, p) in planted.iter_mut().enumerate() {
                 let found = contact_flags(&after, plan.len(), &ch.legs[l], ch.scale);
@@ -363,75 +421,87 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
                 break;
             }
         }
+        max_drop
     }
-    let back = t.scaled(w).matrix().inverse();
-    if t != FloorTransform::IDENTITY {
+}
+
+/// Blend clip `a` with clip `b` (weight `opts.weight` on `b`).
+pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
+    let w = opts.weight;
+    let (ch, an) = analyze(rig, &[a, b], opts.cycles);
+    let (an_a, an_b) = (&an[0], &an[1]);
+    let spans = [cycles_used(a, an_a), cycles_used(b, an_b)];
+    let phase = phase(a, b, [an_a, an_b], [&spans[0], &spans[1]], w);
+    let src = sources(rig, [a, b], [an_a, an_b], &phase);
+    let mut frames: Vec<Pose> = src.poses[0]
+        .iter()
+        .zip(&src.poses[1])
+        .map(|(x, y)| mix(x, y, w))
+        .collect();
+    let dt = 1.0 / phase.fps;
+    let before = positions_track(rig, &frames, dt, false);
+    let before_loop = track_of(before.pos.clone(), dt, phase.looping);
+    // Where the sources plant each foot by weighted vote (the source of more weight decides,
+    // either at 0.5), per output frame: the clean-up pins these and the figures measure
+    // sliding there too (a naive blend's feet may never settle enough for the contact test).
+    let vote = |l: usize, ta: f64, tb: f64| {
+        let x = |p: bool| if p { 1.0 } else { 0.0 };
+        (1.0 - w) * x(an_a.planted(l, ta)) + w * x(an_b.planted(l, tb)) >= 0.5
+    };
+    let voted: Vec<Vec<bool>> = (0..ch.legs.len())
+        .map(|l| phase.frames.iter().map(|p| vote(l, p.1, p.2)).collect())
+        .collect();
+    let mut max_drop: f64 = 0.0;
+    if opts.cleanup && !ch.legs.is_empty() && cleanup_strength(w) > 0.0 {
+        let cleanup = Cleanup {
+            rig,
+            ch: &ch,
+            phase: &phase,
+            src: &src,
+            before: &before,
+            before_loop: &before_loop,
+            voted: &voted,
+            w,
+        };
+        max_drop = cleanup.run(&mut frames);
+    }
+    if src.fit != FloorTransform::IDENTITY {
+        let back = src.fit.scaled(w).matrix().inverse();
         for pose in &mut frames {
             align::move_skeleton(rig, pose, &back);
         }
     }
-    // Figures, all at the output rate.
-    let fig = |track: &Track, expected: &[Vec<bool>]| {
-        measure::figures(track, rig.root, &joints, &ch.legs, ch.scale, expected)
+    let figures = Measured {
+        rig,
+        ch: &ch,
+        joints: &src.joints,
+        fps: phase.fps,
+        w,
     };
-    let source = |clip: &Clip, looping: bool| {
-        let n = ((clip.duration() * fps).round() as usize).max(1);
-        let poses: Vec<Pose> = (0..=n)
-            .map(|i| clip.pose(rig, clip.start + i as f64 * clip.duration() / n as f64))
-            .collect();
-        positions_track(rig, &poses, clip.duration().max(1e-9) / n as f64, looping)
+    let naive = figures.naive(a, b, phase.looping, &vote);
+    let after = figures.of(&positions_track(rig, &frames, dt, phase.looping), &voted);
+    let fig = [
+        figures.of(&figures.source(a, an_a.looping()), &[]),
+        figures.of(&figures.source(b, an_b.looping()), &[]),
+    ];
+    let source_jerk = (1.0 - w) * fig[0].jerk + w * fig[1].jerk;
+    let result = ResultReport {
+        duration: phase.duration,
+        frames: frames.len(),
+        fps: phase.fps,
+        looping: phase.looping,
+        cycle_periods: phase.periods.clone(),
+        warp_knots: phase.knots,
+        before_cleanup: figures.of(&before_loop, &voted),
+        after_cleanup: after,
+        jerk_ratio: if source_jerk > 0.0 {
+            after.jerk / source_jerk
+        } else {
+            1.0
+        },
+        max_root_drop: max_drop / ch.scale,
     };
-    let (track_a, track_b) = (source(a, an_a.looping()), source(b, an_b.looping()));
-    let (fig_a, fig_b) = (fig(&track_a, &[]), fig(&track_b, &[]));
-    let naive = {
-        let dur = (1.0 - w) * a.duration() + w * b.duration();
-        let n = ((dur * fps).round() as usize).max(1);
-        let at = |i: usize| {
-            let u = i as f64 / n as f64;
-            (a.start + u * a.duration(), b.start + u * b.duration())
-        };
-        let poses: Vec<Pose> = (0..=n)
-            .map(|i| mix(&a.pose(rig, at(i).0), &b.pose(rig, at(i).1), w))
-            .collect();
-        let expected: Vec<Vec<bool>> = (0..ch.legs.len())
-            .map(|l| (0..=n).map(|i| vote(l, at(i).0, at(i).1)).collect())
-            .collect();
-        fig(
-            &positions_track(rig, &poses, dur.max(1e-9) / n as f64, looping),
-            &expected,
-        )
-    };
-    let after_fig = fig(&positions_track(rig, &frames, dt, looping), &voted);
-    let source_jerk = (1.0 - w) * fig_a.jerk + w * fig_b.jerk;
-    let clip_report =
-        |clip: &Clip, an: &Analysis, spans: &[(f64, f64)], figures: Figures| ClipReport {
-            name: clip.name.clone(),
-            duration: clip.duration(),
-            looping: an.looping(),
-            cycles: an
-                .cycles
-                .as_ref()
-                .map(|c| {
-                    c.spans
-                        .iter()
-                        .map(|&(start, period)| CycleReport { start, period })
-                        .collect()
-                })
-                .unwrap_or_default(),
-            synced_start: spans[0].0,
-            contacts: ch
-                .legs
-                .iter()
-                .zip(&an.contacts)
-                .map(|(l, c)| ContactReport {
-                    foot: l.name.clone(),
-                    side: l.side,
-                    count: c.len(),
-                    intervals: c.iter().map(|c| (c.start, c.end)).collect(),
-                })
-                .collect(),
-            figures,
-        };
+    let [fig_a, fig_b] = fig;
     let report = Report {
         weight: w,
         cycle_method: opts.cycles,
@@ -449,33 +519,120 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
             })
             .collect(),
         clips: [
-            clip_report(a, an_a, &spans_a, fig_a),
-            clip_report(b, an_b, &spans_b, fig_b),
+            clip_report(&ch, a, an_a, &spans[0], fig_a),
+            clip_report(&ch, b, an_b, &spans[1], fig_b),
         ],
-        alignment_degrees: t.angle.to_degrees(),
-        alignment_translation: t.translation.to_array(),
+        alignment_degrees: src.fit.angle.to_degrees(),
+        alignment_translation: src.fit.translation.to_array(),
         naive,
-        result: ResultReport {
-            duration: offset,
-            frames: frames.len(),
-            fps,
-            looping,
-            cycle_periods: periods,
-            warp_knots: knots,
-            before_cleanup: fig(&before_loop, &voted),
-            after_cleanup: after_fig,
-            jerk_ratio: if source_jerk > 0.0 {
-                after_fig.jerk / source_jerk
-            } else {
-                1.0
-            },
-            max_root_drop: max_drop / ch.scale,
-        },
+        result,
     };
     Blended {
-        times: plan.iter().map(|f| f.0).collect(),
+        times: phase.frames.iter().map(|f| f.0).collect(),
         poses: frames,
-        looping,
         report,
+    }
+}
+
+/// The report's figures, all at the output rate.
+struct Measured<'a> {
+    rig: &'a Rig,
+    ch: &'a Character,
+    joints: &'a [usize],
+    fps: f64,
+    w: f64,
+}
+
+impl Measured<'_> {
+    fn of(&self, track: &Track, expected: &[Vec<bool>]) -> Figures {
+        let ch = self.ch;
+        measure::figures(
+            track,
+            self.rig.root,
+            self.joints,
+            &ch.legs,
+            ch.scale,
+            expected,
+        )
+    }
+
+    /// A source clip resampled at the output rate over its whole duration.
+    fn source(&self, clip: &Clip, looping: bool) -> Track {
+        let n = ((clip.duration() * self.fps).round() as usize).max(1);
+        let poses: Vec<Pose> = (0..=n)
+            .map(|i| clip.pose(self.rig, clip.start + i as f64 * clip.duration() / n as f64))
+            .collect();
+        positions_track(
+            self.rig,
+            &poses,
+            clip.duration().max(MIN_DURATION) / n as f64,
+            looping,
+        )
+    }
+
+    /// The two clips blended at normalised time: no sync, no alignment, no clean-up; its
+    /// sliding measured where the sources plant a foot by `vote`.
+    fn naive(
+        &self,
+        a: &Clip,
+        b: &Clip,
+        looping: bool,
+        vote: &dyn Fn(usize, f64, f64) -> bool,
+    ) -> Figures {
+        let w = self.w;
+        let dur = (1.0 - w) * a.duration() + w * b.duration();
+        let n = ((dur * self.fps).round() as usize).max(1);
+        let at = |i: usize| {
+            let u = i as f64 / n as f64;
+            (a.start + u * a.duration(), b.start + u * b.duration())
+        };
+        let poses: Vec<Pose> = (0..=n)
+            .map(|i| mix(&a.pose(self.rig, at(i).0), &b.pose(self.rig, at(i).1), w))
+            .collect();
+        let expected: Vec<Vec<bool>> = (0..self.ch.legs.len())
+            .map(|l| (0..=n).map(|i| vote(l, at(i).0, at(i).1)).collect())
+            .collect();
+        self.of(
+            &positions_track(self.rig, &poses, dur.max(MIN_DURATION) / n as f64, looping),
+            &expected,
+        )
+    }
+}
+
+/// A clip's part of the report: cycles found and used, contacts, figures.
+fn clip_report(
+    ch: &Character,
+    clip: &Clip,
+    an: &Analysis,
+    spans: &[(f64, f64)],
+    figures: Figures,
+) -> ClipReport {
+    ClipReport {
+        name: clip.name.clone(),
+        duration: clip.duration(),
+        looping: an.looping(),
+        cycles: an
+            .cycles
+            .as_ref()
+            .map(|c| {
+                c.spans
+                    .iter()
+                    .map(|&(start, period)| CycleReport { start, period })
+                    .collect()
+            })
+            .unwrap_or_default(),
+        synced_start: spans[0].0,
+        contacts: ch
+            .legs
+            .iter()
+            .zip(&an.contacts)
+            .map(|(l, c)| ContactReport {
+                foot: l.name.clone(),
+                side: l.side,
+                count: c.len(),
+                intervals: c.iter().map(|c| (c.start, c.end)).collect(),
+            })
+            .collect(),
+        figures,
     }
 }

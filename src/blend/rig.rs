@@ -1,11 +1,14 @@
 //! The character and its clips: every node of the scene as a joint (so any node a clip animates
 //! has a place), the skin in use marking the skeleton, and clips evaluated as local poses.
 
-use crate::read::{arr, Document};
+use crate::gltf::{arr, Document};
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 use std::collections::BTreeSet;
+
+/// Shortest key span (seconds) a channel's key rate is measured over.
+const MIN_SPAN: f64 = 1e-9;
 
 /// World up: +Y in glTF and in the BVH files we read.
 pub const UP: DVec3 = DVec3::Y;
@@ -445,7 +448,9 @@ pub fn clip_from_channels(name: String, index: usize, channels: Vec<Channel>) ->
     let key_rate = channels
         .iter()
         .filter(|c| c.times.len() > 1)
-        .map(|c| (c.times.len() - 1) as f64 / (c.times[c.times.len() - 1] - c.times[0]).max(1e-9))
+        .map(|c| {
+            (c.times.len() - 1) as f64 / (c.times[c.times.len() - 1] - c.times[0]).max(MIN_SPAN)
+        })
         .fold(0.0, f64::max);
     let (start, end) = if start.is_finite() {
         (start, end)

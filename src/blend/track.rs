@@ -7,6 +7,10 @@
 use super::rig::{Clip, Path, Pose, Rig};
 use glam::DVec3;
 
+/// Smallest size (scene units) a skeleton is given, so that a collapsed rest pose still scales
+/// every tolerance.
+const MIN_SIZE: f64 = 1e-9;
+
 /// Analysis rate floor, in samples per second (key rates above it are kept).
 pub const MIN_RATE: f64 = 120.0;
 
@@ -114,7 +118,7 @@ pub fn size(rig: &Rig, pose: &Pose) -> f64 {
     if ext.y > 0.25 * ext.max_element() {
         ext.y
     } else {
-        ext.max_element().max(1e-9)
+        ext.max_element().max(MIN_SIZE)
     }
 }
 

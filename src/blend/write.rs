@@ -3,7 +3,7 @@
 //! alignment or the clean-up moved. Nothing else in the document changes.
 
 use super::rig::{Path, Pose, Rig, Trs};
-use crate::write::Output;
+use crate::gltf::Output;
 use glam::DQuat;
 use serde_json::json;
 use std::collections::BTreeSet;

@@ -122,7 +122,7 @@ pub fn read_targets(path: &Path, mesh: usize, prim: usize) -> (Vec<[f32; 3]>, Ve
 }
 
 pub fn diag(points: &[glam::DVec3]) -> f64 {
-    inbetween::weld::bbox_diagonal(points)
+    inbetween::tween::bbox_diagonal(points)
 }
 
 /// Error and warning codes the validator reports for a file, with their counts.
@@ -173,13 +173,13 @@ pub fn run_tool(python: &Path, script: &str, args: &[&std::ffi::OsStr], what: &s
 }
 
 /// The morph meshes of a file, keys chosen as `--keys auto` does.
-pub fn morph_meshes(path: &Path) -> Vec<inbetween::keyframes::MorphMesh> {
-    let doc = inbetween::read::Document::open(path).unwrap();
-    let opts = inbetween::keyframes::KeyOptions {
-        source: inbetween::keyframes::KeySource::Auto,
+pub fn morph_meshes(path: &Path) -> Vec<inbetween::tween::MorphMesh> {
+    let doc = inbetween::gltf::Document::open(path).unwrap();
+    let opts = inbetween::tween::KeyOptions {
+        source: inbetween::tween::KeySource::Auto,
         animation: None,
     };
-    inbetween::keyframes::find_morph_meshes(&doc, &opts).unwrap()
+    inbetween::tween::find_morph_meshes(&doc, &opts).unwrap()
 }
 
 /// `inbetween tween INPUT -o OUTPUT ARGS... -q`, insisting on success.

@@ -15,23 +15,11 @@
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
 
-use crate::keyframes::{read_triangles, read_vec3};
-use crate::read::{arr, Document};
-use crate::tween::PrimitiveDelta;
+use crate::gltf::{arr, read_triangles, read_vec3, Document};
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 use std::collections::HashMap;
-use std::io::Write;
-use std::path::{Path, PathBuf};
-
-/// The three USD file formats, by extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum UsdFormat {
-    Usda,
-    Usdc,
-    Usdz,
-}
 
 /// One Mesh prim to write.
 pub struct MeshPrim {
@@ -57,10 +45,16 @@ pub struct Animation {
     pub normals: bool,
 }
 
+/// One frame of one primitive: deltas from its base points (and normals), in f32.
+pub struct Delta<'a> {
+    pub positions: &'a [[f32; 3]],
+    pub normals: Option<&'a [[f32; 3]]>,
+}
+
 /// Hands every frame of every processed mesh, in order, to the sink it is given:
 /// (processed mesh, frame index, per-primitive deltas).
 pub type FrameSource<'a> =
-    dyn FnMut(&mut dyn FnMut(usize, usize, &[PrimitiveDelta]) -> Result<()>) -> Result<()> + 'a;
+    dyn FnMut(&mut dyn FnMut(usize, usize, &[Delta]) -> Result<()>) -> Result<()> + 'a;
 
 /// Base + delta, in f32 as a glTF viewer adds them.
 pub fn add(base: &[[f32; 3]], delta: &[[f32; 3]]) -> Vec<[f32; 3]> {
@@ -382,190 +376,6 @@ pub fn extent(points: &[[f32; 3]]) -> [[f32; 3]; 2] {
     [lo, hi]
 }
 
-// ---------------------------------------------------------------------------------------------
-// .usda
-// ---------------------------------------------------------------------------------------------
-
-/// Write the stage as USDA text.
-pub fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
-    writeln!(out, "#usda 1.0")?;
-    writeln!(out, "(")?;
-    writeln!(out, "    defaultPrim = \"{}\"", stage.root)?;
-    writeln!(
-        out,
-        "    doc = \"Written by inbetween {}\"",
-        env!("CARGO_PKG_VERSION")
-    )?;
-    writeln!(out, "    endTimeCode = {}", stage.end)?;
-    writeln!(out, "    framesPerSecond = {}", stage.rate)?;
-    writeln!(out, "    metersPerUnit = 1")?;
-    writeln!(out, "    startTimeCode = {}", stage.start)?;
-    writeln!(out, "    timeCodesPerSecond = {}", stage.rate)?;
-    writeln!(out, "    upAxis = \"Y\"")?;
-    writeln!(out, ")")?;
-    writeln!(out)?;
-    writeln!(out, "def Xform \"{}\"", stage.root)?;
-    writeln!(out, "{{")?;
-    for c in &stage.children {
-        write_prim(c, out, 1, spool)?;
-    }
-    writeln!(out, "}}")?;
-    Ok(())
-}
-
-fn write_prim(prim: &Prim, out: &mut dyn Write, depth: usize, spool: &Spool) -> Result<()> {
-    let pad = "    ".repeat(depth);
-    match prim {
-        Prim::Xform {
-            name,
-            matrix,
-            children,
-        } => {
-            writeln!(out, "{pad}def Xform \"{name}\"")?;
-            writeln!(out, "{pad}{{")?;
-            if let Some(m) = matrix {
-                let rows: Vec<String> = m
-                    .chunks(4)
-                    .map(|r| format!("({}, {}, {}, {})", r[0], r[1], r[2], r[3]))
-                    .collect();
-                writeln!(
-                    out,
-                    "{pad}    matrix4d xformOp:transform = ( {} )",
-                    rows.join(", ")
-                )?;
-                writeln!(
-                    out,
-                    "{pad}    uniform token[] xformOpOrder = [\"xformOp:transform\"]"
-                )?;
-            }
-            for c in children {
-                write_prim(c, out, depth + 1, spool)?;
-            }
-            writeln!(out, "{pad}}}")?;
-        }
-        Prim::Mesh(m) => write_mesh(m, out, &pad, spool)?,
-    }
-    Ok(())
-}
-
-/// A float in its shortest round-trip form, in exponent notation when that is shorter
-/// (USD parses both back to the same f32).
-struct F(f32);
-
-impl std::fmt::Display for F {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        if a != 0.0 && !(1e-4..1e7).contains(&a) {
-            write!(f, "{:e}", self.0)
-        } else {
-            write!(f, "{}", self.0)
-        }
-    }
-}
-
-fn write_vec3s(out: &mut dyn Write, v: &[[f32; 3]]) -> std::io::Result<()> {
-    out.write_all(b"[")?;
-    for (i, p) in v.iter().enumerate() {
-        if i > 0 {
-            out.write_all(b", ")?;
-        }
-        write!(out, "({}, {}, {})", F(p[0]), F(p[1]), F(p[2]))?;
-    }
-    out.write_all(b"]")
-}
-
-fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str, spool: &Spool) -> Result<()> {
-    writeln!(out, "{pad}def Mesh \"{}\"", m.name)?;
-    writeln!(out, "{pad}{{")?;
-    let p = format!("{pad}    ");
-    if m.double_sided {
-        writeln!(out, "{p}uniform bool doubleSided = 1")?;
-    }
-    match &m.animation {
-        None => {
-            let e = extent(&m.points);
-            write!(out, "{p}float3[] extent = ")?;
-            write_vec3s(out, &e)?;
-            writeln!(out)?;
-        }
-        Some(a) => {
-            writeln!(out, "{p}float3[] extent.timeSamples = {{")?;
-            spool.copy(a, Attr::Extent, out)?;
-            writeln!(out, "{p}}}")?;
-        }
-    }
-    write!(out, "{p}int[] faceVertexCounts = [")?;
-    for i in 0..m.indices.len() / 3 {
-        out.write_all(if i == 0 { b"3" } else { b", 3" })?;
-    }
-    writeln!(out, "]")?;
-    write!(out, "{p}int[] faceVertexIndices = [")?;
-    for (i, v) in m.indices.iter().enumerate() {
-        if i > 0 {
-            out.write_all(b", ")?;
-        }
-        write!(out, "{v}")?;
-    }
-    writeln!(out, "]")?;
-    if let Some(n) = &m.normals {
-        match &m.animation {
-            Some(a) if a.normals => {
-                writeln!(out, "{p}normal3f[] normals (")?;
-                writeln!(out, "{p}    interpolation = \"vertex\"")?;
-                writeln!(out, "{p})")?;
-                writeln!(out, "{p}normal3f[] normals.timeSamples = {{")?;
-                spool.copy(a, Attr::Normals, out)?;
-                writeln!(out, "{p}}}")?;
-            }
-            _ => {
-                write!(out, "{p}normal3f[] normals = ")?;
-                write_vec3s(out, n)?;
-                writeln!(out, " (")?;
-                writeln!(out, "{p}    interpolation = \"vertex\"")?;
-                writeln!(out, "{p})")?;
-            }
-        }
-    }
-    match &m.animation {
-        None => {
-            write!(out, "{p}point3f[] points = ")?;
-            write_vec3s(out, &m.points)?;
-            writeln!(out)?;
-        }
-        Some(a) => {
-            writeln!(out, "{p}point3f[] points.timeSamples = {{")?;
-            spool.copy(a, Attr::Points, out)?;
-            writeln!(out, "{p}}}")?;
-        }
-    }
-    if let Some(c) = m.color {
-        writeln!(
-            out,
-            "{p}color3f[] primvars:displayColor = [({}, {}, {})] (",
-            F(c[0]),
-            F(c[1]),
-            F(c[2])
-        )?;
-        writeln!(out, "{p}    interpolation = \"constant\"")?;
-        writeln!(out, "{p})")?;
-    }
-    if let Some(st) = &m.st {
-        write!(out, "{p}texCoord2f[] primvars:st = [")?;
-        for (i, t) in st.iter().enumerate() {
-            if i > 0 {
-                out.write_all(b", ")?;
-            }
-            write!(out, "({}, {})", F(t[0]), F(t[1]))?;
-        }
-        writeln!(out, "] (")?;
-        writeln!(out, "{p}    interpolation = \"vertex\"")?;
-        writeln!(out, "{p})")?;
-    }
-    writeln!(out, "{p}uniform token subdivisionScheme = \"none\"")?;
-    writeln!(out, "{pad}}}")?;
-    Ok(())
-}
-
 /// The animated primitives of a stage: one entry per (processed mesh, primitive), with the
 /// base points and normals its frames' deltas apply to (instances share the entry).
 pub fn animated(stage: &Stage) -> Vec<&MeshPrim> {
@@ -603,7 +413,7 @@ pub struct Sample {
 pub fn for_each_sample(
     prims: &[&MeshPrim],
     k: usize,
-    deltas: &[PrimitiveDelta],
+    deltas: &[Delta],
     f: &mut dyn FnMut(&Animation, Sample) -> Result<()>,
 ) -> Result<()> {
     for m in prims {
@@ -611,8 +421,8 @@ pub fn for_each_sample(
             continue;
         };
         let d = &deltas[a.primitive];
-        let points = add(&m.points, &d.positions);
-        let normals = match (a.normals, &m.normals, &d.normals) {
+        let points = add(&m.points, d.positions);
+        let normals = match (a.normals, &m.normals, d.normals) {
             (true, Some(base), Some(n)) => Some(add(base, n)),
             _ => None,
         };
@@ -626,143 +436,4 @@ pub fn for_each_sample(
         )?;
     }
     Ok(())
-}
-
-/// Time-sampled attributes written per frame.
-#[derive(Clone, Copy)]
-pub enum Attr {
-    Extent,
-    Normals,
-    Points,
-}
-
-/// Sample text of every animated attribute, spooled to temporary files beside the output as
-/// frames arrive, then copied into the .usda (so no frame is held in memory).
-pub struct Spool {
-    files: HashMap<(usize, usize, u8), PathBuf>,
-}
-
-impl Spool {
-    fn path(&self, a: &Animation, attr: Attr) -> Option<&PathBuf> {
-        self.files.get(&(a.mesh, a.primitive, attr as u8))
-    }
-
-    fn copy(&self, a: &Animation, attr: Attr, out: &mut dyn Write) -> Result<()> {
-        if let Some(p) = self.path(a, attr) {
-            let mut f = std::fs::File::open(p)?;
-            std::io::copy(&mut f, out)?;
-        }
-        Ok(())
-    }
-
-    fn remove(&self) {
-        for p in self.files.values() {
-            let _ = std::fs::remove_file(p);
-        }
-    }
-}
-
-/// Run the frame source, writing each animated primitive's sample lines to spool files.
-fn spool_frames(
-    stage: &Stage,
-    path: &Path,
-    source: &mut FrameSource,
-    spool: &mut Spool,
-) -> Result<()> {
-    let prims = animated(stage);
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    let mut writers: HashMap<(usize, usize, u8), std::io::BufWriter<std::fs::File>> =
-        HashMap::new();
-    for m in &prims {
-        let a = m.animation.as_ref().expect("animated");
-        let attrs: &[Attr] = if a.normals {
-            &[Attr::Extent, Attr::Normals, Attr::Points]
-        } else {
-            &[Attr::Extent, Attr::Points]
-        };
-        for &attr in attrs {
-            let key = (a.mesh, a.primitive, attr as u8);
-            let file = dir.join(format!(
-                ".{name}.{}.{}_{}_{}.tmp",
-                std::process::id(),
-                a.mesh,
-                a.primitive,
-                attr as u8
-            ));
-            spool.files.insert(key, file.clone());
-            let f = std::fs::File::create(&file)
-                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
-            writers.insert(key, std::io::BufWriter::with_capacity(1 << 20, f));
-        }
-    }
-    let pad = "            ";
-    source(&mut |k, f, deltas| {
-        for_each_sample(&prims, k, deltas, &mut |a, s| {
-            let t = a.times[f];
-            let arrays = [
-                (Attr::Extent, Some(&s.extent[..])),
-                (Attr::Normals, s.normals.as_deref()),
-                (Attr::Points, Some(&s.points[..])),
-            ];
-            for (attr, values) in arrays {
-                if let Some(values) = values {
-                    let w = writers
-                        .get_mut(&(k, a.primitive, attr as u8))
-                        .expect("spool");
-                    write!(w, "{pad}{t}: ")?;
-                    write_vec3s(w, values)?;
-                    writeln!(w, ",")?;
-                }
-            }
-            Ok(())
-        })
-    })?;
-    for (_, mut w) in writers {
-        w.flush()?;
-    }
-    Ok(())
-}
-
-/// Write `stage` to `path` in `format`, atomically (temporary files beside it, renamed on
-/// success), taking the frames from `source` as they are computed.
-pub fn write_file(
-    stage: &Stage,
-    format: UsdFormat,
-    path: &Path,
-    source: &mut FrameSource,
-) -> Result<()> {
-    use crate::write::atomic_write_with;
-    match format {
-        UsdFormat::Usda => {
-            let mut spool = Spool {
-                files: HashMap::new(),
-            };
-            let result = spool_frames(stage, path, source, &mut spool)
-                .and_then(|_| atomic_write_with(path, |w| write_usda(stage, w, &spool)));
-            spool.remove();
-            result
-        }
-        UsdFormat::Usdc => atomic_write_with(path, |w| {
-            crate::usdc::write_usdc(stage, w, source).map(|_| ())
-        }),
-        UsdFormat::Usdz => {
-            // The root layer, as .usdc, in a temporary file beside the output, then stored.
-            let layer = path.with_extension(format!("usdz.{}.usdc.tmp", std::process::id()));
-            let result = (|| {
-                atomic_write_with(&layer, |w| {
-                    crate::usdc::write_usdc(stage, w, source).map(|_| ())
-                })?;
-                let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("stage");
-                atomic_write_with(path, |w| {
-                    crate::usdz::write_package(w, &[(format!("{stem}.usdc"), layer.clone())])
-                })
-            })();
-            let _ = std::fs::remove_file(&layer);
-            result
-        }
-    }
 }

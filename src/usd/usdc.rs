@@ -11,7 +11,7 @@
 //! laid out as `[offset to times][times][times rep][offset to reps][sample arrays][count][reps]`
 //! with every size known beforehand, so nothing is patched but the bootstrap.
 
-use crate::usd::{animated, extent, for_each_sample, FrameSource, MeshPrim, Prim, Stage};
+use super::stage::{animated, extent, for_each_sample, FrameSource, MeshPrim, Prim, Stage};
 use anyhow::Result;
 use std::collections::HashMap;
 use std::io::{Seek, SeekFrom, Write};

@@ -1,7 +1,7 @@
 //! Procedural test meshes and keyframe files: the inputs in `samples/`, the meshes of the
 //! tests and of `inbetween bench`. Everything here is deterministic.
 
-use crate::write::{self, BinBuilder, Container, Output};
+use crate::gltf::{self, Container, Output};
 use anyhow::Result;
 use glam::{DMat3, DQuat, DVec3};
 use serde_json::json;
@@ -204,10 +204,8 @@ pub struct KeyframeFile {
 
 impl KeyframeFile {
     pub fn write(&self, path: &Path) -> Result<()> {
-        let mut out = Output {
-            json: json!({ "asset": { "version": "2.0", "generator": "inbetween synth" } }),
-            bin: BinBuilder::new(),
-        };
+        let mut out =
+            Output::new(json!({ "asset": { "version": "2.0", "generator": "inbetween synth" } }));
         let mut meshes = Vec::new();
         let mut nodes = Vec::new();
         let mut materials = Vec::new();
@@ -306,7 +304,7 @@ impl KeyframeFile {
             Some("gltf") => Container::Gltf,
             _ => Container::Glb,
         };
-        write::finish(out, container, path)
+        gltf::finish(out, container, path)
     }
 }
 

@@ -22,9 +22,9 @@
 //! (angle + 2 pi k about its axis) closest to the linear continuation of the two keys inside
 //! it, outward from the segment's own log.
 
-use crate::gradient::{deformation, frame, gradient_operator, polar, quat_log};
-use crate::interpolate::axis_angle_matrix;
-use crate::solve::{scatter, Pattern, Placement};
+use super::gradient::{deformation, frame, gradient_operator, polar, quat_log, rotation};
+use super::solve::{scatter, Pattern, Placement};
+use super::weld::{bbox_diagonal, rms_rel};
 use anyhow::Result;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -222,16 +222,6 @@ fn twist_swing(r: DVec3, axis: DVec3) -> (f64, DVec3) {
     (2.0 * along.atan2(q.w), quat_log(swing))
 }
 
-/// The rotation matrix of log `r` (angle times axis).
-fn rotation(r: DVec3) -> DMat3 {
-    let angle = r.length();
-    if angle > 0.0 {
-        axis_angle_matrix(r / angle, angle)
-    } else {
-        DMat3::IDENTITY
-    }
-}
-
 /// `angle` plus the whole turns that bring it nearest to `target`.
 fn nearest_turn(angle: f64, target: f64) -> f64 {
     angle + 2.0 * PI * ((target - angle) / (2.0 * PI)).round()
@@ -258,8 +248,8 @@ fn hermite_point(w: [f64; 4], v: [DVec3; 4]) -> DVec3 {
 /// bounding-box diagonal): a cycle the spline wraps around.
 pub fn is_loop(keys: &[Vec<DVec3>]) -> bool {
     keys.len() > 2 && {
-        let d = crate::weld::bbox_diagonal(&keys[0]).max(f64::MIN_POSITIVE);
-        crate::weld::rms_rel(&keys[0], &keys[keys.len() - 1], d) < 1e-6
+        let d = bbox_diagonal(&keys[0]).max(f64::MIN_POSITIVE);
+        rms_rel(&keys[0], &keys[keys.len() - 1], d) < 1e-6
     }
 }
 
@@ -426,222 +416,28 @@ impl<'a> SplineTrack<'a> {
 
     /// Prepare segment a (keys a and a + 1).
     pub fn segment(&self, a: usize) -> Result<SplineSegment> {
-        let b = a + 1;
-        let (x0, x1) = (&self.keys[a], &self.keys[b]);
-        let win = self.window(a);
-        let (ia, nw) = (win.a, win.keys.len());
-        // Reference areas: each triangle's residual is weighted by its area (the continuous
-        // Poisson energy), in the right-hand side and in A below; components' mean rotations
-        // are weighted by it too.
-        let areas: Vec<f64> = self
-            .triangles
-            .par_iter()
-            .map(|&[i, j, k]| {
-                let [a, b, c] = [i, j, k].map(|v| x0[v as usize]);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .collect();
-        let weight = |area: f64| if WEIGHTED { area } else { 1.0 };
-        // Rotation log and stretch from key a to `key` of the triangle with frame inverse v_inv.
-        let rs = |v_inv: &DMat3, [i, j, k]: [u32; 3], key: usize| -> (DVec3, DMat3) {
-            let x = &self.keys[key];
-            let (q, s) = polar(&deformation(
-                v_inv,
-                x[i as usize],
-                x[j as usize],
-                x[k as usize],
-            ));
-            (quat_log(q), s)
-        };
-        let inverse = |[i, j, k]: [u32; 3]| {
-            frame(x0[i as usize], x0[j as usize], x0[k as usize]).map(|v| v.inverse())
-        };
+        let (x0, x1) = (&self.keys[a], &self.keys[a + 1]);
+        let build = Build::new(self, a);
         // First key b alone: its branches are made consistent across the surface before the
-        // other keys are unrolled from it. Its stretch is kept aside for the tangents.
-        let (mut per, stretch_b): (Vec<Option<Tri>>, Vec<DMat3>) = self
-            .triangles
-            .par_iter()
-            .zip(&areas)
-            .map(|(&corners, &area)| {
-                let Some(v_inv) = inverse(corners) else {
-                    return (None, DMat3::IDENTITY);
-                };
-                let g3 = gradient_operator(&v_inv);
-                let w = weight(area);
-                let g = [g3[1] * w, g3[2] * w];
-                let (rb, sb) = rs(&v_inv, corners, b);
-                let tri = Tri {
-                    corners,
-                    r: [DVec3::ZERO, rb, DVec3::ZERO],
-                    g,
-                    // Set with the tangents below.
-                    sg: [[DVec3::ZERO; 2]; 3],
-                    twist: [0.0; 3],
-                    axis: DVec3::ZERO,
-                };
-                (Some(tri), sb)
-            })
-            .unzip();
+        // other keys are unrolled from it.
+        let (mut per, stretch_b) = build.first_key();
         let order = self.consistent_branches(&mut per);
-        let n = x0.len();
-        // A = sum w g g^T: pass sqrt(w) g (the stored g carry w).
-        let grads = per.iter().zip(&areas).map(|(t, &area)| {
-            t.as_ref().map(|t| {
-                let s = 1.0 / weight(area).sqrt();
-                [-(t.g[0] + t.g[1]) * s, t.g[0] * s, t.g[1] * s]
-            })
-        });
-        let valid: Vec<[u32; 3]> = per.iter().flatten().map(|t| t.corners).collect();
-        let placement = Placement::new(self.pattern, n, grads, &valid)?;
-        let components = placement.component_count();
-        // Per component: area, area-weighted mean log to b, scatter about it, largest turn.
-        let mut area_of = vec![0.0; components];
-        let mut mean_b = vec![DVec3::ZERO; components];
-        let mut turn = vec![0.0f64; components];
-        let members = || {
-            per.iter().zip(&areas).filter_map(|(tri, &area)| {
-                let tri = tri.as_ref()?;
-                Some((tri, placement.component_of(tri.corners[0] as usize)?, area))
-            })
-        };
-        for (tri, c, area) in members() {
-            area_of[c] += area;
-            mean_b[c] += tri.r[1] * area;
-            turn[c] = turn[c].max(tri.r[1].length());
-        }
-        for (m, w) in mean_b.iter_mut().zip(&area_of) {
-            if *w > 0.0 {
-                *m /= *w;
-            }
-        }
-        let mut spread = vec![0.0; components];
-        for (tri, c, area) in members() {
-            spread[c] += area * (tri.r[1] - mean_b[c]).length_squared();
-        }
-        // Components some triangle of which turns past SPLIT_ABOVE: twist about the mean axis
-        // and swing; b's twists unwrapped over the settling order of the branches.
-        let axis: Vec<DVec3> = (0..components)
-            .map(|c| {
-                if turn[c] <= SPLIT_ABOVE {
-                    DVec3::ZERO
-                } else {
-                    mean_b[c].try_normalize().unwrap_or(DVec3::X)
-                }
-            })
-            .collect();
+        let placement = build.placement(&per)?;
+        let stats = Components::of(&per, &build.areas, &placement);
         // The branch-consistent logs to b, before the split replaces some by swings.
         let full_b: Vec<DVec3> = per
             .iter()
             .map(|t| t.as_ref().map_or(DVec3::ZERO, |t| t.r[1]))
             .collect();
-        per.par_iter_mut().flatten().for_each(|tri| {
-            if let Some(c) = placement.component_of(tri.corners[0] as usize) {
-                tri.axis = axis[c];
-                if tri.axis != DVec3::ZERO {
-                    let (twist, swing) = twist_swing(tri.r[1], tri.axis);
-                    tri.twist[1] = twist;
-                    tri.r[1] = swing;
-                }
-            }
-        });
-        for &(t, from) in &order {
-            let target = if from == u32::MAX {
-                0.0
-            } else {
-                per[from as usize].as_ref().map_or(0.0, |x| x.twist[1])
-            };
-            if let Some(tri) = per[t as usize].as_mut().filter(|x| x.axis != DVec3::ZERO) {
-                tri.twist[1] = nearest_turn(tri.twist[1], target);
-            }
-        }
-        // The other keys of the window, unrolled outward from a and b, reduced to the tangents
-        // at a and b; the components' mean logs at every window key on the way.
-        let mut logs = vec![[DVec3::ZERO; MAX_WINDOW]; components];
-        // Fixed chunks: the sums, and so the output, do not depend on the number of threads.
-        let chunk = 4096;
-        let sums: Vec<std::collections::HashMap<usize, [DVec3; MAX_WINDOW]>> = per
-            .par_chunks_mut(chunk)
-            .zip(areas.par_chunks(chunk))
-            .zip(full_b.par_chunks(chunk))
-            .zip(stretch_b.par_chunks(chunk))
-            .map(|(((tris, areas), full_b), stretch_b)| {
-                let mut sums = std::collections::HashMap::new();
-                let each = tris.iter_mut().zip(areas).zip(full_b).zip(stretch_b);
-                for (((tri, &area), &full_b), &sb) in each {
-                    let Some(tri) = tri.as_mut() else { continue };
-                    // Recomputed rather than kept from the first pass (72 bytes a triangle).
-                    let Some(v_inv) = inverse(tri.corners) else {
-                        continue;
-                    };
-                    let mut log = [DVec3::ZERO; MAX_WINDOW];
-                    let mut stretch = [DMat3::IDENTITY; MAX_WINDOW];
-                    (log[ia + 1], stretch[ia + 1]) = (full_b, sb);
-                    for (w, &key) in win.keys.iter().enumerate() {
-                        if w != ia && w != ia + 1 {
-                            (log[w], stretch[w]) = rs(&v_inv, tri.corners, key);
-                        }
-                    }
-                    unroll(&mut log[..nw], &win.times, ia, closest_branch);
-                    if let Some(c) = placement.component_of(tri.corners[0] as usize) {
-                        let sum: &mut [DVec3; MAX_WINDOW] =
-                            sums.entry(c).or_insert([DVec3::ZERO; MAX_WINDOW]);
-                        for (s, l) in sum.iter_mut().zip(&log) {
-                            *s += *l * area;
-                        }
-                    }
-                    let mut values = log;
-                    if tri.axis != DVec3::ZERO {
-                        let mut twist = [0.0; MAX_WINDOW];
-                        for w in 0..nw {
-                            (twist[w], values[w]) = if w == ia + 1 {
-                                (tri.twist[1], tri.r[1])
-                            } else {
-                                twist_swing(log[w], tri.axis)
-                            };
-                        }
-                        unroll(&mut twist[..nw], &win.times, ia, nearest_turn);
-                        let [ta, tb] = &win.tangents;
-                        tri.twist = [
-                            win.combine(ta, |w| twist[w]),
-                            tri.twist[1],
-                            win.combine(tb, |w| twist[w]),
-                        ];
-                    }
-                    let [ta, tb] = &win.tangents;
-                    tri.r = [
-                        win.combine(ta, |w| values[w]),
-                        values[ia + 1],
-                        win.combine(tb, |w| values[w]),
-                    ];
-                    let g = tri.g;
-                    tri.sg = [
-                        win.combine(ta, |w| stretch[w]),
-                        stretch[ia + 1],
-                        win.combine(tb, |w| stretch[w]),
-                    ]
-                    .map(|s| [s * g[0], s * g[1]]);
-                }
-                sums
-            })
-            .collect();
-        for part in sums {
-            for (c, sum) in part {
-                for (l, s) in logs[c].iter_mut().zip(sum) {
-                    *l += s;
-                }
-            }
-        }
-        for (l, w) in logs.iter_mut().zip(&area_of) {
-            if *w > 0.0 {
-                *l = l.map(|r| r / *w);
-            }
-        }
-        let scatter: Vec<f64> = spread
+        split_twists(&mut per, &order, &placement, &stats);
+        let logs = build.window_pass(&mut per, &full_b, &stretch_b, &placement, &stats);
+        let scatter: Vec<f64> = stats
+            .spread
             .iter()
-            .zip(&area_of)
+            .zip(&stats.area)
             .map(|(s, w)| (s / w.max(f64::MIN_POSITIVE)).sqrt())
             .collect();
-        let paths = self.paths(&win, &logs, &scatter, &placement);
+        let paths = self.paths(&build.win, &logs, &scatter, &placement);
         let tris: Vec<Tri> = per.into_iter().flatten().collect();
         Ok(SplineSegment {
             tris,
@@ -709,12 +505,290 @@ impl<'a> SplineTrack<'a> {
             })
             .collect()
     }
+}
 
-    /// The frame at u in [0, 1] of segment a (built anew: use [`SplineSegment`] for several).
-    pub fn frame(&self, a: usize, u: f64) -> Vec<DVec3> {
-        self.segment(a)
-            .map(|s| s.frame(u))
-            .unwrap_or_else(|_| self.keys[a].clone())
+/// Segment a of a track while it is built: its window, and the reference (key a) triangles'
+/// areas. Each triangle's residual is weighted by its area (the continuous Poisson energy), in
+/// the right-hand side and in the system; components' mean rotations are weighted by it too.
+struct Build<'t, 'a> {
+    track: &'t SplineTrack<'a>,
+    a: usize,
+    win: Window,
+    areas: Vec<f64>,
+}
+
+fn weight(area: f64) -> f64 {
+    if WEIGHTED {
+        area
+    } else {
+        1.0
+    }
+}
+
+impl<'t, 'a> Build<'t, 'a> {
+    fn new(track: &'t SplineTrack<'a>, a: usize) -> Build<'t, 'a> {
+        let x0 = &track.keys[a];
+        let areas: Vec<f64> = track
+            .triangles
+            .par_iter()
+            .map(|&[i, j, k]| {
+                let [a, b, c] = [i, j, k].map(|v| x0[v as usize]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .collect();
+        Build {
+            track,
+            a,
+            win: track.window(a),
+            areas,
+        }
+    }
+
+    /// Rotation log and stretch from key a to `key` of the triangle with frame inverse v_inv.
+    fn rs(&self, v_inv: &DMat3, [i, j, k]: [u32; 3], key: usize) -> (DVec3, DMat3) {
+        let x = &self.track.keys[key];
+        let (q, s) = polar(&deformation(
+            v_inv,
+            x[i as usize],
+            x[j as usize],
+            x[k as usize],
+        ));
+        (quat_log(q), s)
+    }
+
+    /// Inverse frame of a triangle in key a (`None` when it is degenerate there).
+    fn inverse(&self, [i, j, k]: [u32; 3]) -> Option<DMat3> {
+        let x0 = &self.track.keys[self.a];
+        frame(x0[i as usize], x0[j as usize], x0[k as usize]).map(|v| v.inverse())
+    }
+
+    /// Every valid triangle with its log to key b, and b's stretch kept aside for the tangents.
+    fn first_key(&self) -> (Vec<Option<Tri>>, Vec<DMat3>) {
+        let b = self.a + 1;
+        self.track
+            .triangles
+            .par_iter()
+            .zip(&self.areas)
+            .map(|(&corners, &area)| {
+                let Some(v_inv) = self.inverse(corners) else {
+                    return (None, DMat3::IDENTITY);
+                };
+                let g3 = gradient_operator(&v_inv);
+                let w = weight(area);
+                let g = [g3[1] * w, g3[2] * w];
+                let (rb, sb) = self.rs(&v_inv, corners, b);
+                let tri = Tri {
+                    corners,
+                    r: [DVec3::ZERO, rb, DVec3::ZERO],
+                    g,
+                    // Set with the tangents in the window pass.
+                    sg: [[DVec3::ZERO; 2]; 3],
+                    twist: [0.0; 3],
+                    axis: DVec3::ZERO,
+                };
+                (Some(tri), sb)
+            })
+            .unzip()
+    }
+
+    /// The system A = sum w g g^T over the valid triangles, factored.
+    fn placement(&self, per: &[Option<Tri>]) -> Result<Placement> {
+        // Pass sqrt(w) g (the stored g carry w).
+        let grads = per.iter().zip(&self.areas).map(|(t, &area)| {
+            t.as_ref().map(|t| {
+                let s = 1.0 / weight(area).sqrt();
+                [-(t.g[0] + t.g[1]) * s, t.g[0] * s, t.g[1] * s]
+            })
+        });
+        let valid: Vec<[u32; 3]> = per.iter().flatten().map(|t| t.corners).collect();
+        let n = self.track.keys[self.a].len();
+        Placement::new(self.track.pattern, n, grads, &valid)
+    }
+
+    /// The other keys of the window, unrolled outward from a and b, reduced to each triangle's
+    /// tangents at a and b; returns the components' area-weighted mean logs at every window key.
+    fn window_pass(
+        &self,
+        per: &mut [Option<Tri>],
+        full_b: &[DVec3],
+        stretch_b: &[DMat3],
+        placement: &Placement,
+        stats: &Components,
+    ) -> Vec<[DVec3; MAX_WINDOW]> {
+        let mut logs = vec![[DVec3::ZERO; MAX_WINDOW]; stats.area.len()];
+        // Fixed chunks: the sums, and so the output, do not depend on the number of threads.
+        let chunk = 4096;
+        let sums: Vec<std::collections::HashMap<usize, [DVec3; MAX_WINDOW]>> = per
+            .par_chunks_mut(chunk)
+            .zip(self.areas.par_chunks(chunk))
+            .zip(full_b.par_chunks(chunk))
+            .zip(stretch_b.par_chunks(chunk))
+            .map(|(((tris, areas), full_b), stretch_b)| {
+                let mut sums = std::collections::HashMap::new();
+                let each = tris.iter_mut().zip(areas).zip(full_b).zip(stretch_b);
+                for (((tri, &area), &full_b), &sb) in each {
+                    let Some(tri) = tri.as_mut() else { continue };
+                    let Some(log) = self.tangents(tri, full_b, sb) else {
+                        continue;
+                    };
+                    if let Some(c) = placement.component_of(tri.corners[0] as usize) {
+                        let sum: &mut [DVec3; MAX_WINDOW] =
+                            sums.entry(c).or_insert([DVec3::ZERO; MAX_WINDOW]);
+                        for (s, l) in sum.iter_mut().zip(&log) {
+                            *s += *l * area;
+                        }
+                    }
+                }
+                sums
+            })
+            .collect();
+        for part in sums {
+            for (c, sum) in part {
+                for (l, s) in logs[c].iter_mut().zip(sum) {
+                    *l += s;
+                }
+            }
+        }
+        for (l, w) in logs.iter_mut().zip(&stats.area) {
+            if *w > 0.0 {
+                *l = l.map(|r| r / *w);
+            }
+        }
+        logs
+    }
+
+    /// Set `tri`'s tangents (rotation, twist, stretch) from its values at the window's keys,
+    /// given its branch-consistent log `full_b` and stretch `sb` at key b; returns its unrolled
+    /// logs at the window's keys (`None` for a triangle degenerate in key a).
+    fn tangents(&self, tri: &mut Tri, full_b: DVec3, sb: DMat3) -> Option<[DVec3; MAX_WINDOW]> {
+        let win = &self.win;
+        let (ia, nw) = (win.a, win.keys.len());
+        // Recomputed rather than kept from the first pass (72 bytes a triangle).
+        let v_inv = self.inverse(tri.corners)?;
+        let mut log = [DVec3::ZERO; MAX_WINDOW];
+        let mut stretch = [DMat3::IDENTITY; MAX_WINDOW];
+        (log[ia + 1], stretch[ia + 1]) = (full_b, sb);
+        for (w, &key) in win.keys.iter().enumerate() {
+            if w != ia && w != ia + 1 {
+                (log[w], stretch[w]) = self.rs(&v_inv, tri.corners, key);
+            }
+        }
+        unroll(&mut log[..nw], &win.times, ia, closest_branch);
+        let mut values = log;
+        let [ta, tb] = &win.tangents;
+        if tri.axis != DVec3::ZERO {
+            let mut twist = [0.0; MAX_WINDOW];
+            for w in 0..nw {
+                (twist[w], values[w]) = if w == ia + 1 {
+                    (tri.twist[1], tri.r[1])
+                } else {
+                    twist_swing(log[w], tri.axis)
+                };
+            }
+            unroll(&mut twist[..nw], &win.times, ia, nearest_turn);
+            tri.twist = [
+                win.combine(ta, |w| twist[w]),
+                tri.twist[1],
+                win.combine(tb, |w| twist[w]),
+            ];
+        }
+        tri.r = [
+            win.combine(ta, |w| values[w]),
+            values[ia + 1],
+            win.combine(tb, |w| values[w]),
+        ];
+        let g = tri.g;
+        tri.sg = [
+            win.combine(ta, |w| stretch[w]),
+            stretch[ia + 1],
+            win.combine(tb, |w| stretch[w]),
+        ]
+        .map(|s| [s * g[0], s * g[1]]);
+        Some(log)
+    }
+}
+
+/// Per component of a segment: area, area-weighted mean log to b, the scatter of its
+/// triangles' logs about it (area-weighted sum of squares), largest turn.
+struct Components {
+    area: Vec<f64>,
+    mean_b: Vec<DVec3>,
+    spread: Vec<f64>,
+    turn: Vec<f64>,
+}
+
+impl Components {
+    fn of(per: &[Option<Tri>], areas: &[f64], placement: &Placement) -> Components {
+        let components = placement.component_count();
+        let mut area_of = vec![0.0; components];
+        let mut mean_b = vec![DVec3::ZERO; components];
+        let mut turn = vec![0.0f64; components];
+        let members = || {
+            per.iter().zip(areas).filter_map(|(tri, &area)| {
+                let tri = tri.as_ref()?;
+                Some((tri, placement.component_of(tri.corners[0] as usize)?, area))
+            })
+        };
+        for (tri, c, area) in members() {
+            area_of[c] += area;
+            mean_b[c] += tri.r[1] * area;
+            turn[c] = turn[c].max(tri.r[1].length());
+        }
+        for (m, w) in mean_b.iter_mut().zip(&area_of) {
+            if *w > 0.0 {
+                *m /= *w;
+            }
+        }
+        let mut spread = vec![0.0; components];
+        for (tri, c, area) in members() {
+            spread[c] += area * (tri.r[1] - mean_b[c]).length_squared();
+        }
+        Components {
+            area: area_of,
+            mean_b,
+            spread,
+            turn,
+        }
+    }
+}
+
+/// Components some triangle of which turns past [`SPLIT_ABOVE`]: each rotation to b becomes a
+/// twist about the component's mean axis and a swing, b's twists unwrapped over the settling
+/// `order` of the branches.
+fn split_twists(
+    per: &mut [Option<Tri>],
+    order: &[(u32, u32)],
+    placement: &Placement,
+    stats: &Components,
+) {
+    let axis: Vec<DVec3> = (0..stats.area.len())
+        .map(|c| {
+            if stats.turn[c] <= SPLIT_ABOVE {
+                DVec3::ZERO
+            } else {
+                stats.mean_b[c].try_normalize().unwrap_or(DVec3::X)
+            }
+        })
+        .collect();
+    per.par_iter_mut().flatten().for_each(|tri| {
+        if let Some(c) = placement.component_of(tri.corners[0] as usize) {
+            tri.axis = axis[c];
+            if tri.axis != DVec3::ZERO {
+                let (twist, swing) = twist_swing(tri.r[1], tri.axis);
+                tri.twist[1] = twist;
+                tri.r[1] = swing;
+            }
+        }
+    });
+    for &(t, from) in order {
+        let target = if from == u32::MAX {
+            0.0
+        } else {
+            per[from as usize].as_ref().map_or(0.0, |x| x.twist[1])
+        };
+        if let Some(tri) = per[t as usize].as_mut().filter(|x| x.axis != DVec3::ZERO) {
+            tri.twist[1] = nearest_turn(tri.twist[1], target);
+        }
     }
 }
 

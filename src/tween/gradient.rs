@@ -161,6 +161,65 @@ pub fn deformation(v_inv: &DMat3, a: DVec3, b: DVec3, c: DVec3) -> DMat3 {
     frame_any(a, b, c) * *v_inv
 }
 
+/// Rotation matrix about a unit axis by an angle, through the half-angle quaternion.
+#[inline(always)]
+pub fn axis_angle_matrix(axis: DVec3, angle: f64) -> DMat3 {
+    let (s, c) = sin_cos(0.5 * angle);
+    let (x, y, z, w) = (axis.x * s, axis.y * s, axis.z * s, c);
+    let (x2, y2, z2) = (x + x, y + y, z + z);
+    let (xx, yy, zz) = (x * x2, y * y2, z * z2);
+    let (xy, xz, yz) = (x * y2, x * z2, y * z2);
+    let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    DMat3::from_cols(
+        DVec3::new(1.0 - (yy + zz), xy + wz, xz - wy),
+        DVec3::new(xy - wz, 1.0 - (xx + zz), yz + wx),
+        DVec3::new(xz + wy, yz - wx, 1.0 - (xx + yy)),
+    )
+}
+
+/// sin and cos together, inlined: Cody-Waite reduction by pi/2 and the fdlibm kernel
+/// polynomials on [-pi/4, pi/4] (error about 1 ulp for |x| < 1e5).
+#[inline(always)]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    const PIO2_HI: f64 = 1.570_796_326_734_125_6;
+    const PIO2_LO: f64 = 6.077_100_506_506_192e-11;
+    // Round to nearest by the 1.5 * 2^52 trick (|x| < 2^50): no libm call.
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    let k = (x * std::f64::consts::FRAC_2_PI + ROUND) - ROUND;
+    let r = (x - k * PIO2_HI) - k * PIO2_LO;
+    let z = r * r;
+    let s = r + r
+        * z
+        * (-1.666_666_666_666_663_2e-1
+            + z * (8.333_333_333_322_49e-3
+                + z * (-1.984_126_982_985_795e-4
+                    + z * (2.755_731_370_707_006_8e-6
+                        + z * (-2.505_076_025_340_686_3e-8 + z * 1.589_690_995_211_55e-10)))));
+    let c = 1.0 - 0.5 * z
+        + z * z
+            * (4.166_666_666_666_66e-2
+                + z * (-1.388_888_888_887_411e-3
+                    + z * (2.480_158_728_947_673e-5
+                        + z * (-2.755_731_435_139_066_3e-7
+                            + z * (2.087_572_321_298_175e-9 + z * -1.135_964_755_778_819_5e-11)))));
+    match (k as i64).rem_euclid(4) {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
+/// The rotation matrix of log `r` (angle times axis).
+pub fn rotation(r: DVec3) -> DMat3 {
+    let angle = r.length();
+    if angle > 0.0 {
+        axis_angle_matrix(r / angle, angle)
+    } else {
+        DMat3::IDENTITY
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -204,5 +263,26 @@ mod tests {
         let r = DVec3::new(0.3, -1.2, 2.0);
         let q = DQuat::from_axis_angle(r.normalize(), r.length());
         assert!((quat_log(q) - r).length() < 1e-12);
+    }
+
+    #[test]
+    fn sin_cos_matches_libm() {
+        let mut worst = 0.0f64;
+        for i in -20000..=20000 {
+            let x = i as f64 * 1.7e-3;
+            let (s, c) = sin_cos(x);
+            worst = worst.max((s - x.sin()).abs()).max((c - x.cos()).abs());
+        }
+        assert!(worst < 4e-16, "{worst}");
+    }
+
+    #[test]
+    fn axis_angle_matrix_matches_glam() {
+        let axis = DVec3::new(0.3, -0.5, 0.8).normalize();
+        for angle in [0.0, 0.4, 2.0, 3.1, -1.0, 7.5] {
+            let a = axis_angle_matrix(axis, angle);
+            let b = DMat3::from_axis_angle(axis, angle);
+            assert!(a.abs_diff_eq(b, 1e-15), "{angle}");
+        }
     }
 }

@@ -9,15 +9,15 @@
 //! * `seed`: the seed method between the two kept keys;
 //! * `spline`: the C1 gradient-space spline over all kept keys.
 
-use crate::interpolate::{Method, Segment};
-use crate::keyframes::MorphMesh;
-use crate::solve::Pattern;
-use crate::spline::is_loop;
-use crate::tween::{key_poses, Timing, TweenOptions};
-use crate::weld::{bbox_diagonal, rms_rel, Welded};
+use crate::gltf::Document;
+use crate::tween::{
+    bbox_diagonal, find_morph_meshes, is_loop, key_poses, rms_rel, KeyOptions, KeySource, KeyTrack,
+    Method, MorphMesh, Pattern, Segment, Welded,
+};
 use anyhow::{bail, Result};
 use glam::DVec3;
 use serde::Serialize;
+use std::path::Path;
 
 /// One evaluated method on one mesh.
 #[derive(Clone, Debug, Serialize)]
@@ -50,6 +50,26 @@ pub fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, t: f64) -> DVec3 
         + (p2 - p0) * t
         + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t2
         + (3.0 * p1 - p0 - 3.0 * p2 + p3) * t3)
+}
+
+/// Score `methods` on every morph mesh of the file `input` (keys from `keys`), keeping every
+/// `step`-th key.
+pub fn run_eval(
+    input: &Path,
+    step: usize,
+    methods: &[String],
+    keys: KeySource,
+) -> Result<Vec<MeshScore>> {
+    let doc = Document::open(input)?;
+    let opts = KeyOptions {
+        source: keys,
+        animation: None,
+    };
+    let methods: Vec<&str> = methods.iter().map(String::as_str).collect();
+    find_morph_meshes(&doc, &opts)?
+        .iter()
+        .map(|m| evaluate(m, step, &methods))
+        .collect()
 }
 
 /// Score `methods` on `mesh` keeping every `step`-th key.
@@ -124,16 +144,13 @@ pub fn evaluate(mesh: &MorphMesh, step: usize, methods: &[&str]) -> Result<MeshS
                         } else {
                             Method::Spline
                         };
-                        let opts = TweenOptions::new(m, Timing::Tweens(0));
-                        let s = Segment::for_key_pair(
-                            &opts,
-                            &kept_keys,
-                            &kept_times,
-                            a,
-                            a + 1,
-                            Some(&pattern),
-                            &welded.triangles,
-                        )?;
+                        let s = KeyTrack {
+                            keys: &kept_keys,
+                            times: &kept_times,
+                            pattern: Some(&pattern),
+                            triangles: &welded.triangles,
+                        }
+                        .segment(m, true, a, a + 1)?;
                         cache = Some((a, s));
                     }
                     cache.as_ref().unwrap().1.frame(t)

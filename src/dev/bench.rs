@@ -11,9 +11,9 @@
 //! * where python3 with numpy/scipy is available, the same workload through
 //!   `../shared/peers/ref_tween.py` (set-up and per-frame median) and the ratios.
 
-use crate::interpolate::{Method, Segment};
-use crate::solve::Pattern;
-use crate::synth;
+use super::synth;
+use crate::progress::peak_rss_mib;
+use crate::tween::{KeyTrack, Method, Pattern, Segment};
 use anyhow::{Context, Result};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -88,18 +88,30 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Peak resident set size of this process (VmHWM), in MiB.
-pub fn peak_rss_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| {
-                l.split_whitespace()
-                    .nth(1)
-                    .and_then(|k| k.parse::<f64>().ok())
-            })
-        })
-        .map_or(0.0, |kib| kib / 1024.0)
+/// Python with numpy and scipy for the peer, and the folder holding `ref_tween.py`: `python`
+/// if given, else `.venv/bin/python` where it exists, else `python3`; `None` (with a note on
+/// stderr) when that python lacks numpy or scipy or the folder lacks the script.
+pub fn find_peer(python: Option<PathBuf>, peers: PathBuf) -> Option<(PathBuf, PathBuf)> {
+    let python = python.unwrap_or_else(|| {
+        let venv = PathBuf::from(".venv/bin/python");
+        if venv.exists() {
+            venv
+        } else {
+            PathBuf::from("python3")
+        }
+    });
+    let works = peers.join("ref_tween.py").exists()
+        && std::process::Command::new(&python)
+            .args(["-c", "import numpy, scipy"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+    if !works {
+        eprintln!(
+            "bench: no python with numpy+scipy or no {}: peer columns left empty",
+            peers.display()
+        );
+    }
+    works.then_some((python, peers))
 }
 
 pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec<BenchRow>> {
@@ -147,10 +159,13 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
         row.linear_frame_ms = time_frames(&linear).0;
         {
             let keys = [x0.clone(), x1.clone()];
-            let opts =
-                crate::tween::TweenOptions::new(Method::Spline, crate::tween::Timing::Tweens(1));
-            let spline =
-                Segment::for_key_pair(&opts, &keys, &[0.0, 1.0], 0, 1, Some(&pattern), &triangles)?;
+            let spline = KeyTrack {
+                keys: &keys,
+                times: &[0.0, 1.0],
+                pattern: Some(&pattern),
+                triangles: &triangles,
+            }
+            .segment(Method::Spline, true, 0, 1)?;
             (row.spline_frame_ms, row.spline_frame_min_ms) = time_frames(&spline);
             let ratios: Vec<f64> = ts
                 .iter()
@@ -171,8 +186,13 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
                 .collect();
             let times: Vec<f64> = (0..8).map(f64::from).collect();
             let t = Instant::now();
-            let middle =
-                Segment::for_key_pair(&opts, &keys, &times, 3, 4, Some(&pattern), &triangles)?;
+            let middle = KeyTrack {
+                keys: &keys,
+                times: &times,
+                pattern: Some(&pattern),
+                triangles: &triangles,
+            }
+            .segment(Method::Spline, true, 3, 4)?;
             row.spline_setup_s = t.elapsed().as_secs_f64();
             std::hint::black_box(middle);
         }

@@ -4,15 +4,16 @@
 //! (`--keys animation`), or the base mesh followed by each target at weight 1 (`--keys targets`).
 //! A key pose is `base + sum_i w_i * delta_i` over the mesh's targets.
 
-use crate::read::{arr, Document};
+use crate::gltf::{arr, read_triangles, read_vec3, Document};
 use anyhow::{bail, Result};
 use glam::DVec3;
 use serde_json::Value;
 
 /// Where the keys come from (`--keys`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum KeySource {
     /// `animation` when the file animates the mesh's weights, else `targets`.
+    #[default]
     Auto,
     /// Key 0 = base mesh, key k = base + target k at weight 1; key times 0, 1, 2, ... s.
     Targets,
@@ -121,113 +122,15 @@ pub struct KeyOptions<'a> {
 
 /// Find every mesh with morph targets, its geometry and its tracks.
 pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphMesh>> {
-    let json = &doc.json;
-    let selected_anim = match opts.animation {
+    let selected = match opts.animation {
         None => None,
         Some(sel) => Some(find_animation(doc, sel)?),
     };
     let mut out = Vec::new();
     let mut held_one_pose = false;
-    for (mi, mesh) in arr(json, "meshes").iter().enumerate() {
-        let prims = arr(mesh, "primitives");
-        let target_count = prims.first().map(|p| arr(p, "targets").len()).unwrap_or(0);
-        if target_count == 0 {
+    for mi in 0..arr(&doc.json, "meshes").len() {
+        let Some((mm, use_animation)) = morph_mesh(doc, mi, opts, selected)? else {
             continue;
-        }
-        let name = mesh["name"]
-            .as_str()
-            .map(str::to_owned)
-            .unwrap_or_else(|| format!("mesh {mi}"));
-        let mut primitives = Vec::new();
-        for (pi, p) in prims.iter().enumerate() {
-            primitives.push(read_primitive(doc, &name, pi, p, target_count)?);
-        }
-        let nodes: Vec<usize> = arr(json, "nodes")
-            .iter()
-            .enumerate()
-            .filter(|(_, n)| n["mesh"].as_u64() == Some(mi as u64))
-            .map(|(i, _)| i)
-            .collect();
-        // Every weights channel aimed at a node of this mesh.
-        let mut channels = Vec::new();
-        for (ai, anim) in arr(json, "animations").iter().enumerate() {
-            for (ci, ch) in arr(anim, "channels").iter().enumerate() {
-                let t = &ch["target"];
-                let node = t["node"].as_u64().map(|n| n as usize);
-                if t["path"].as_str() == Some("weights") && node.is_some_and(|n| nodes.contains(&n))
-                {
-                    channels.push((ai, ci, ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize));
-                }
-            }
-        }
-        let use_animation = match opts.source {
-            KeySource::Targets => false,
-            KeySource::Animation => true,
-            KeySource::Auto => channels
-                .iter()
-                .any(|&(a, _, _)| selected_anim.is_none_or(|s| s == a)),
-        };
-        let mut tracks = Vec::new();
-        let mut dropped = Vec::new();
-        if use_animation {
-            for &(ai, ci, si) in &channels {
-                if selected_anim.is_some_and(|s| s != ai) {
-                    dropped.push((ai, ci));
-                    continue;
-                }
-                if let Some(t) = tracks.iter_mut().find(|t: &&mut Track| {
-                    matches!(&t.origin, TrackOrigin::Animation { animation, sampler, .. } if *animation == ai && *sampler == si)
-                }) {
-                    if let TrackOrigin::Animation { channels, .. } = &mut t.origin {
-                        channels.push(ci);
-                    }
-                    continue;
-                }
-                let (times, weights) = read_weight_keys(doc, ai, si, target_count)?;
-                tracks.push(Track {
-                    origin: TrackOrigin::Animation {
-                        animation: ai,
-                        sampler: si,
-                        channels: vec![ci],
-                    },
-                    times,
-                    weights,
-                });
-            }
-            if tracks.is_empty() {
-                if opts.source == KeySource::Animation {
-                    bail!(doc.err(format!(
-                        "--keys animation: no animation{} drives the weights of mesh {name:?}",
-                        opts.animation
-                            .map(|a| format!(" {a:?}"))
-                            .unwrap_or_default()
-                    )));
-                }
-                continue;
-            }
-        } else {
-            dropped.extend(channels.iter().map(|&(a, c, _)| (a, c)));
-            let mut weights = vec![vec![0.0; target_count]];
-            for k in 0..target_count {
-                let mut w = vec![0.0; target_count];
-                w[k] = 1.0;
-                weights.push(w);
-            }
-            tracks.push(Track {
-                origin: TrackOrigin::Targets {
-                    nodes: nodes.clone(),
-                },
-                times: (0..=target_count).map(|k| k as f64).collect(),
-                weights,
-            });
-        }
-        let mm = MorphMesh {
-            mesh: mi,
-            name,
-            primitives,
-            target_count,
-            tracks,
-            dropped_channels: dropped,
         };
         if mm.tracks.iter().any(|t| has_distinct_keys(&mm, t)) {
             out.push(mm);
@@ -246,6 +149,141 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
         )));
     }
     Ok(out)
+}
+
+/// Mesh `mi` with its tracks, and whether they come from an animation; `None` when it has no
+/// morph targets, or no track under `--keys auto` with `--animation`.
+fn morph_mesh(
+    doc: &Document,
+    mi: usize,
+    opts: &KeyOptions,
+    selected: Option<usize>,
+) -> Result<Option<(MorphMesh, bool)>> {
+    let json = &doc.json;
+    let mesh = &json["meshes"][mi];
+    let prims = arr(mesh, "primitives");
+    let target_count = prims.first().map(|p| arr(p, "targets").len()).unwrap_or(0);
+    if target_count == 0 {
+        return Ok(None);
+    }
+    let name = mesh["name"]
+        .as_str()
+        .map(str::to_owned)
+        .unwrap_or_else(|| format!("mesh {mi}"));
+    let mut primitives = Vec::new();
+    for (pi, p) in prims.iter().enumerate() {
+        primitives.push(read_primitive(doc, &name, pi, p, target_count)?);
+    }
+    let nodes: Vec<usize> = arr(json, "nodes")
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n["mesh"].as_u64() == Some(mi as u64))
+        .map(|(i, _)| i)
+        .collect();
+    let channels = weight_channels(json, &nodes);
+    let use_animation = match opts.source {
+        KeySource::Targets => false,
+        KeySource::Animation => true,
+        KeySource::Auto => channels
+            .iter()
+            .any(|&(a, _, _)| selected.is_none_or(|s| s == a)),
+    };
+    let (tracks, dropped) = if use_animation {
+        let (tracks, dropped) = animation_tracks(doc, &channels, selected, target_count)?;
+        if tracks.is_empty() {
+            if opts.source == KeySource::Animation {
+                bail!(doc.err(format!(
+                    "--keys animation: no animation{} drives the weights of mesh {name:?}",
+                    opts.animation
+                        .map(|a| format!(" {a:?}"))
+                        .unwrap_or_default()
+                )));
+            }
+            return Ok(None);
+        }
+        (tracks, dropped)
+    } else {
+        let dropped = channels.iter().map(|&(a, c, _)| (a, c)).collect();
+        (vec![target_track(target_count, nodes)], dropped)
+    };
+    let mm = MorphMesh {
+        mesh: mi,
+        name,
+        primitives,
+        target_count,
+        tracks,
+        dropped_channels: dropped,
+    };
+    Ok(Some((mm, use_animation)))
+}
+
+/// Every weights channel aimed at one of `nodes`: (animation, channel, sampler).
+fn weight_channels(json: &Value, nodes: &[usize]) -> Vec<(usize, usize, usize)> {
+    let mut channels = Vec::new();
+    for (ai, anim) in arr(json, "animations").iter().enumerate() {
+        for (ci, ch) in arr(anim, "channels").iter().enumerate() {
+            let t = &ch["target"];
+            let node = t["node"].as_u64().map(|n| n as usize);
+            if t["path"].as_str() == Some("weights") && node.is_some_and(|n| nodes.contains(&n)) {
+                channels.push((ai, ci, ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize));
+            }
+        }
+    }
+    channels
+}
+
+/// (animation, channel) of a weights channel.
+type ChannelRef = (usize, usize);
+
+/// One track per sampler of `channels` (those of animation `selected` only, when given; the
+/// others are returned as dropped channels).
+fn animation_tracks(
+    doc: &Document,
+    channels: &[(usize, usize, usize)],
+    selected: Option<usize>,
+    target_count: usize,
+) -> Result<(Vec<Track>, Vec<ChannelRef>)> {
+    let mut tracks: Vec<Track> = Vec::new();
+    let mut dropped = Vec::new();
+    for &(ai, ci, si) in channels {
+        if selected.is_some_and(|s| s != ai) {
+            dropped.push((ai, ci));
+            continue;
+        }
+        let same = |t: &&mut Track| matches!(&t.origin, TrackOrigin::Animation { animation, sampler, .. } if *animation == ai && *sampler == si);
+        if let Some(t) = tracks.iter_mut().find(same) {
+            if let TrackOrigin::Animation { channels, .. } = &mut t.origin {
+                channels.push(ci);
+            }
+            continue;
+        }
+        let (times, weights) = read_weight_keys(doc, ai, si, target_count)?;
+        tracks.push(Track {
+            origin: TrackOrigin::Animation {
+                animation: ai,
+                sampler: si,
+                channels: vec![ci],
+            },
+            times,
+            weights,
+        });
+    }
+    Ok((tracks, dropped))
+}
+
+/// `--keys targets`: key 0 the base, key k target k at weight 1, at times 0, 1, 2, ... s.
+fn target_track(target_count: usize, nodes: Vec<usize>) -> Track {
+    let mut weights = vec![vec![0.0; target_count]];
+    for k in 0..target_count {
+        let mut w = vec![0.0; target_count];
+        w[k] = 1.0;
+        weights.push(w);
+    }
+    Track {
+        origin: TrackOrigin::Targets { nodes },
+        times: (0..=target_count).map(|k| k as f64).collect(),
+        weights,
+    }
 }
 
 /// True when at least two keys of the track give different poses.
@@ -290,23 +328,6 @@ fn find_animation(doc: &Document, sel: &str) -> Result<usize> {
 
 fn attr(p: &Value, name: &str) -> Option<usize> {
     p["attributes"][name].as_u64().map(|v| v as usize)
-}
-
-pub fn read_vec3(doc: &Document, acc: usize, what: &str) -> Result<Vec<DVec3>> {
-    let (v, n) = doc.read_f64(acc)?;
-    if n != 3 {
-        bail!(doc.err(format!("{what} (accessor {acc}) is not VEC3")));
-    }
-    let out: Vec<DVec3> = v
-        .chunks_exact(3)
-        .map(|c| DVec3::new(c[0], c[1], c[2]))
-        .collect();
-    if let Some(i) = out.iter().position(|p| !p.is_finite()) {
-        bail!(doc.err(format!(
-            "{what} (accessor {acc}) has a NaN or infinite value at element {i}"
-        )));
-    }
-    Ok(out)
 }
 
 fn read_primitive(
@@ -383,54 +404,6 @@ fn read_primitive(
         target_pos,
         target_nrm,
         triangles,
-    })
-}
-
-/// Triangles of a primitive with `n` vertices (TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN;
-/// other modes are an error naming `what`).
-pub fn read_triangles(doc: &Document, p: &Value, n: usize, what: &str) -> Result<Vec<[u32; 3]>> {
-    let what = what.trim_end();
-    let mode = p["mode"].as_u64().unwrap_or(4);
-    let indices: Vec<u32> = match p["indices"].as_u64() {
-        Some(a) => doc.read_indices(a as usize)?,
-        None => (0..n as u32).collect(),
-    };
-    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
-        bail!(doc.err(format!("{what} has index {bad} but only {n} vertices")));
-    }
-    Ok(match mode {
-        4 => {
-            if !indices.len().is_multiple_of(3) {
-                bail!(doc.err(format!(
-                    "{what} has a TRIANGLES index count that is not a multiple of 3"
-                )));
-            }
-            indices
-                .chunks_exact(3)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect()
-        }
-        5 => (2..indices.len())
-            .map(|i| {
-                if i % 2 == 0 {
-                    [indices[i - 2], indices[i - 1], indices[i]]
-                } else {
-                    [indices[i - 1], indices[i - 2], indices[i]]
-                }
-            })
-            .collect(),
-        6 => (2..indices.len())
-            .map(|i| [indices[0], indices[i - 1], indices[i]])
-            .collect(),
-        m => {
-            let kind = ["POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"]
-                .get(m as usize)
-                .copied()
-                .unwrap_or("unknown");
-            bail!(doc.err(format!(
-                "{what} is not made of triangles (mode {m}, {kind}); morph tweening needs a triangle mesh"
-            )))
-        }
     })
 }
 

@@ -6,7 +6,7 @@
 //! within [`DELTA_TOLERANCE`] of the mesh's bounding-box diagonal. A seam therefore cannot open,
 //! while vertices that merely touch in the base pose but move apart in a key stay separate.
 
-use crate::keyframes::MorphMesh;
+use super::keys::MorphMesh;
 use glam::DVec3;
 use std::collections::HashMap;
 

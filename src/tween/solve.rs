@@ -3,7 +3,7 @@
 //! The seed minimises `sum_j |X_j V_j^-1 - T_j|^2` over all vertices *and* one fourth vertex per
 //! triangle. The fourth vertices appear only in their own triangle's terms, so they are
 //! eliminated exactly: with `g` the in-plane gradient operator of a reference triangle
-//! ([`crate::gradient::gradient_operator`]) the normal equations become
+//! ([`super::gradient::gradient_operator`]) the normal equations become
 //!
 //! ```text
 //!   A x = b,   A_ab = sum_j g_ja . g_jb,   b_a = sum_j T_j g_ja
@@ -245,6 +245,7 @@ impl Factor {
 
     /// Keep only the column-oriented copy of L (half the memory, a slower forward pass):
     /// done for factors over [`TWO_COPIES_MAX_NONZEROS`].
+    #[cfg(test)]
     pub fn keep_columns_only(&mut self) {
         self.row_ptr = Vec::new();
         self.cols = Vec::new();
@@ -604,11 +605,11 @@ pub fn scatter(rhs: &mut [[f64; 3]], corners: [u32; 3], v1: DVec3, v2: DVec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gradient::{frame, gradient_operator};
+    use crate::tween::gradient::{frame, gradient_operator};
 
     #[test]
     fn column_only_solve_matches_two_copy_solve() {
-        let s = crate::synth::tube(12, 9, 3.0, 0.5, 0.4);
+        let s = crate::dev::synth::tube(12, 9, 3.0, 0.5, 0.4);
         let pattern = Pattern::new(s.positions.len(), &s.triangles).unwrap();
         let grads: Vec<Option<[DVec3; 3]>> = s
             .triangles

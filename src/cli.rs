@@ -1,0 +1,312 @@
+//! The command line: clap's structs, the choices it offers, and their conversion into the
+//! library's jobs. Defaults live in the library (`Default` of each option type) and are read
+//! from there.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use inbetween::blend::{BlendJob, CycleMethod};
+use inbetween::tween::{KeySource, Method, Timing, TweenJob};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "inbetween",
+    version,
+    about = "Tween frames for glTF morph keyframes by the deformation-gradient method.",
+    long_about = "inbetween reads a glTF whose morph targets (or weights animation) are keyframe poses and \
+writes the in-between frames, computed per triangle (polar decomposition, rotation slerp, linear stretch) \
+and solved for the vertices, instead of by linear vertex blending. Everything else in the file is kept."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Write tween frames between a mesh's morph keyframes as dense morph animation.
+    #[command(
+        after_help = "Examples:\n  inbetween tween samples/bar_twist.glb -o bar_tween.glb\n  \
+inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -o lerp.glb --method linear --tweens 9"
+    )]
+    Tween(TweenArgs),
+    /// Blend two skeletal clips of a character into a new clip (walk + run = jog): cycles found
+    /// and synchronised on foot contacts, the second clip aligned to the first, joints slerped,
+    /// planted feet cleaned up with two-bone IK. The output is the input plus one animation.
+    #[command(
+        after_help = "Examples:\n  inbetween blend Fox.glb -o fox_trot.glb --clips Walk Run\n  \
+inbetween blend robot.glb -o jog.glb --clips Walking Running --weight 0.3 --name Jog --report jog.json"
+    )]
+    Blend(BlendArgs),
+    /// Hold-out accuracy: keep every K-th key, predict the dropped ones with each method, and
+    /// print the RMS vertex error over the bounding-box diagonal (mean and max) per method.
+    Eval(EvalArgs),
+    /// Print speed figures on generated meshes (set-up, per-frame time, throughput, memory),
+    /// side by side with the numpy/scipy peer when python3 with numpy and scipy is available.
+    Bench(BenchArgs),
+}
+
+/// `--method`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum MethodArg {
+    /// The seed paper's method: polar decomposition, slerp, linear stretch, Poisson solve.
+    Seed,
+    /// Vertex lerp between consecutive keys (BlendShape baseline).
+    Linear,
+    /// C1 spline across all keys in gradient space (rotation logs and stretches by cubic Hermite
+    /// with C2-spline tangents, same solve; each component turns about its pivot). The default.
+    Spline,
+}
+
+impl From<Method> for MethodArg {
+    fn from(m: Method) -> MethodArg {
+        match m {
+            Method::Seed => MethodArg::Seed,
+            Method::Linear => MethodArg::Linear,
+            Method::Spline => MethodArg::Spline,
+        }
+    }
+}
+
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Method {
+        match m {
+            MethodArg::Seed => Method::Seed,
+            MethodArg::Linear => Method::Linear,
+            MethodArg::Spline => Method::Spline,
+        }
+    }
+}
+
+/// `--keys`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum KeysArg {
+    /// `animation` when the file animates the mesh's weights, else `targets`.
+    Auto,
+    /// Key 0 = base mesh, key k = base + target k at weight 1; key times 0, 1, 2, ... s.
+    Targets,
+    /// The key times of the weights channel that animates the mesh's node.
+    Animation,
+}
+
+impl From<KeySource> for KeysArg {
+    fn from(k: KeySource) -> KeysArg {
+        match k {
+            KeySource::Auto => KeysArg::Auto,
+            KeySource::Targets => KeysArg::Targets,
+            KeySource::Animation => KeysArg::Animation,
+        }
+    }
+}
+
+impl From<KeysArg> for KeySource {
+    fn from(k: KeysArg) -> KeySource {
+        match k {
+            KeysArg::Auto => KeySource::Auto,
+            KeysArg::Targets => KeySource::Targets,
+            KeysArg::Animation => KeySource::Animation,
+        }
+    }
+}
+
+/// `--cycles`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum CyclesArg {
+    /// From each foot's forward offset and touchdowns: any rig (feet found from the skeleton).
+    Legs,
+    /// The seed paper's angle between the thighs (bipeds).
+    Thigh,
+}
+
+impl From<CycleMethod> for CyclesArg {
+    fn from(c: CycleMethod) -> CyclesArg {
+        match c {
+            CycleMethod::Legs => CyclesArg::Legs,
+            CycleMethod::Thigh => CyclesArg::Thigh,
+        }
+    }
+}
+
+impl From<CyclesArg> for CycleMethod {
+    fn from(c: CyclesArg) -> CycleMethod {
+        match c {
+            CyclesArg::Legs => CycleMethod::Legs,
+            CyclesArg::Thigh => CycleMethod::Thigh,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct TweenArgs {
+    /// Input .gltf (embedded or external buffers) or .glb.
+    input: PathBuf,
+    /// Output file; the format follows the extension (.glb, .gltf, .usda, .usdc or .usdz).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Frames inserted evenly between each pair of consecutive keys.
+    #[arg(long, default_value_t = 4, conflicts_with = "fps")]
+    tweens: usize,
+    /// Instead of --tweens: frames at this fixed rate (per second) over the keys' time span.
+    #[arg(long)]
+    fps: Option<f64>,
+    /// Interpolation method.
+    #[arg(long, value_enum, default_value_t = Method::default().into())]
+    method: MethodArg,
+    /// Where the keys come from.
+    #[arg(long, value_enum, default_value_t = KeySource::default().into())]
+    keys: KeysArg,
+    /// The animation (name or index) whose weights channel supplies the keys.
+    #[arg(long, value_name = "NAME|INDEX")]
+    animation: Option<String>,
+    /// Worker threads for frames (default: all cores). Output is identical for any value.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Close every key sequence into a loop (append its first key after the last) and let
+    /// `spline` wrap around it. Without it, tracks whose last key equals the first wrap.
+    #[arg(long = "loop", conflicts_with = "no_loop")]
+    looping: bool,
+    /// Never wrap `spline` around the ends, even when the last key equals the first.
+    #[arg(long)]
+    no_loop: bool,
+    /// Seconds to continue the motion before the first key (the seed paper's exaggeration).
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    extend_before: f64,
+    /// Seconds to continue the motion after the last key.
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    extend_after: f64,
+    /// Also write per-frame shape figures (edge distortion, area and volume change,
+    /// inverted triangles) to this JSON file (schema: schemas/report.schema.json).
+    #[arg(long, value_name = "FILE.json")]
+    report: Option<PathBuf>,
+    /// No progress bar, no summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+impl TweenArgs {
+    pub fn job(self) -> TweenJob {
+        TweenJob {
+            input: self.input,
+            output: self.output,
+            method: self.method.into(),
+            keys: self.keys.into(),
+            animation: self.animation,
+            timing: self
+                .fps
+                .map(Timing::Fps)
+                .unwrap_or(Timing::Tweens(self.tweens)),
+            quiet: self.quiet,
+            looping: match (self.looping, self.no_loop) {
+                (true, _) => Some(true),
+                (_, true) => Some(false),
+                _ => None,
+            },
+            extend: [self.extend_before, self.extend_after],
+            report: self.report,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct BlendArgs {
+    /// Input .gltf or .glb with a skinned character and its animations.
+    input: PathBuf,
+    /// Output .gltf or .glb.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// The two animations to blend (names or indices).
+    #[arg(long, num_args = 2, value_names = ["A", "B"], required = true)]
+    clips: Vec<String>,
+    /// Weight of B: 0 gives A, 1 gives B.
+    #[arg(long, default_value_t = 0.5)]
+    weight: f64,
+    /// Name of the new animation (default "A+B").
+    #[arg(long)]
+    name: Option<String>,
+    /// How gait cycles are found.
+    #[arg(long, value_enum, default_value_t = CycleMethod::default().into())]
+    cycles: CyclesArg,
+    /// Leave planted feet as the blend puts them (no IK clean-up).
+    #[arg(long)]
+    no_cleanup: bool,
+    /// Also write cycles, contacts, foot sliding, root speed and smoothness figures to this
+    /// JSON file (schema: schemas/blend-report.schema.json).
+    #[arg(long, value_name = "FILE.json")]
+    report: Option<PathBuf>,
+    /// No summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+impl BlendArgs {
+    pub fn job(self) -> BlendJob {
+        BlendJob {
+            input: self.input,
+            output: self.output,
+            clips: [self.clips[0].clone(), self.clips[1].clone()],
+            weight: self.weight,
+            name: self.name,
+            cycles: self.cycles.into(),
+            cleanup: !self.no_cleanup,
+            report: self.report,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct EvalArgs {
+    /// Input .gltf or .glb with morph keyframes.
+    pub input: PathBuf,
+    /// Keep every K-th key.
+    #[arg(long, default_value_t = 2)]
+    pub step: usize,
+    /// Methods to compare (linear, poscr, seed, spline).
+    #[arg(long, value_delimiter = ',', default_values_t = inbetween::eval::METHODS.iter().map(|m| m.to_string()))]
+    pub methods: Vec<String>,
+    /// Where the keys come from.
+    #[arg(long, value_enum, default_value_t = KeySource::default().into())]
+    keys: KeysArg,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl EvalArgs {
+    pub fn keys(&self) -> KeySource {
+        self.keys.into()
+    }
+}
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Triangle counts to generate (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![16020, 100_000, 1_000_000])]
+    pub sizes: Vec<usize>,
+    /// Frames timed per method and size (the median is reported).
+    #[arg(long, default_value_t = 20)]
+    pub frames: usize,
+    /// Python with numpy and scipy for the peer (default: .venv/bin/python, else python3).
+    #[arg(long)]
+    pub python: Option<PathBuf>,
+    /// Folder holding ref_tween.py.
+    #[arg(long, default_value = "../shared/peers")]
+    pub peers: PathBuf,
+    /// Skip the peer above this many triangles (its set-up takes minutes at 1M).
+    #[arg(long, default_value_t = 100_000)]
+    pub peer_max_triangles: usize,
+    /// Worker threads for the all-threads figure (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print the rows as JSON lines instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Instead: write a 3-key tube of this many triangles and time `inbetween tween
+    /// --tweens 10` on it end to end, in a child process (e.g. 1000000).
+    #[arg(long, value_name = "TRIANGLES")]
+    pub end_to_end: Option<usize>,
+    /// With --end-to-end: frames inserted between keys.
+    #[arg(long, default_value_t = 10)]
+    pub e2e_tweens: usize,
+    /// With --end-to-end: output format (glb, gltf, usda, usdc, usdz).
+    #[arg(long, default_value = "glb")]
+    pub e2e_format: String,
+}

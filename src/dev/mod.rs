@@ -1,0 +1,9 @@
+//! Developer tools, apart from the product path: nothing under `tween/`, `gltf/`, `usd/` or
+//! `blend/` imports them (but one unit test of the solver, which builds a tube).
+//! [`synth`] (procedural meshes and keyframe files for the samples, tests and benchmarks) ->
+//! [`eval`] (`inbetween eval`: hold-out accuracy per method) and [`bench`] (`inbetween bench`:
+//! speed figures).
+
+pub mod bench;
+pub mod eval;
+pub mod synth;

@@ -1,0 +1,274 @@
+//! Accessor decoding: every accessor (strided, sparse, normalized and quantized integer
+//! types) becomes `f64` or `u32` values, so the rest of the pipeline never sees the encoding;
+//! and the triangles of a primitive in any of the triangle modes.
+
+use super::read::Document;
+use anyhow::{bail, Result};
+use glam::DVec3;
+use serde_json::Value;
+
+impl Document {
+    /// Decode accessor `index` as `f64` values, `count * components` of them, row-major.
+    pub fn read_f64(&self, index: usize) -> Result<(Vec<f64>, usize)> {
+        let acc = self.accessor(index)?;
+        let ncomp = acc.ncomp;
+        let mut out = vec![0.0f64; acc.count * ncomp];
+        if let Some(view) = acc.view {
+            let (bytes, stride) = self.view_slice(view, acc.offset, acc.count, acc.elem_size())?;
+            for i in 0..acc.count {
+                let base = i * stride;
+                for c in 0..ncomp {
+                    out[i * ncomp + c] = acc.decode(bytes, base + c * acc.comp_size());
+                }
+            }
+        }
+        if let Some(sparse) = self.json["accessors"][index].get("sparse") {
+            let n = sparse["count"].as_u64().unwrap_or(0) as usize;
+            let ind = &sparse["indices"];
+            let idx_ty = ind["componentType"].as_u64().unwrap_or(0) as u32;
+            let idx_size = comp_size(idx_ty)
+                .ok_or_else(|| self.err(format!("accessor {index}: bad sparse index type")))?;
+            let iv = ind["bufferView"].as_u64().ok_or_else(|| {
+                self.err(format!(
+                    "accessor {index}: sparse indices without bufferView"
+                ))
+            })? as usize;
+            let io = ind["byteOffset"].as_u64().unwrap_or(0) as usize;
+            let (ibytes, _) = self.view_slice(iv, io, n, idx_size)?;
+            let val = &sparse["values"];
+            let vv = val["bufferView"].as_u64().ok_or_else(|| {
+                self.err(format!(
+                    "accessor {index}: sparse values without bufferView"
+                ))
+            })? as usize;
+            let vo = val["byteOffset"].as_u64().unwrap_or(0) as usize;
+            let (vbytes, _) = self.view_slice(vv, vo, n, acc.elem_size())?;
+            let sparse_acc = Accessor {
+                view: None,
+                offset: 0,
+                ..acc
+            };
+            for k in 0..n {
+                let target = read_uint(ibytes, k * idx_size, idx_ty) as usize;
+                if target >= acc.count {
+                    bail!(self.err(format!(
+                        "accessor {index}: sparse index {target} is out of range"
+                    )));
+                }
+                for c in 0..ncomp {
+                    out[target * ncomp + c] =
+                        sparse_acc.decode(vbytes, k * acc.elem_size() + c * acc.comp_size());
+                }
+            }
+        }
+        Ok((out, ncomp))
+    }
+
+    /// Decode an index accessor (unsigned integer scalars).
+    pub fn read_indices(&self, index: usize) -> Result<Vec<u32>> {
+        let (v, ncomp) = self.read_f64(index)?;
+        if ncomp != 1 {
+            bail!(self.err(format!("accessor {index} used as indices is not SCALAR")));
+        }
+        Ok(v.into_iter().map(|x| x as u32).collect())
+    }
+
+    /// Element count of accessor `index`.
+    pub fn accessor_count(&self, index: usize) -> Result<usize> {
+        Ok(self.accessor(index)?.count)
+    }
+
+    fn accessor(&self, index: usize) -> Result<Accessor> {
+        let a = self
+            .json
+            .get("accessors")
+            .and_then(|a| a.get(index))
+            .ok_or_else(|| self.err(format!("accessor {index} does not exist")))?;
+        let ty = a["componentType"].as_u64().unwrap_or(0) as u32;
+        comp_size(ty)
+            .ok_or_else(|| self.err(format!("accessor {index} has unknown componentType {ty}")))?;
+        let ncomp = match a["type"].as_str().unwrap_or("") {
+            "SCALAR" => 1,
+            "VEC2" => 2,
+            "VEC3" => 3,
+            "VEC4" | "MAT2" => 4,
+            "MAT3" => 9,
+            "MAT4" => 16,
+            t => bail!(self.err(format!("accessor {index} has unknown type {t:?}"))),
+        };
+        Ok(Accessor {
+            view: a["bufferView"].as_u64().map(|v| v as usize),
+            offset: a["byteOffset"].as_u64().unwrap_or(0) as usize,
+            count: a["count"].as_u64().unwrap_or(0) as usize,
+            ty,
+            ncomp,
+            normalized: a["normalized"].as_bool().unwrap_or(false),
+        })
+    }
+
+    /// The bytes of `count` elements of `elem` bytes starting `offset` bytes into buffer view
+    /// `view`, and the stride between elements.
+    fn view_slice(
+        &self,
+        view: usize,
+        offset: usize,
+        count: usize,
+        elem: usize,
+    ) -> Result<(&[u8], usize)> {
+        let bv = self
+            .json
+            .get("bufferViews")
+            .and_then(|v| v.get(view))
+            .ok_or_else(|| self.err(format!("bufferView {view} does not exist")))?;
+        let buffer = bv["buffer"].as_u64().unwrap_or(u64::MAX) as usize;
+        let data = self
+            .buffers
+            .get(buffer)
+            .ok_or_else(|| self.err(format!("bufferView {view} names missing buffer {buffer}")))?;
+        let start = bv["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let len = bv["byteLength"].as_u64().unwrap_or(0) as usize;
+        let stride = bv["byteStride"]
+            .as_u64()
+            .map(|s| s as usize)
+            .unwrap_or(elem);
+        if start + len > data.len() {
+            bail!(self.err(format!(
+                "bufferView {view} reaches past the end of buffer {buffer}"
+            )));
+        }
+        let need = if count == 0 {
+            0
+        } else {
+            offset + (count - 1) * stride + elem
+        };
+        if need > len {
+            bail!(self.err(format!(
+                "an accessor reads past the end of bufferView {view}"
+            )));
+        }
+        Ok((&data[start + offset..start + len], stride))
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Accessor {
+    view: Option<usize>,
+    offset: usize,
+    count: usize,
+    ty: u32,
+    ncomp: usize,
+    normalized: bool,
+}
+
+impl Accessor {
+    fn comp_size(&self) -> usize {
+        comp_size(self.ty).unwrap_or(4)
+    }
+    fn elem_size(&self) -> usize {
+        self.comp_size() * self.ncomp
+    }
+    fn decode(&self, b: &[u8], at: usize) -> f64 {
+        let raw = match self.ty {
+            5126 => return f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64,
+            5120 => b[at] as i8 as f64,
+            5122 => i16::from_le_bytes([b[at], b[at + 1]]) as f64,
+            _ => read_uint(b, at, self.ty) as f64,
+        };
+        if !self.normalized {
+            return raw;
+        }
+        // glTF 2.0 normalization rules (section 3.11).
+        match self.ty {
+            5120 => (raw / 127.0).max(-1.0),
+            5121 => raw / 255.0,
+            5122 => (raw / 32767.0).max(-1.0),
+            5123 => raw / 65535.0,
+            5125 => raw / 4294967295.0,
+            _ => raw,
+        }
+    }
+}
+
+fn comp_size(ty: u32) -> Option<usize> {
+    match ty {
+        5120 | 5121 => Some(1),
+        5122 | 5123 => Some(2),
+        5125 | 5126 => Some(4),
+        _ => None,
+    }
+}
+
+fn read_uint(b: &[u8], at: usize, ty: u32) -> u64 {
+    match ty {
+        5121 | 5120 => b[at] as u64,
+        5123 | 5122 => u16::from_le_bytes([b[at], b[at + 1]]) as u64,
+        _ => u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as u64,
+    }
+}
+
+/// Accessor `acc` as 3-vectors, refused (naming `what`) when it is not VEC3 or holds a NaN or
+/// infinite value.
+pub fn read_vec3(doc: &Document, acc: usize, what: &str) -> Result<Vec<DVec3>> {
+    let (v, n) = doc.read_f64(acc)?;
+    if n != 3 {
+        bail!(doc.err(format!("{what} (accessor {acc}) is not VEC3")));
+    }
+    let out: Vec<DVec3> = v
+        .chunks_exact(3)
+        .map(|c| DVec3::new(c[0], c[1], c[2]))
+        .collect();
+    if let Some(i) = out.iter().position(|p| !p.is_finite()) {
+        bail!(doc.err(format!(
+            "{what} (accessor {acc}) has a NaN or infinite value at element {i}"
+        )));
+    }
+    Ok(out)
+}
+
+/// Triangles of a primitive with `n` vertices (TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN;
+/// other modes are an error naming `what`).
+pub fn read_triangles(doc: &Document, p: &Value, n: usize, what: &str) -> Result<Vec<[u32; 3]>> {
+    let what = what.trim_end();
+    let mode = p["mode"].as_u64().unwrap_or(4);
+    let indices: Vec<u32> = match p["indices"].as_u64() {
+        Some(a) => doc.read_indices(a as usize)?,
+        None => (0..n as u32).collect(),
+    };
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
+        bail!(doc.err(format!("{what} has index {bad} but only {n} vertices")));
+    }
+    Ok(match mode {
+        4 => {
+            if !indices.len().is_multiple_of(3) {
+                bail!(doc.err(format!(
+                    "{what} has a TRIANGLES index count that is not a multiple of 3"
+                )));
+            }
+            indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect()
+        }
+        5 => (2..indices.len())
+            .map(|i| {
+                if i % 2 == 0 {
+                    [indices[i - 2], indices[i - 1], indices[i]]
+                } else {
+                    [indices[i - 1], indices[i - 2], indices[i]]
+                }
+            })
+            .collect(),
+        6 => (2..indices.len())
+            .map(|i| [indices[0], indices[i - 1], indices[i]])
+            .collect(),
+        m => {
+            let kind = ["POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"]
+                .get(m as usize)
+                .copied()
+                .unwrap_or("unknown");
+            bail!(doc.err(format!(
+                "{what} is not made of triangles (mode {m}, {kind}); morph tweening needs a triangle mesh"
+            )))
+        }
+    })
+}

@@ -1,0 +1,19 @@
+//! glTF in and out.
+//!
+//! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
+//! container, buffers) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles) ... the
+//! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`]) ->
+//! [`compact`] (channels and accessors nothing uses any more dropped) -> [`write`] (`.glb` or
+//! `.gltf` with its `.bin` and images, staged as one all-or-nothing set of files).
+
+mod accessor;
+mod build;
+mod compact;
+mod read;
+mod write;
+
+pub use accessor::{read_triangles, read_vec3};
+pub use build::{BinBuilder, Output};
+pub(crate) use compact::{compact, drop_channels};
+pub use read::{arr, at, Document, UNDECODABLE_EXTENSIONS};
+pub use write::{begin, finish, stage, Container};

@@ -1,0 +1,222 @@
+//! The `tween` command from file to file: read, keyframes, frames, write (glTF morph animation
+//! or a USD point cache), summary. Every file of the run is written in one all-or-nothing step.
+
+use super::frames::{collect_mesh, tween_mesh, MeshStats, PrimitiveDelta};
+use super::keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh};
+use super::morph_targets::apply_frames;
+use super::options::{Method, Timing, TweenOptions};
+use super::report::{MeshReport, Report};
+use super::schedule::{close_loop, plan};
+use crate::gltf::{self, Container, Document};
+use crate::output::{Format, Outputs};
+use crate::progress::{peak_rss_mib, Progress};
+use crate::usd::{self, Delta, MeshPlan};
+use anyhow::Result;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Everything `inbetween tween` was asked to do.
+#[derive(Clone, Debug)]
+pub struct TweenJob {
+    pub input: PathBuf,
+    pub output: PathBuf,
+    pub method: Method,
+    pub keys: KeySource,
+    pub animation: Option<String>,
+    pub timing: Timing,
+    pub quiet: bool,
+    /// `Some(true)`: close every track into a loop (`--loop`); `Some(false)`: never wrap
+    /// (`--no-loop`); `None`: wrap tracks whose last key equals the first.
+    pub looping: Option<bool>,
+    /// Seconds to continue the motion before the first key and after the last.
+    pub extend: [f64; 2],
+    /// Where to write the per-frame quality report (JSON).
+    pub report: Option<PathBuf>,
+}
+
+/// What was done, for the summary line.
+#[derive(Clone, Debug, Default)]
+pub struct Summary {
+    pub meshes: Vec<MeshStats>,
+    pub seconds: f64,
+    /// Peak resident memory of the process, MiB (Linux; 0 elsewhere).
+    pub peak_rss_mib: f64,
+}
+
+impl Summary {
+    pub fn line(&self, job: &TweenJob) -> String {
+        let frames: usize = self.meshes.iter().map(|m| m.frames).sum();
+        let tris: usize = self.meshes.iter().map(|m| m.triangles).sum();
+        let keys: usize = self.meshes.iter().map(|m| m.keys).sum();
+        let setup: f64 = self.meshes.iter().map(|m| m.setup.as_secs_f64()).sum();
+        let solve: f64 = self.meshes.iter().map(|m| m.solve.as_secs_f64()).sum();
+        format!(
+            "{}: {} mesh{} ({} triangles), {} keys -> {} frames by the {} method; {:.3} s (set-up {:.3} s, frames {:.3} s), peak memory {:.0} MiB",
+            job.output.display(),
+            self.meshes.len(),
+            if self.meshes.len() == 1 { "" } else { "es" },
+            tris,
+            keys,
+            frames,
+            job.method.name(),
+            self.seconds,
+            setup,
+            solve,
+            self.peak_rss_mib,
+        )
+    }
+}
+
+/// The run in progress: its input, meshes, options and what has been measured.
+struct Run<'a> {
+    job: &'a TweenJob,
+    doc: Document,
+    meshes: Vec<MorphMesh>,
+    opts: TweenOptions,
+    progress: Progress,
+    stats: Vec<MeshStats>,
+    reports: Vec<MeshReport>,
+}
+
+impl Run<'_> {
+    /// Stage the `--report` file, if one was asked for.
+    fn stage_report(&mut self, files: &mut Outputs) -> Result<()> {
+        let Some(path) = &self.job.report else {
+            return Ok(());
+        };
+        let report = Report {
+            input: self.job.input.display().to_string(),
+            output: self.job.output.display().to_string(),
+            meshes: std::mem::take(&mut self.reports),
+        };
+        files.write(path, &serde_json::to_vec_pretty(&report)?)
+    }
+
+    /// Every mesh's frames collected, then written as morph targets into the glTF output.
+    fn gltf(&mut self, container: Container, files: &mut Outputs) -> Result<()> {
+        let mut results = Vec::new();
+        for m in &self.meshes {
+            self.progress.message(m.name.clone());
+            results.push(collect_mesh(m, &self.opts, &|| self.progress.inc())?);
+        }
+        self.progress.finish();
+        let mut out = gltf::begin(&self.doc, container, &self.job.output)?;
+        apply_frames(&mut out, &results)?;
+        for r in results {
+            self.stats.push(r.stats);
+            self.reports.extend(r.report);
+        }
+        gltf::stage(out, container, &self.job.output, files)
+    }
+
+    /// The frames streamed from the solver into a USD point cache, one chunk at a time.
+    fn usd(&mut self, format: Format, files: &mut Outputs) -> Result<()> {
+        let fps = match self.opts.timing {
+            Timing::Fps(f) => Some(f),
+            Timing::Tweens(_) => None,
+        };
+        let plans: Vec<MeshPlan> = self
+            .meshes
+            .iter()
+            .map(|m| MeshPlan {
+                mesh: m.mesh,
+                tracks: m
+                    .tracks
+                    .iter()
+                    .map(|t| plan(&t.times, &self.opts).iter().map(|f| f.time).collect())
+                    .collect(),
+            })
+            .collect();
+        let stage = usd::build_stage(&self.doc, &plans, fps)?;
+        let (meshes, opts, progress) = (&self.meshes, &self.opts, &self.progress);
+        let (stats, reports) = (&mut self.stats, &mut self.reports);
+        usd::write_file(
+            &stage,
+            format,
+            &self.job.output,
+            &mut |sink| {
+                for (k, m) in meshes.iter().enumerate() {
+                    progress.message(m.name.clone());
+                    let done = tween_mesh(m, opts, &|| progress.inc(), &mut |f, deltas| {
+                        sink(k, f, &usd_deltas(&deltas))
+                    })?;
+                    stats.push(done.stats);
+                    reports.extend(done.report);
+                }
+                Ok(())
+            },
+            files,
+        )?;
+        progress.finish();
+        Ok(())
+    }
+}
+
+/// A frame's deltas as the USD writer takes them.
+fn usd_deltas(deltas: &[PrimitiveDelta]) -> Vec<Delta<'_>> {
+    deltas
+        .iter()
+        .map(|d| Delta {
+            positions: &d.positions,
+            normals: d.normals.as_deref(),
+        })
+        .collect()
+}
+
+/// Run the tween job. Nothing is written unless every step succeeds.
+pub fn run_tween(job: &TweenJob) -> Result<Summary> {
+    let started = Instant::now();
+    let format = Format::of(&job.output)?;
+    if let Timing::Fps(f) = job.timing {
+        anyhow::ensure!(
+            f.is_finite() && f > 0.0,
+            "--fps must be a positive number (got {f})"
+        );
+    }
+    let doc = Document::open(&job.input)?;
+    let mut meshes = find_morph_meshes(
+        &doc,
+        &KeyOptions {
+            source: job.keys,
+            animation: job.animation.as_deref(),
+        },
+    )?;
+    if job.looping == Some(true) {
+        meshes
+            .iter_mut()
+            .flat_map(|m| m.tracks.iter_mut())
+            .for_each(close_loop);
+    }
+    let opts = TweenOptions {
+        method: job.method,
+        timing: job.timing,
+        report: job.report.is_some(),
+        wrap: job.looping != Some(false),
+        extend: job.extend,
+    };
+    let total: usize = meshes
+        .iter()
+        .flat_map(|m| m.tracks.iter().map(|t| plan(&t.times, &opts).len()))
+        .sum();
+    let mut run = Run {
+        job,
+        doc,
+        meshes,
+        opts,
+        progress: Progress::new(total as u64, "tween", job.quiet),
+        stats: Vec::new(),
+        reports: Vec::new(),
+    };
+    let mut files = Outputs::new();
+    match Container::of(format) {
+        Some(container) => run.gltf(container, &mut files)?,
+        None => run.usd(format, &mut files)?,
+    }
+    run.stage_report(&mut files)?;
+    files.commit()?;
+    Ok(Summary {
+        meshes: run.stats,
+        seconds: started.elapsed().as_secs_f64(),
+        peak_rss_mib: peak_rss_mib(),
+    })
+}

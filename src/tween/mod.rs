@@ -1,0 +1,36 @@
+//! `inbetween tween`: in-between frames of a mesh's morph keyframes.
+//!
+//! The pipeline, one module per stage: [`keys`] (morph meshes and their key tracks from the
+//! glTF) -> [`weld`] (seams merged for the solve) -> [`schedule`] (where frames lie in time) ->
+//! [`segment`] per pair of keys: [`seed`] or [`spline`] (with [`gradient`]: deformation
+//! gradients, polar decomposition, rotation logs; and [`solve`]: the sparse Poisson system) ->
+//! [`normals`] -> [`report`] (shape figures) -> [`frames`] (a mesh's frames, streamed) ->
+//! [`morph_targets`] (glTF morph animation) or the USD writer; [`job`] runs it from file to
+//! file, with [`options`] holding what the user asked for.
+
+mod frames;
+mod gradient;
+mod job;
+mod keys;
+mod morph_targets;
+mod normals;
+mod options;
+mod report;
+mod schedule;
+mod seed;
+mod segment;
+mod solve;
+mod spline;
+mod weld;
+
+pub use frames::{key_poses, track_frames_welded};
+pub use job::{run_tween, Summary, TweenJob};
+pub use keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh, Track};
+pub use options::{Method, Timing, TweenOptions};
+pub use schedule::{plan, schedule, FrameAt};
+pub use weld::bbox_diagonal;
+
+pub(crate) use segment::{KeyTrack, Segment};
+pub(crate) use solve::Pattern;
+pub(crate) use spline::is_loop;
+pub(crate) use weld::{rms_rel, Welded};

@@ -1,0 +1,129 @@
+//! Schedule stage: where the output frames of a track lie in time, and between which keys.
+
+use super::keys::Track;
+use super::options::{Timing, TweenOptions};
+
+/// One output frame of a track: the time and where it falls between keys.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameAt {
+    pub time: f64,
+    /// The segment's start and end keys (equal for a track with a single key time).
+    pub key_a: usize,
+    pub key_b: usize,
+    /// Position within the segment, 0 at `key_a`, 1 at `key_b`.
+    pub t: f64,
+}
+
+/// Frame times for keys at `times` (non-decreasing).
+pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
+    // Segments of positive duration, in order.
+    let segments: Vec<(usize, usize)> = (0..times.len().saturating_sub(1))
+        .filter(|&k| times[k + 1] > times[k])
+        .map(|k| (k, k + 1))
+        .collect();
+    let Some(&(_, last_b)) = segments.last() else {
+        return vec![FrameAt {
+            time: times[0],
+            key_a: 0,
+            key_b: 0,
+            t: 0.0,
+        }];
+    };
+    let mut out = Vec::new();
+    match timing {
+        Timing::Tweens(n) => {
+            for &(a, b) in &segments {
+                for j in 0..=n {
+                    let t = j as f64 / (n + 1) as f64;
+                    out.push(FrameAt {
+                        time: times[a] + (times[b] - times[a]) * t,
+                        key_a: a,
+                        key_b: b,
+                        t,
+                    });
+                }
+            }
+            let (a, b) = segments[segments.len() - 1];
+            out.push(FrameAt {
+                time: times[last_b],
+                key_a: a,
+                key_b: b,
+                t: 1.0,
+            });
+        }
+        Timing::Fps(fps) => {
+            let start = times[segments[0].0];
+            let span = times[last_b] - start;
+            let count = (span * fps + 1e-9).floor() as usize;
+            let mut seg = 0;
+            for i in 0..=count {
+                let time = start + i as f64 / fps;
+                while seg + 1 < segments.len() && time >= times[segments[seg].1] {
+                    seg += 1;
+                }
+                let (a, b) = segments[seg];
+                let t = ((time - times[a]) / (times[b] - times[a])).min(1.0);
+                out.push(FrameAt {
+                    time,
+                    key_a: a,
+                    key_b: b,
+                    t,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Frames of a track with keys at `times`: [`schedule`] plus the extensions of `opts`, which
+/// continue the first and last segments' motion (t < 0 before the first key, t > 1 after the
+/// last) at the frame spacing next to them.
+pub fn plan(times: &[f64], opts: &TweenOptions) -> Vec<FrameAt> {
+    let mut frames = schedule(times, opts.timing);
+    let [before, after] = opts.extend;
+    if frames.len() < 2 {
+        return frames;
+    }
+    let span = |f: &FrameAt| times[f.key_b] - times[f.key_a];
+    // `seconds` more of the segment of `from`, at `spacing` (negative: backwards in time),
+    // nearest to `from` first.
+    let continued = |from: FrameAt, spacing: f64, seconds: f64| -> Vec<FrameAt> {
+        let n = (seconds.max(0.0) / spacing.abs() + 1e-9).floor() as usize;
+        (1..=n)
+            .map(|k| {
+                let time = from.time + k as f64 * spacing;
+                FrameAt {
+                    time,
+                    key_a: from.key_a,
+                    key_b: from.key_b,
+                    t: (time - times[from.key_a]) / span(&from),
+                }
+            })
+            .collect()
+    };
+    let spacing = frames[1].time - frames[0].time;
+    if spacing > 0.0 {
+        let mut ext = continued(frames[0], -spacing, before);
+        ext.reverse();
+        frames.splice(0..0, ext);
+    }
+    let last = frames[frames.len() - 1];
+    let spacing = last.time - frames[frames.len() - 2].time;
+    if spacing > 0.0 {
+        frames.extend(continued(last, spacing, after));
+    }
+    frames
+}
+
+/// Close a track into a loop (`--loop`): unless its last key already equals its first, append
+/// the first key again, one mean key spacing after the last.
+pub fn close_loop(track: &mut Track) {
+    let (k, times) = (track.times.len(), &track.times);
+    if k < 2 || track.weights[k - 1] == track.weights[0] {
+        return;
+    }
+    let spacing = (times[k - 1] - times[0]) / (k - 1) as f64;
+    let spacing = if spacing > 0.0 { spacing } else { 1.0 };
+    track.times.push(times[k - 1] + spacing);
+    track.weights.push(track.weights[0].clone());
+}

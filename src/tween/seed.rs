@@ -1,0 +1,112 @@
+//! The seed method (ALGORITHMS.md part A as published) between two key poses of a welded mesh:
+//! per triangle `T = R S`, `R(t) = exp(t log R)` (slerp from identity, shortest arc),
+//! `S(t) = (1-t) I + t S`, `T(t) = R(t) S(t)`, the vertices from the least-squares solve, and
+//! every connected component translated so its vertex centroid follows the straight line
+//! between the keys'.
+
+use super::gradient::{axis_angle_matrix, deformation, frame, gradient_operator, polar, quat_log};
+use super::solve::{scatter, Pattern, Placement};
+use anyhow::Result;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// What a seed segment keeps per valid triangle to assemble a frame's right-hand side.
+struct TriangleTween {
+    corners: [u32; 3],
+    /// Unit rotation axis of R and its angle in [0, pi] (shortest arc, as the seed's slerp).
+    axis: DVec3,
+    angle: f64,
+    /// Gradient operator of the reference triangle at corners 1 and 2 (corner 0's is minus
+    /// their sum).
+    g: [DVec3; 2],
+    /// S applied to each of them.
+    sg: [DVec3; 2],
+}
+
+impl TriangleTween {
+    fn gradients(&self) -> [DVec3; 3] {
+        [-(self.g[0] + self.g[1]), self.g[0], self.g[1]]
+    }
+}
+
+pub struct SeedSegment {
+    x0: Vec<DVec3>,
+    x1: Vec<DVec3>,
+    triangles: Vec<TriangleTween>,
+    placement: Placement,
+    centroid0: Vec<DVec3>,
+    centroid1: Vec<DVec3>,
+}
+
+impl SeedSegment {
+    pub fn new(
+        x0: Vec<DVec3>,
+        x1: Vec<DVec3>,
+        pattern: &Pattern,
+        triangles: &[[u32; 3]],
+    ) -> Result<Self> {
+        let n = x0.len();
+        let per_triangle: Vec<Option<TriangleTween>> = triangles
+            .par_iter()
+            .map(|&[a, b, c]| {
+                let v = frame(x0[a as usize], x0[b as usize], x0[c as usize])?;
+                let v_inv = v.inverse();
+                let g = gradient_operator(&v_inv);
+                let t = deformation(&v_inv, x1[a as usize], x1[b as usize], x1[c as usize]);
+                let (q, s) = polar(&t);
+                let r = quat_log(q);
+                let angle = r.length();
+                let axis = if angle > 0.0 { r / angle } else { DVec3::X };
+                Some(TriangleTween {
+                    corners: [a, b, c],
+                    axis,
+                    angle,
+                    g: [g[1], g[2]],
+                    sg: [s * g[1], s * g[2]],
+                })
+            })
+            .collect();
+        let valid: Vec<[u32; 3]> = per_triangle.iter().flatten().map(|t| t.corners).collect();
+        let placement = Placement::new(
+            pattern,
+            n,
+            per_triangle
+                .iter()
+                .map(|t| t.as_ref().map(TriangleTween::gradients)),
+            &valid,
+        )?;
+        let (centroid0, centroid1) = (placement.centroids(&x0), placement.centroids(&x1));
+        Ok(SeedSegment {
+            x0,
+            x1,
+            triangles: per_triangle.into_iter().flatten().collect(),
+            placement,
+            centroid0,
+            centroid1,
+        })
+    }
+
+    pub fn factor_nonzeros(&self) -> usize {
+        self.placement.factor_nonzeros()
+    }
+
+    pub fn frame(&self, t: f64) -> Vec<DVec3> {
+        let mut rhs = vec![[0.0f64; 3]; self.x0.len()];
+        for tri in &self.triangles {
+            let r = axis_angle_matrix(tri.axis, tri.angle * t);
+            // T(t) g = R(t) ((1-t) g + t S g)
+            let v1 = r * (tri.g[0] * (1.0 - t) + tri.sg[0] * t);
+            let v2 = r * (tri.g[1] * (1.0 - t) + tri.sg[1] * t);
+            scatter(&mut rhs, tri.corners, v1, v2);
+        }
+        // Centroid path per component; untouched vertices follow the straight line.
+        let centroids: Vec<DVec3> = self
+            .centroid0
+            .iter()
+            .zip(&self.centroid1)
+            .map(|(a, b)| a.lerp(*b, t))
+            .collect();
+        self.placement
+            .place(rhs, &centroids, |v| self.x0[v].lerp(self.x1[v], t))
+    }
+}

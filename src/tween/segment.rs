@@ -1,0 +1,90 @@
+//! Interpolate stage: one segment (a pair of consecutive keys) of a track, ready to produce
+//! frames by the chosen [`Method`]: [`SeedSegment`], [`SplineSegment`], or vertex lerp.
+
+use super::options::Method;
+use super::seed::SeedSegment;
+use super::solve::Pattern;
+use super::spline::{is_loop, SplineSegment, SplineTrack};
+use anyhow::Result;
+use glam::DVec3;
+
+/// The tween of one pair of keys, ready to produce frames.
+pub enum Segment {
+    Linear { x0: Vec<DVec3>, x1: Vec<DVec3> },
+    Seed(Box<SeedSegment>),
+    Spline(Box<SplineSegment>),
+}
+
+impl Segment {
+    /// Prepare the tween from `x0` to `x1` (welded positions). `pattern` is the mesh's
+    /// analysed system and `triangles` its welded triangles (same order as the pattern's).
+    pub fn new(
+        method: Method,
+        x0: Vec<DVec3>,
+        x1: Vec<DVec3>,
+        pattern: Option<&Pattern>,
+        triangles: &[[u32; 3]],
+    ) -> Result<Segment> {
+        match method {
+            Method::Linear => Ok(Segment::Linear { x0, x1 }),
+            Method::Seed | Method::Spline => {
+                let pattern = pattern.expect("the seed method needs the mesh's pattern");
+                Ok(Segment::Seed(Box::new(SeedSegment::new(
+                    x0, x1, pattern, triangles,
+                )?)))
+            }
+        }
+    }
+
+    /// The frame at `t` in [0, 1] (or beyond, to extrapolate).
+    pub fn frame(&self, t: f64) -> Vec<DVec3> {
+        match self {
+            Segment::Linear { x0, x1 } => x0.iter().zip(x1).map(|(a, b)| a.lerp(*b, t)).collect(),
+            Segment::Seed(s) => s.frame(t),
+            Segment::Spline(s) => s.frame(t),
+        }
+    }
+
+    /// Nonzeros of the Cholesky factor used by the solves (0 for `linear`).
+    pub fn factor_nonzeros(&self) -> usize {
+        match self {
+            Segment::Linear { .. } => 0,
+            Segment::Seed(s) => s.factor_nonzeros(),
+            Segment::Spline(s) => s.factor_nonzeros(),
+        }
+    }
+}
+
+/// A track's welded keys at their times, and the mesh they share (its welded triangles and,
+/// for the methods that solve, its analysed system): what a segment is built from.
+pub struct KeyTrack<'a> {
+    pub keys: &'a [Vec<DVec3>],
+    pub times: &'a [f64],
+    pub pattern: Option<&'a Pattern>,
+    pub triangles: &'a [[u32; 3]],
+}
+
+impl KeyTrack<'_> {
+    /// The segment from key a to key b (a + 1, or a itself for a track with a single key time)
+    /// by `method`; with `wrap`, `spline` wraps around a track whose last key repeats its
+    /// first. `pattern` is required by `seed` and `spline`.
+    pub fn segment(&self, method: Method, wrap: bool, a: usize, b: usize) -> Result<Segment> {
+        let (keys, pattern, triangles) = (self.keys, self.pattern, self.triangles);
+        match method {
+            Method::Spline if b == a + 1 => {
+                let pattern = pattern.expect("the spline method needs the mesh's pattern");
+                let looped = wrap && is_loop(keys);
+                let track = SplineTrack::new(keys, self.times, looped, pattern, triangles)?;
+                Ok(Segment::Spline(Box::new(track.segment(a)?)))
+            }
+            Method::Spline => Segment::new(
+                Method::Seed,
+                keys[a].clone(),
+                keys[b].clone(),
+                pattern,
+                triangles,
+            ),
+            m => Segment::new(m, keys[a].clone(), keys[b].clone(), pattern, triangles),
+        }
+    }
+}

@@ -1,0 +1,15 @@
+//! USD point caches of a glTF scene.
+//!
+//! The pipeline, one module per stage: [`stage`] (the glTF scene as a USD stage model: Xforms,
+//! Meshes, which of them are animated and at which time codes) -> the frames, streamed in as
+//! they are computed -> [`usda`] (text, samples spooled) | [`usdc`] (crate file) -> [`usdz`]
+//! (package); [`write`] picks the format and stages the file.
+
+mod stage;
+mod usda;
+mod usdc;
+mod usdz;
+mod write;
+
+pub use stage::{build_stage, identifier, Delta, FrameSource, MeshPlan, Stage};
+pub use write::write_file;

@@ -1,0 +1,289 @@
+//! `.usda` writer: the stage as USD text. Every animated attribute's samples are spooled to
+//! scratch files beside the output as frames arrive, then copied into the layer, so no frame
+//! is held in memory.
+
+use super::stage::{
+    animated, extent, for_each_sample, Animation, FrameSource, MeshPrim, Prim, Stage,
+};
+use crate::output::Outputs;
+use anyhow::Result;
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Write the stage as USDA text.
+fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
+    writeln!(out, "#usda 1.0")?;
+    writeln!(out, "(")?;
+    writeln!(out, "    defaultPrim = \"{}\"", stage.root)?;
+    writeln!(
+        out,
+        "    doc = \"Written by inbetween {}\"",
+        env!("CARGO_PKG_VERSION")
+    )?;
+    writeln!(out, "    endTimeCode = {}", stage.end)?;
+    writeln!(out, "    framesPerSecond = {}", stage.rate)?;
+    writeln!(out, "    metersPerUnit = 1")?;
+    writeln!(out, "    startTimeCode = {}", stage.start)?;
+    writeln!(out, "    timeCodesPerSecond = {}", stage.rate)?;
+    writeln!(out, "    upAxis = \"Y\"")?;
+    writeln!(out, ")")?;
+    writeln!(out)?;
+    writeln!(out, "def Xform \"{}\"", stage.root)?;
+    writeln!(out, "{{")?;
+    for c in &stage.children {
+        write_prim(c, out, 1, spool)?;
+    }
+    writeln!(out, "}}")?;
+    Ok(())
+}
+
+fn write_prim(prim: &Prim, out: &mut dyn Write, depth: usize, spool: &Spool) -> Result<()> {
+    let pad = "    ".repeat(depth);
+    match prim {
+        Prim::Xform {
+            name,
+            matrix,
+            children,
+        } => {
+            writeln!(out, "{pad}def Xform \"{name}\"")?;
+            writeln!(out, "{pad}{{")?;
+            if let Some(m) = matrix {
+                let rows: Vec<String> = m
+                    .chunks(4)
+                    .map(|r| format!("({}, {}, {}, {})", r[0], r[1], r[2], r[3]))
+                    .collect();
+                writeln!(
+                    out,
+                    "{pad}    matrix4d xformOp:transform = ( {} )",
+                    rows.join(", ")
+                )?;
+                writeln!(
+                    out,
+                    "{pad}    uniform token[] xformOpOrder = [\"xformOp:transform\"]"
+                )?;
+            }
+            for c in children {
+                write_prim(c, out, depth + 1, spool)?;
+            }
+            writeln!(out, "{pad}}}")?;
+        }
+        Prim::Mesh(m) => write_mesh(m, out, &pad, spool)?,
+    }
+    Ok(())
+}
+
+/// A float in its shortest round-trip form, in exponent notation when that is shorter
+/// (USD parses both back to the same f32).
+struct F(f32);
+
+impl std::fmt::Display for F {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a != 0.0 && !(1e-4..1e7).contains(&a) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
+fn write_vec3s(out: &mut dyn Write, v: &[[f32; 3]]) -> std::io::Result<()> {
+    out.write_all(b"[")?;
+    for (i, p) in v.iter().enumerate() {
+        if i > 0 {
+            out.write_all(b", ")?;
+        }
+        write!(out, "({}, {}, {})", F(p[0]), F(p[1]), F(p[2]))?;
+    }
+    out.write_all(b"]")
+}
+
+fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str, spool: &Spool) -> Result<()> {
+    writeln!(out, "{pad}def Mesh \"{}\"", m.name)?;
+    writeln!(out, "{pad}{{")?;
+    let p = format!("{pad}    ");
+    if m.double_sided {
+        writeln!(out, "{p}uniform bool doubleSided = 1")?;
+    }
+    match &m.animation {
+        None => {
+            let e = extent(&m.points);
+            write!(out, "{p}float3[] extent = ")?;
+            write_vec3s(out, &e)?;
+            writeln!(out)?;
+        }
+        Some(a) => {
+            writeln!(out, "{p}float3[] extent.timeSamples = {{")?;
+            spool.copy(a, Attr::Extent, out)?;
+            writeln!(out, "{p}}}")?;
+        }
+    }
+    write!(out, "{p}int[] faceVertexCounts = [")?;
+    for i in 0..m.indices.len() / 3 {
+        out.write_all(if i == 0 { b"3" } else { b", 3" })?;
+    }
+    writeln!(out, "]")?;
+    write!(out, "{p}int[] faceVertexIndices = [")?;
+    for (i, v) in m.indices.iter().enumerate() {
+        if i > 0 {
+            out.write_all(b", ")?;
+        }
+        write!(out, "{v}")?;
+    }
+    writeln!(out, "]")?;
+    if let Some(n) = &m.normals {
+        match &m.animation {
+            Some(a) if a.normals => {
+                writeln!(out, "{p}normal3f[] normals (")?;
+                writeln!(out, "{p}    interpolation = \"vertex\"")?;
+                writeln!(out, "{p})")?;
+                writeln!(out, "{p}normal3f[] normals.timeSamples = {{")?;
+                spool.copy(a, Attr::Normals, out)?;
+                writeln!(out, "{p}}}")?;
+            }
+            _ => {
+                write!(out, "{p}normal3f[] normals = ")?;
+                write_vec3s(out, n)?;
+                writeln!(out, " (")?;
+                writeln!(out, "{p}    interpolation = \"vertex\"")?;
+                writeln!(out, "{p})")?;
+            }
+        }
+    }
+    match &m.animation {
+        None => {
+            write!(out, "{p}point3f[] points = ")?;
+            write_vec3s(out, &m.points)?;
+            writeln!(out)?;
+        }
+        Some(a) => {
+            writeln!(out, "{p}point3f[] points.timeSamples = {{")?;
+            spool.copy(a, Attr::Points, out)?;
+            writeln!(out, "{p}}}")?;
+        }
+    }
+    if let Some(c) = m.color {
+        writeln!(
+            out,
+            "{p}color3f[] primvars:displayColor = [({}, {}, {})] (",
+            F(c[0]),
+            F(c[1]),
+            F(c[2])
+        )?;
+        writeln!(out, "{p}    interpolation = \"constant\"")?;
+        writeln!(out, "{p})")?;
+    }
+    if let Some(st) = &m.st {
+        write!(out, "{p}texCoord2f[] primvars:st = [")?;
+        for (i, t) in st.iter().enumerate() {
+            if i > 0 {
+                out.write_all(b", ")?;
+            }
+            write!(out, "({}, {})", F(t[0]), F(t[1]))?;
+        }
+        writeln!(out, "] (")?;
+        writeln!(out, "{p}    interpolation = \"vertex\"")?;
+        writeln!(out, "{p})")?;
+    }
+    writeln!(out, "{p}uniform token subdivisionScheme = \"none\"")?;
+    writeln!(out, "{pad}}}")?;
+    Ok(())
+}
+
+/// Time-sampled attributes written per frame.
+#[derive(Clone, Copy)]
+pub enum Attr {
+    Extent,
+    Normals,
+    Points,
+}
+
+/// Sample text of every animated attribute, spooled to scratch files beside the output as
+/// frames arrive, then copied into the .usda (so no frame is held in memory).
+pub struct Spool {
+    files: HashMap<(usize, usize, u8), PathBuf>,
+}
+
+impl Spool {
+    fn path(&self, a: &Animation, attr: Attr) -> Option<&PathBuf> {
+        self.files.get(&(a.mesh, a.primitive, attr as u8))
+    }
+
+    fn copy(&self, a: &Animation, attr: Attr, out: &mut dyn Write) -> Result<()> {
+        if let Some(p) = self.path(a, attr) {
+            let mut f = std::fs::File::open(p)?;
+            std::io::copy(&mut f, out)?;
+        }
+        Ok(())
+    }
+}
+
+/// Stage `stage` as a `.usda` at `path` in `files`, its frames taken from `source`.
+pub fn write(
+    stage: &Stage,
+    path: &Path,
+    source: &mut FrameSource,
+    files: &mut Outputs,
+) -> Result<()> {
+    let spool = spool_frames(stage, path, source, files)?;
+    files.write_with(path, |w| write_usda(stage, w, &spool))
+}
+
+/// Run the frame source, writing each animated primitive's sample lines to spool files.
+fn spool_frames(
+    stage: &Stage,
+    path: &Path,
+    source: &mut FrameSource,
+    files: &mut Outputs,
+) -> Result<Spool> {
+    let prims = animated(stage);
+    let mut spool = Spool {
+        files: HashMap::new(),
+    };
+    let mut writers: HashMap<(usize, usize, u8), std::io::BufWriter<std::fs::File>> =
+        HashMap::new();
+    for m in &prims {
+        let a = m.animation.as_ref().expect("animated");
+        let attrs: &[Attr] = if a.normals {
+            &[Attr::Extent, Attr::Normals, Attr::Points]
+        } else {
+            &[Attr::Extent, Attr::Points]
+        };
+        for &attr in attrs {
+            let key = (a.mesh, a.primitive, attr as u8);
+            let tag = format!(".{}_{}_{}", a.mesh, a.primitive, attr as u8);
+            let file = files.scratch(path, &tag);
+            spool.files.insert(key, file.clone());
+            let f = std::fs::File::create(&file)
+                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+            writers.insert(key, std::io::BufWriter::with_capacity(1 << 20, f));
+        }
+    }
+    let pad = "            ";
+    source(&mut |k, f, deltas| {
+        for_each_sample(&prims, k, deltas, &mut |a, s| {
+            let t = a.times[f];
+            let arrays = [
+                (Attr::Extent, Some(&s.extent[..])),
+                (Attr::Normals, s.normals.as_deref()),
+                (Attr::Points, Some(&s.points[..])),
+            ];
+            for (attr, values) in arrays {
+                if let Some(values) = values {
+                    let w = writers
+                        .get_mut(&(k, a.primitive, attr as u8))
+                        .expect("spool");
+                    write!(w, "{pad}{t}: ")?;
+                    write_vec3s(w, values)?;
+                    writeln!(w, ",")?;
+                }
+            }
+            Ok(())
+        })
+    })?;
+    for (_, mut w) in writers {
+        w.flush()?;
+    }
+    Ok(spool)
+}
