@@ -4,6 +4,7 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use inbetween::blend::{BlendJob, CycleMethod};
+use inbetween::gltf::Access;
 use inbetween::tween::{KeySource, Method, Timing, TweenJob};
 use std::path::PathBuf;
 
@@ -177,6 +178,10 @@ pub struct TweenArgs {
     /// inverted triangles) to this JSON file (schema: schemas/report.schema.json).
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
+    /// Also read external buffers and images of a .gltf input under this folder (repeatable).
+    /// Without it a .gltf may only refer to files inside its own folder.
+    #[arg(long, value_name = "FOLDER")]
+    allow_external: Vec<PathBuf>,
     /// No progress bar, no summary.
     #[arg(short, long)]
     pub quiet: bool,
@@ -202,6 +207,9 @@ impl TweenArgs {
             },
             extend: [self.extend_before, self.extend_after],
             report: self.report,
+            access: Access {
+                roots: self.allow_external,
+            },
         }
     }
 }
@@ -232,6 +240,10 @@ pub struct BlendArgs {
     /// JSON file (schema: schemas/blend-report.schema.json).
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
+    /// Also read external buffers and images of a .gltf input under this folder (repeatable).
+    /// Without it a .gltf may only refer to files inside its own folder.
+    #[arg(long, value_name = "FOLDER")]
+    allow_external: Vec<PathBuf>,
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -248,6 +260,9 @@ impl BlendArgs {
             cycles: self.cycles.into(),
             cleanup: !self.no_cleanup,
             report: self.report,
+            access: Access {
+                roots: self.allow_external,
+            },
         }
     }
 }

@@ -65,14 +65,70 @@ pub fn folder_of(path: &Path) -> PathBuf {
     }
 }
 
+/// What every temporary file of ours beside `path` starts with: `.<name>.inbetween-`, then
+/// the process id, a tag and `.tmp`.
+fn temporary_prefix(path: &Path) -> String {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    format!(".{name}.inbetween-")
+}
+
 /// A temporary file beside `path`, named after it, this process and `tag`.
 fn temporary(path: &Path, tag: &str) -> PathBuf {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    folder_of(path).join(format!(".{name}.{}{tag}.tmp", std::process::id()))
+    folder_of(path).join(format!(
+        "{}{}{tag}.tmp",
+        temporary_prefix(path),
+        std::process::id()
+    ))
+}
+
+/// Remove the temporary files an earlier run at the same output path left behind when it was
+/// killed: ours by name, of a process that no longer runs (on systems without `/proc`, those
+/// older than a day).
+fn remove_stale(path: &Path) {
+    let prefix = temporary_prefix(path);
+    let Ok(entries) = std::fs::read_dir(folder_of(path)) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(rest) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(&prefix))
+            .filter(|n| n.ends_with(".tmp"))
+        else {
+            continue;
+        };
+        let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+        let Ok(pid) = digits.parse::<u32>() else {
+            continue;
+        };
+        let gone = if Path::new("/proc/self").exists() {
+            pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+        } else {
+            entry
+                .metadata()
+                .and_then(|m| m.modified())
+                .ok()
+                .and_then(|t| t.elapsed().ok())
+                .is_some_and(|age| age.as_secs() > 86_400)
+        };
+        if gone {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }
 
 fn cannot_write(path: &Path, e: impl std::fmt::Display) -> anyhow::Error {
     anyhow!("{}: cannot write: {e}", path.display())
+}
+
+/// An I/O error while writing `path` (a full disk, say) named with the file; other errors
+/// (a failure computing what is written) as they are.
+pub fn naming(path: &Path, e: anyhow::Error) -> anyhow::Error {
+    match e.root_cause().downcast_ref::<std::io::Error>() {
+        Some(io) if e.chain().count() == 1 => cannot_write(path, io),
+        _ => e,
+    }
 }
 
 /// The files of one run, staged under temporary names until [`Outputs::commit`].
@@ -96,12 +152,13 @@ impl Outputs {
         fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
     ) -> Result<()> {
         folder_exists(path)?;
+        remove_stale(path);
         let tmp = temporary(path, "");
         let file = File::create(&tmp).map_err(|e| cannot_write(path, e))?;
         // Registered before it is filled, so that a failure below removes it.
         self.staged.push((tmp, path.to_path_buf()));
         let mut w = BufWriter::with_capacity(1 << 20, file);
-        fill(&mut w)?;
+        fill(&mut w).map_err(|e| naming(path, e))?;
         w.flush().map_err(|e| cannot_write(path, e))?;
         Ok(())
     }
@@ -113,18 +170,9 @@ impl Outputs {
         })
     }
 
-    /// Stage `path` as a copy of the file `src`.
-    pub fn copy(&mut self, src: &Path, path: &Path) -> Result<()> {
-        self.write_with(path, |w| {
-            let mut f =
-                File::open(src).map_err(|e| anyhow!("{}: cannot read: {e}", src.display()))?;
-            std::io::copy(&mut f, w).map_err(|e| cannot_write(path, e))?;
-            Ok(())
-        })
-    }
-
     /// A scratch file beside `path` (tagged `tag`), removed when the run ends either way.
     pub fn scratch(&mut self, path: &Path, tag: &str) -> PathBuf {
+        remove_stale(path);
         let p = temporary(path, tag);
         self.scratch.push(p.clone());
         p
@@ -140,24 +188,73 @@ impl Outputs {
         let p = self.scratch(path, tag);
         let file = File::create(&p).map_err(|e| cannot_write(path, e))?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
-        fill(&mut w)?;
+        fill(&mut w).map_err(|e| naming(path, e))?;
         w.flush().map_err(|e| cannot_write(path, e))?;
         Ok(p)
     }
 
-    /// Rename every staged file onto its target; on failure nothing more is renamed and the
-    /// remaining temporaries are removed.
+    /// Put every staged file in its target's place. Targets that exist are first moved aside,
+    /// and if any rename fails every target is restored as it was, so the run's files appear
+    /// together or not at all.
     pub fn commit(mut self) -> Result<()> {
-        let staged = std::mem::take(&mut self.staged);
-        for (i, (tmp, path)) in staged.iter().enumerate() {
-            if let Err(e) = std::fs::rename(tmp, path) {
-                for (t, _) in &staged[i..] {
-                    let _ = std::fs::remove_file(t);
-                }
-                return Err(cannot_write(path, e));
+        for (_, path) in &self.staged {
+            if path.is_dir() {
+                // Dropped on return: the temporaries go with it.
+                return Err(cannot_write(path, "a folder is in its place"));
             }
         }
-        Ok(())
+        let staged = std::mem::take(&mut self.staged);
+        // (target, where its previous file was moved, whether the new file is in place).
+        let mut done: Vec<(&Path, Option<PathBuf>)> = Vec::new();
+        let mut failure = None;
+        for (tmp, path) in &staged {
+            let aside = match path.exists() {
+                true => {
+                    let aside = temporary(path, ".previous");
+                    if let Err(e) = std::fs::rename(path, &aside) {
+                        failure = Some(cannot_write(path, e));
+                        break;
+                    }
+                    Some(aside)
+                }
+                false => None,
+            };
+            if let Err(e) = std::fs::rename(tmp, path) {
+                if let Some(a) = &aside {
+                    let _ = std::fs::rename(a, path);
+                }
+                failure = Some(cannot_write(path, e));
+                break;
+            }
+            done.push((path, aside));
+        }
+        match failure {
+            None => {
+                for (_, aside) in done {
+                    if let Some(a) = aside {
+                        let _ = std::fs::remove_file(a);
+                    }
+                }
+                // The temporaries are all renamed: nothing is left for drop to remove.
+                Ok(())
+            }
+            Some(e) => {
+                for (path, aside) in done.into_iter().rev() {
+                    match aside {
+                        Some(a) => {
+                            let _ = std::fs::rename(a, path);
+                        }
+                        None => {
+                            let _ = std::fs::remove_file(path);
+                        }
+                    }
+                }
+                for (tmp, _) in &staged {
+                    let _ = std::fs::remove_file(tmp);
+                }
+                Err(e)
+            }
+        }
     }
 }
 

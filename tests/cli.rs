@@ -201,33 +201,6 @@ fn summary_unless_quiet() {
     }
 }
 
-/// Write a copy of `input` with its JSON changed by `edit` (GLB in, GLB out).
-fn edited_glb(input: &Path, out: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
-    let doc = Document::open(input).unwrap();
-    let mut json = doc.json.clone();
-    edit(&mut json);
-    write_glb(out, &json, &doc.buffers[0]);
-}
-
-/// Write `json` and `bin` as a GLB file, byte for byte as given.
-fn write_glb(path: &Path, json: &serde_json::Value, bin: &[u8]) {
-    let mut js = serde_json::to_vec(json).unwrap();
-    while !js.len().is_multiple_of(4) {
-        js.push(b' ');
-    }
-    let total = 12 + 8 + js.len() + 8 + bin.len();
-    let mut f = b"glTF".to_vec();
-    f.extend(2u32.to_le_bytes());
-    f.extend((total as u32).to_le_bytes());
-    f.extend((js.len() as u32).to_le_bytes());
-    f.extend(0x4E4F534Au32.to_le_bytes());
-    f.extend(&js);
-    f.extend((bin.len() as u32).to_le_bytes());
-    f.extend(0x004E4942u32.to_le_bytes());
-    f.extend(bin);
-    std::fs::write(path, f).unwrap();
-}
-
 #[test]
 fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     let dir = tempfile::tempdir().unwrap();
@@ -404,21 +377,6 @@ fn external_images_are_embedded_or_copied() {
     // Three clips animate the mesh: each keeps its channel, over its own frames.
     let (gdoc, _, _) = gltf::import(&gltf_out).unwrap();
     assert_eq!(gdoc.animations().count(), 3);
-}
-
-fn walk(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    if let Ok(rd) = std::fs::read_dir(dir) {
-        for e in rd.flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                out.extend(walk(&p));
-            } else {
-                out.push(p);
-            }
-        }
-    }
-    out
 }
 
 #[test]

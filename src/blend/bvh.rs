@@ -20,12 +20,18 @@ pub fn read(path: &FsPath) -> Result<(Rig, Clip)> {
     parse(&text).map_err(|e| at(path, e))
 }
 
-/// The whitespace-separated words of a BVH file, each asked for by what it should be.
-struct Words<'a>(std::str::SplitWhitespace<'a>);
+/// The whitespace-separated words of a BVH file, each asked for by what it should be, and the
+/// file's length in bytes.
+struct Words<'a> {
+    words: std::str::SplitWhitespace<'a>,
+    len: usize,
+}
 
 impl<'a> Words<'a> {
     fn next(&mut self, what: &str) -> Result<&'a str, String> {
-        self.0.next().ok_or_else(|| format!("ends before {what}"))
+        self.words
+            .next()
+            .ok_or_else(|| format!("ends before {what}"))
     }
 }
 
@@ -38,8 +44,12 @@ struct Hierarchy {
     dofs: Vec<(usize, Vec<Dof>)>,
 }
 
-fn parse(text: &str) -> Result<(Rig, Clip), String> {
-    let mut words = Words(text.split_whitespace());
+/// Parse the text of a BVH file (errors say what is wrong, without the file name).
+pub fn parse(text: &str) -> Result<(Rig, Clip), String> {
+    let mut words = Words {
+        words: text.split_whitespace(),
+        len: text.len(),
+    };
     if words.next("HIERARCHY")? != "HIERARCHY" {
         return Err("not a BVH file (no HIERARCHY)".into());
     }
@@ -139,6 +149,12 @@ fn motion(words: &mut Words, h: &Hierarchy) -> Result<Vec<Channel>, String> {
     let dt = num(words.next("a frame time")?)?;
     if dt <= 0.0 || frames == 0 {
         return Err("no frames".into());
+    }
+    // Each value takes at least two characters: a frame count beyond the text is refused
+    // before anything is allocated for it.
+    let per_frame: usize = h.dofs.iter().map(|(_, l)| l.len()).sum();
+    if frames.saturating_mul(per_frame.max(1)) > words.len / 2 {
+        return Err(format!("claims {frames} frames, more than the file holds"));
     }
     let n = h.names.len();
     let times: Vec<f64> = (0..frames).map(|f| f as f64 * dt).collect();

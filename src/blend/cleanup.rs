@@ -237,10 +237,16 @@ fn reach(rig: &Rig, leg: &Leg, pose: &mut Pose, world: &[DMat4], want: DVec3, fo
     if lab < MIN_BONE || lcb < MIN_BONE {
         return;
     }
-    let lat = (target - pa).length().clamp(
+    // The reach of the two bones: a thigh a thousand times its shin's length (or the other
+    // way round) leaves no range to clamp into, and the leg is left as it is.
+    let (shortest, longest) = (
         (lab - lcb).abs() * 1.001 + MIN_BONE,
         MAX_STRETCH * (lab + lcb),
     );
+    if shortest > longest {
+        return;
+    }
+    let lat = (target - pa).length().clamp(shortest, longest);
     let ankle_world = rotation_of(&world[c]);
     // Knee: the interior angle that puts the ankle at distance `lat` from the hip.
     let current = (pa - pb).angle_between(pc - pb);

@@ -2,9 +2,9 @@
 //! the new animation, write the document (atomically) and the report.
 
 use super::cycles::CycleMethod;
-use super::plan::{blend, BlendOptions, Report};
-use super::rig::{self, Clip, Path};
-use crate::gltf::{self, Container, Document};
+use super::plan::{blend, BlendOptions, Blended, Report};
+use super::rig::{self, Clip, Path, Rig};
+use crate::gltf::{self, Access, Container, Document};
 use crate::output::{Format, Outputs};
 use anyhow::{bail, Result};
 use std::collections::BTreeSet;
@@ -21,6 +21,8 @@ pub struct BlendJob {
     pub cycles: CycleMethod,
     pub cleanup: bool,
     pub report: Option<PathBuf>,
+    /// Where external references of a `.gltf` input may lead besides its own folder.
+    pub access: Access,
 }
 
 pub struct BlendSummary {
@@ -69,6 +71,25 @@ fn find_clip<'a>(doc: &Document, clips: &'a [Clip], key: &str) -> Result<&'a Cli
     )))
 }
 
+/// Most samples of a clip that blend analyses (at its key rate, at least
+/// [`MIN_RATE`](super::track::MIN_RATE)): 2.3 hours of capture at 120 per second.
+const MAX_SAMPLES: f64 = 1e6;
+
+/// Refuse a clip whose duration and key rate would need more than [`MAX_SAMPLES`] samples.
+fn check_size(doc: &Document, clip: &Clip) -> Result<()> {
+    let rate = clip.key_rate.max(super::track::MIN_RATE);
+    let samples = clip.duration() * rate;
+    if samples > MAX_SAMPLES {
+        bail!(doc.err(format!(
+            "animation {:?} lasts {:.6} s at {:.1} keys per second: more than {MAX_SAMPLES} samples to analyse",
+            clip.name,
+            clip.duration(),
+            rate
+        )));
+    }
+    Ok(())
+}
+
 fn skeleton_nodes(clip: &Clip) -> BTreeSet<usize> {
     clip.channels
         .iter()
@@ -77,24 +98,33 @@ fn skeleton_nodes(clip: &Clip) -> BTreeSet<usize> {
         .collect()
 }
 
-pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
-    let Some(container) = Container::of(Format::of(&job.output)?) else {
-        bail!(
-            "{}: blend writes .gltf or .glb (a skeletal clip has no USD point-cache form here)",
-            job.output.display()
-        );
-    };
-    if !(0.0..=1.0).contains(&job.weight) {
-        bail!("--weight {} is outside [0, 1]", job.weight);
-    }
-    let doc = Document::open(&job.input)?;
-    let (mut rig, clips) = rig::load_gltf(&doc)?;
-    let skins = rig::skins(&doc);
+/// Two clips of a document's character, blended: the rig (skeleton of their skin marked), the
+/// blended clip, and every (node, property) either source animates.
+pub struct BlendedClips {
+    pub rig: Rig,
+    pub blended: Blended,
+    pub animated: BTreeSet<(usize, Path)>,
+    /// The clips' names.
+    pub names: [String; 2],
+}
+
+/// Blend clips `clips` (names or indices) of `doc`'s character with `opts`: the skeleton they
+/// share found from the skins, everything checked first.
+pub fn blend_clips(
+    doc: &Document,
+    clips: &[String; 2],
+    opts: &BlendOptions,
+) -> Result<BlendedClips> {
+    let (mut rig, all) = rig::load_gltf(doc)?;
+    let skins = rig::skins(doc);
     if skins.is_empty() {
         bail!(doc.err("has no skin: blend needs a skinned character"));
     }
-    let a = find_clip(&doc, &clips, &job.clips[0])?;
-    let b = find_clip(&doc, &clips, &job.clips[1])?;
+    let a = find_clip(doc, &all, &clips[0])?;
+    let b = find_clip(doc, &all, &clips[1])?;
+    for clip in [a, b] {
+        check_size(doc, clip)?;
+    }
     let (na, nb) = (skeleton_nodes(a), skeleton_nodes(b));
     let best = |nodes: &BTreeSet<usize>| {
         (0..skins.len())
@@ -121,18 +151,42 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
             ))),
         }
     }
-    rig::use_skin(&doc, &mut rig, skin);
+    rig::use_skin(doc, &mut rig, skin);
+    let blended = blend(&rig, a, b, opts);
+    Ok(BlendedClips {
+        animated: a.animated().union(&b.animated()).copied().collect(),
+        names: [a.name.clone(), b.name.clone()],
+        rig,
+        blended,
+    })
+}
+
+pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
+    let Some(container) = Container::of(Format::of(&job.output)?) else {
+        bail!(
+            "{}: blend writes .gltf or .glb (a skeletal clip has no USD point-cache form here)",
+            job.output.display()
+        );
+    };
+    if !(0.0..=1.0).contains(&job.weight) {
+        bail!("--weight {} is outside [0, 1]", job.weight);
+    }
+    let doc = Document::open_with(&job.input, &job.access)?;
     let opts = BlendOptions {
         cycles: job.cycles,
         cleanup: job.cleanup,
         ..BlendOptions::new(job.weight)
     };
-    let blended = blend(&rig, a, b, &opts);
+    let BlendedClips {
+        rig,
+        blended,
+        animated,
+        names,
+    } = blend_clips(&doc, &job.clips, &opts)?;
     let name = job
         .name
         .clone()
-        .unwrap_or_else(|| format!("{}+{}", a.name, b.name));
-    let animated: BTreeSet<(usize, Path)> = a.animated().union(&b.animated()).copied().collect();
+        .unwrap_or_else(|| format!("{}+{}", names[0], names[1]));
     let channels = super::write::channels(&rig, &blended.poses, &animated);
     let mut out = gltf::begin(&doc, container, &job.output)?;
     super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);

@@ -23,9 +23,10 @@ mod track;
 mod write;
 
 pub use analyze::{analyze, Analysis, Character};
-pub use bvh::read as read_bvh;
+pub use bvh::{parse as parse_bvh, read as read_bvh};
 pub use cycles::{touchdowns, CycleMethod};
-pub use job::{run_blend, BlendJob, BlendSummary};
+pub use job::{blend_clips, run_blend, BlendJob, BlendSummary, BlendedClips};
+pub use plan::{BlendOptions, Blended};
 pub use rig::{load_gltf, Clip, Path, Pose, Rig};
 pub use track::{pose_unwrapped, size, Track};
 pub use write::append_animation;

@@ -10,6 +10,10 @@ use std::collections::BTreeSet;
 /// Shortest key span (seconds) a channel's key rate is measured over.
 const MIN_SPAN: f64 = 1e-9;
 
+/// A rotation key shorter than this (unitless) is no rotation at all (a zero-filled accessor):
+/// refused rather than normalised into NaN.
+const MIN_QUATERNION: f64 = 1e-6;
+
 /// World up: +Y in glTF and in the BVH files we read.
 pub const UP: DVec3 = DVec3::Y;
 
@@ -330,6 +334,12 @@ pub fn load_gltf(doc: &Document) -> Result<(Rig, Vec<Clip>)> {
                 s: DVec3::new(num(s, 0, 1.0), num(s, 1, 1.0), num(s, 2, 1.0)),
             }
         };
+        if !(trs.t.is_finite() && trs.r.is_finite() && trs.s.is_finite()) {
+            bail!(doc.err(format!(
+                "node {} has a transform that is not finite or cannot be decomposed",
+                local.len()
+            )));
+        }
         local.push(trs);
         let mesh = node
             .get("mesh")
@@ -409,6 +419,11 @@ fn read_clip(doc: &Document, rig: &Rig, index: usize, anim: &Value) -> Result<Cl
         if times.is_empty() {
             bail!(doc.err(format!("animation {name:?} has a sampler without keys")));
         }
+        if times.windows(2).any(|w| w[1] <= w[0]) {
+            bail!(doc.err(format!(
+                "animation {name:?}: the key times of accessor {input} do not increase"
+            )));
+        }
         let per_key_values =
             values.len() / times.len() / if interp == Interp::Cubic { 3 } else { 1 };
         let width = match path {
@@ -422,6 +437,20 @@ fn read_clip(doc: &Document, rig: &Rig, index: usize, anim: &Value) -> Result<Cl
                 path.name(),
                 times.len()
             )));
+        }
+        if path == Path::Rotation {
+            let (per_key, mid) = match interp {
+                Interp::Cubic => (12, 4),
+                _ => (4, 0),
+            };
+            let zero = values
+                .chunks_exact(per_key)
+                .position(|k| DQuat::from_slice(&k[mid..mid + 4]).length() < MIN_QUATERNION);
+            if let Some(k) = zero {
+                bail!(doc.err(format!(
+                    "animation {name:?}: rotation key {k} of node {node} (accessor {output}) is not a unit quaternion"
+                )));
+            }
         }
         channels.push(Channel {
             node,

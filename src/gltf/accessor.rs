@@ -9,12 +9,32 @@ use serde_json::Value;
 
 impl Document {
     /// Decode accessor `index` as `f64` values, `count * components` of them, row-major.
+    /// Every size is checked against the bytes behind it before anything is allocated, and
+    /// every value must be finite.
     pub fn read_f64(&self, index: usize) -> Result<(Vec<f64>, usize)> {
         let acc = self.accessor(index)?;
         let ncomp = acc.ncomp;
-        let mut out = vec![0.0f64; acc.count * ncomp];
-        if let Some(view) = acc.view {
-            let (bytes, stride) = self.view_slice(view, acc.offset, acc.count, acc.elem_size())?;
+        let backing = match acc.view {
+            Some(view) => Some(self.view_slice(view, acc.offset, acc.count, acc.elem_size())?),
+            None => {
+                // Zeros (plus sparse values): as many as the largest accessor the buffers
+                // really hold, which is what such an accessor stands beside (a morph target
+                // of a mesh).
+                if acc.count > self.largest_backed_count() {
+                    bail!(self.err(format!(
+                        "accessor {index} has no bufferView and claims {} elements, more than any accessor the file holds",
+                        acc.count
+                    )));
+                }
+                None
+            }
+        };
+        let total = acc
+            .count
+            .checked_mul(ncomp)
+            .ok_or_else(|| self.err(format!("accessor {index} claims too many elements")))?;
+        let mut out = vec![0.0f64; total];
+        if let Some((bytes, stride)) = backing {
             for i in 0..acc.count {
                 let base = i * stride;
                 for c in 0..ncomp {
@@ -23,45 +43,92 @@ impl Document {
             }
         }
         if let Some(sparse) = self.json["accessors"][index].get("sparse") {
-            let n = sparse["count"].as_u64().unwrap_or(0) as usize;
-            let ind = &sparse["indices"];
-            let idx_ty = ind["componentType"].as_u64().unwrap_or(0) as u32;
-            let idx_size = comp_size(idx_ty)
-                .ok_or_else(|| self.err(format!("accessor {index}: bad sparse index type")))?;
-            let iv = ind["bufferView"].as_u64().ok_or_else(|| {
-                self.err(format!(
-                    "accessor {index}: sparse indices without bufferView"
-                ))
-            })? as usize;
-            let io = ind["byteOffset"].as_u64().unwrap_or(0) as usize;
-            let (ibytes, _) = self.view_slice(iv, io, n, idx_size)?;
-            let val = &sparse["values"];
-            let vv = val["bufferView"].as_u64().ok_or_else(|| {
-                self.err(format!(
-                    "accessor {index}: sparse values without bufferView"
-                ))
-            })? as usize;
-            let vo = val["byteOffset"].as_u64().unwrap_or(0) as usize;
-            let (vbytes, _) = self.view_slice(vv, vo, n, acc.elem_size())?;
-            let sparse_acc = Accessor {
-                view: None,
-                offset: 0,
-                ..acc
-            };
-            for k in 0..n {
-                let target = read_uint(ibytes, k * idx_size, idx_ty) as usize;
-                if target >= acc.count {
-                    bail!(self.err(format!(
-                        "accessor {index}: sparse index {target} is out of range"
-                    )));
-                }
-                for c in 0..ncomp {
-                    out[target * ncomp + c] =
-                        sparse_acc.decode(vbytes, k * acc.elem_size() + c * acc.comp_size());
-                }
-            }
+            self.apply_sparse(index, &acc, sparse, &mut out)?;
+        }
+        if let Some(k) = out.iter().position(|v| !v.is_finite()) {
+            bail!(self.err(format!(
+                "accessor {index} has a NaN or infinite value at element {}",
+                k / ncomp
+            )));
         }
         Ok((out, ncomp))
+    }
+
+    /// Overwrite the elements a sparse accessor lists with its values.
+    fn apply_sparse(
+        &self,
+        index: usize,
+        acc: &Accessor,
+        sparse: &Value,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let ncomp = acc.ncomp;
+        let n = sparse["count"].as_u64().unwrap_or(0) as usize;
+        if n > acc.count {
+            bail!(self.err(format!(
+                "accessor {index}: sparse count {n} exceeds its count {}",
+                acc.count
+            )));
+        }
+        let ind = &sparse["indices"];
+        let idx_ty = ind["componentType"].as_u64().unwrap_or(0) as u32;
+        let idx_size = match idx_ty {
+            5121 | 5123 | 5125 => comp_size(idx_ty).unwrap_or(4),
+            _ => bail!(self.err(format!("accessor {index}: bad sparse index type"))),
+        };
+        let iv = ind["bufferView"].as_u64().ok_or_else(|| {
+            self.err(format!(
+                "accessor {index}: sparse indices without bufferView"
+            ))
+        })? as usize;
+        let io = ind["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let (ibytes, _) = self.view_slice(iv, io, n, idx_size)?;
+        let val = &sparse["values"];
+        let vv = val["bufferView"].as_u64().ok_or_else(|| {
+            self.err(format!(
+                "accessor {index}: sparse values without bufferView"
+            ))
+        })? as usize;
+        let vo = val["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let (vbytes, _) = self.view_slice(vv, vo, n, acc.elem_size())?;
+        let sparse_acc = Accessor {
+            view: None,
+            offset: 0,
+            ..*acc
+        };
+        for k in 0..n {
+            let target = read_uint(ibytes, k * idx_size, idx_ty) as usize;
+            if target >= acc.count {
+                bail!(self.err(format!(
+                    "accessor {index}: sparse index {target} is out of range"
+                )));
+            }
+            for c in 0..ncomp {
+                out[target * ncomp + c] =
+                    sparse_acc.decode(vbytes, k * acc.elem_size() + c * acc.comp_size());
+            }
+        }
+        Ok(())
+    }
+
+    /// The largest element count among the accessors whose buffer views hold them.
+    fn largest_backed_count(&self) -> usize {
+        *self
+            .largest_backed
+            .get_or_init(|| self.find_largest_backed())
+    }
+
+    fn find_largest_backed(&self) -> usize {
+        (0..super::read::arr(&self.json, "accessors").len())
+            .filter_map(|i| {
+                let acc = self.accessor(i).ok()?;
+                let view = acc.view?;
+                self.view_slice(view, acc.offset, acc.count, acc.elem_size())
+                    .ok()
+                    .map(|_| acc.count)
+            })
+            .max()
+            .unwrap_or(0)
     }
 
     /// Decode an index accessor (unsigned integer scalars).
@@ -107,7 +174,7 @@ impl Document {
     }
 
     /// The bytes of `count` elements of `elem` bytes starting `offset` bytes into buffer view
-    /// `view`, and the stride between elements.
+    /// `view`, and the stride between elements; an error unless the view holds them all.
     fn view_slice(
         &self,
         view: usize,
@@ -131,22 +198,32 @@ impl Document {
             .as_u64()
             .map(|s| s as usize)
             .unwrap_or(elem);
-        if start + len > data.len() {
+        if stride < elem {
             bail!(self.err(format!(
-                "bufferView {view} reaches past the end of buffer {buffer}"
+                "bufferView {view} has a byteStride of {stride}, less than the {elem}-byte elements read from it"
             )));
         }
-        let need = if count == 0 {
-            0
-        } else {
-            offset + (count - 1) * stride + elem
+        let end = start
+            .checked_add(len)
+            .filter(|&e| e <= data.len())
+            .ok_or_else(|| {
+                self.err(format!(
+                    "bufferView {view} reaches past the end of buffer {buffer}"
+                ))
+            })?;
+        let need = match count {
+            0 => Some(offset),
+            _ => (count - 1)
+                .checked_mul(stride)
+                .and_then(|x| x.checked_add(offset))
+                .and_then(|x| x.checked_add(elem)),
         };
-        if need > len {
+        if need.is_none_or(|n| n > len) {
             bail!(self.err(format!(
                 "an accessor reads past the end of bufferView {view}"
             )));
         }
-        Ok((&data[start + offset..start + len], stride))
+        Ok((&data[start + offset..end], stride))
     }
 }
 
@@ -271,4 +348,47 @@ pub fn read_triangles(doc: &Document, p: &Value, n: usize, what: &str) -> Result
             )))
         }
     })
+}
+
+/// Attribute `name` of primitive `p` (None when it has none): `ncomp` components per element
+/// and one element per vertex of the primitive's `n`, or an error naming `what`.
+pub fn read_attribute(
+    doc: &Document,
+    p: &Value,
+    name: &str,
+    ncomp: usize,
+    n: usize,
+    what: &str,
+) -> Result<Option<Vec<f64>>> {
+    let Some(acc) = p["attributes"][name].as_u64() else {
+        return Ok(None);
+    };
+    let (v, c) = doc.read_f64(acc as usize)?;
+    if c != ncomp {
+        bail!(doc.err(format!(
+            "{what} {name} (accessor {acc}) has {c} components, not {ncomp}"
+        )));
+    }
+    if v.len() != n * ncomp {
+        bail!(doc.err(format!(
+            "{what} {name} (accessor {acc}) has {} elements but POSITION has {n}",
+            v.len() / ncomp
+        )));
+    }
+    Ok(Some(v))
+}
+
+/// [`read_attribute`] of a VEC3 attribute as vectors.
+pub fn read_attribute3(
+    doc: &Document,
+    p: &Value,
+    name: &str,
+    n: usize,
+    what: &str,
+) -> Result<Option<Vec<DVec3>>> {
+    Ok(read_attribute(doc, p, name, 3, n, what)?.map(|v| {
+        v.chunks_exact(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]))
+            .collect()
+    }))
 }

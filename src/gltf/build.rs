@@ -36,8 +36,8 @@ impl BinBuilder {
 pub struct Output {
     pub json: Value,
     pub bin: BinBuilder,
-    /// External images of a `.gltf` output: (source file, copy beside the output).
-    pub(crate) copies: Vec<(PathBuf, PathBuf)>,
+    /// External images of a `.gltf` output: (their bytes, the copy beside the output).
+    pub(crate) copies: Vec<(Vec<u8>, PathBuf)>,
 }
 
 impl Output {

@@ -102,11 +102,16 @@ pub fn compact(out: &mut Output, candidates: &BTreeSet<usize>) {
     }
     let accessor_count = arr(json, "accessors").len();
     let mut used = vec![false; accessor_count];
-    visit_accessor_refs(json, &mut |a| {
-        if let Some(u) = used.get_mut(*a) {
-            *u = true;
-        }
+    let mut dangling = false;
+    visit_accessor_refs(json, &mut |a| match used.get_mut(*a) {
+        Some(u) => *u = true,
+        None => dangling = true,
     });
+    // A reference to an accessor that does not exist (the input's own error) would point at
+    // another one once the list is renumbered: such a file is written with nothing dropped.
+    if dangling {
+        return;
+    }
     let keep: Vec<bool> = (0..accessor_count)
         .map(|i| used[i] || !candidates.contains(&i))
         .collect();
@@ -132,10 +137,12 @@ pub fn compact(out: &mut Output, candidates: &BTreeSet<usize>) {
     // Buffer views: drop those nothing refers to any more that only dropped accessors used.
     let views = out.bin.views.len();
     let mut view_used = vec![false; views];
+    let mut dangling = false;
     let mut mark = |v: &Value| {
         if let Some(i) = v.as_u64() {
-            if let Some(u) = view_used.get_mut(i as usize) {
-                *u = true;
+            match view_used.get_mut(i as usize) {
+                Some(u) => *u = true,
+                None => dangling = true,
             }
         }
     };
@@ -147,7 +154,7 @@ pub fn compact(out: &mut Output, candidates: &BTreeSet<usize>) {
     for img in arr(json, "images") {
         mark(&img["bufferView"]);
     }
-    if view_used.iter().all(|&u| u) {
+    if dangling || view_used.iter().all(|&u| u) {
         return;
     }
     let mut bytes = Vec::new();

@@ -10,10 +10,12 @@ mod accessor;
 mod build;
 mod compact;
 mod read;
+mod uri;
 mod write;
 
-pub use accessor::{read_triangles, read_vec3};
+pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{BinBuilder, Output};
 pub(crate) use compact::{compact, drop_channels};
 pub use read::{arr, at, Document, UNDECODABLE_EXTENSIONS};
+pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

@@ -4,6 +4,7 @@
 //! not touch — unknown extensions, `extras`, names, vendor fields — is written back unchanged.
 //! Accessors are decoded in [`super::accessor`].
 
+use super::uri::{read_image, read_prefix, reference, regular_file, uri_error, Access, Reference};
 use anyhow::{anyhow, bail, Context, Result};
 use base64::Engine;
 use serde_json::Value;
@@ -23,6 +24,11 @@ pub struct Document {
     pub json: Value,
     /// `buffers[i]` holds the bytes of `json.buffers[i]`.
     pub buffers: Vec<Vec<u8>>,
+    /// Where external references (images) may lead.
+    pub access: Access,
+    /// The largest element count of an accessor its buffer view holds (found once, when an
+    /// accessor without a buffer view is read).
+    pub(crate) largest_backed: std::sync::OnceLock<usize>,
 }
 
 /// Prefix an error with the input path, so each message names its file.
@@ -30,14 +36,44 @@ pub fn at<P: AsRef<Path>>(path: P, msg: impl std::fmt::Display) -> anyhow::Error
     anyhow!("{}: {}", path.as_ref().display(), msg)
 }
 
+/// Top-level arrays whose entries must be objects.
+const OBJECT_ARRAYS: &[&str] = &[
+    "accessors",
+    "animations",
+    "buffers",
+    "bufferViews",
+    "cameras",
+    "images",
+    "materials",
+    "meshes",
+    "nodes",
+    "samplers",
+    "scenes",
+    "skins",
+    "textures",
+];
+
 impl Document {
-    /// Read and check a `.gltf` or `.glb` file. Errors name the file and the problem.
+    /// Read and check a `.gltf` or `.glb` file, its external references confined to its own
+    /// folder. Errors name the file and the problem.
     pub fn open(path: &Path) -> Result<Document> {
+        Document::open_with(path, &Access::default())
+    }
+
+    /// [`Document::open`], external references also allowed under `access.roots`.
+    pub fn open_with(path: &Path, access: &Access) -> Result<Document> {
+        regular_file(path)?;
         let bytes = std::fs::read(path).map_err(|e| at(path, format!("cannot read: {e}")))?;
+        Document::from_bytes(path, &bytes, access)
+    }
+
+    /// A document from the bytes of a `.gltf` or `.glb` file at `path` (which names it in
+    /// errors and anchors its external references).
+    pub fn from_bytes(path: &Path, bytes: &[u8], access: &Access) -> Result<Document> {
         let (json_bytes, bin) = if bytes.starts_with(b"glTF") {
-            split_glb(path, &bytes)?
+            split_glb(path, bytes)?
         } else {
-            (&bytes[..], None)
+            (bytes, None)
         };
         let json: Value = serde_json::from_slice(json_bytes).map_err(|e| {
             at(
@@ -45,7 +81,7 @@ impl Document {
                 format!("not a glTF file (the JSON does not parse: {e})"),
             )
         })?;
-        if !json.is_object() || json.get("asset").is_none() {
+        if !json.is_object() || !json.get("asset").is_some_and(Value::is_object) {
             return Err(at(path, "not a glTF file (no \"asset\" object)"));
         }
         let version = json["asset"]["version"].as_str().unwrap_or("");
@@ -55,6 +91,7 @@ impl Document {
                 format!("unsupported glTF version {version:?} (only 2.x is read)"),
             ));
         }
+        check_structure(&json).map_err(|e| at(path, e))?;
         if let Some(req) = json.get("extensionsRequired").and_then(Value::as_array) {
             for ext in req.iter().filter_map(Value::as_str) {
                 if UNDECODABLE_EXTENSIONS.contains(&ext) {
@@ -65,60 +102,159 @@ impl Document {
                 }
             }
         }
-        let dir = path.parent().unwrap_or(Path::new("."));
+        let folder = input_folder(path);
         let mut buffers = Vec::new();
         let mut bin = bin;
         for (i, b) in arr(&json, "buffers").iter().enumerate() {
-            let declared = b["byteLength"].as_u64().unwrap_or(0) as usize;
-            let data = match b.get("uri").and_then(Value::as_str) {
-                None => {
-                    let chunk = if i == 0 { bin.take() } else { None };
-                    chunk.map(<[u8]>::to_vec).ok_or_else(|| {
-                        at(
-                            path,
-                            format!(
-                                "buffer {i} has no uri and there is no GLB binary chunk for it"
-                            ),
-                        )
-                    })?
+            buffers.push(read_buffer(path, &folder, access, i, b, &mut bin)?);
+        }
+        // Images are read only when an output needs them, but every reference is checked now.
+        for (i, img) in arr(&json, "images").iter().enumerate() {
+            if let Some(uri) = img.get("uri").and_then(Value::as_str) {
+                if !uri.starts_with("data:") {
+                    let why = match reference(uri) {
+                        Err(why) => Some(why),
+                        Ok(Reference::Outside(_, why)) if access.roots.is_empty() => {
+                            Some(why.to_string())
+                        }
+                        Ok(_) => None,
+                    };
+                    if let Some(why) = why {
+                        return Err(uri_error(path, &format!("image {i}"), uri, why));
+                    }
                 }
-                Some(uri) if uri.starts_with("data:") => decode_data_uri(uri).ok_or_else(|| {
-                    at(
-                        path,
-                        format!("buffer {i} has a data URI that is not base64"),
-                    )
-                })?,
-                Some(uri) => {
-                    let file = dir.join(percent_decode(uri));
-                    std::fs::read(&file).map_err(|e| {
-                        at(
-                            path,
-                            format!("buffer {i} file {} cannot be read: {e}", file.display()),
-                        )
-                    })?
-                }
-            };
-            if data.len() < declared {
-                bail!(at(
-                    path,
-                    format!(
-                        "buffer {i} declares {declared} bytes but holds {}",
-                        data.len()
-                    )
-                ));
             }
-            buffers.push(data);
         }
         Ok(Document {
             path: path.to_path_buf(),
             json,
             buffers,
+            access: access.clone(),
+            largest_backed: std::sync::OnceLock::new(),
         })
     }
 
     pub fn err(&self, msg: impl std::fmt::Display) -> anyhow::Error {
         at(&self.path, msg)
     }
+
+    /// The folder the input lies in (external references are relative to it).
+    pub fn folder(&self) -> PathBuf {
+        input_folder(&self.path)
+    }
+
+    /// The bytes and MIME type of image `i`'s external file `uri` (checked as every reference
+    /// is, read up to the size limit, and only when it is an image type glTF allows).
+    pub fn read_image(&self, i: usize, uri: &str) -> Result<(Vec<u8>, &'static str)> {
+        let what = format!("image {i}");
+        let file = self
+            .access
+            .resolve(&self.folder(), uri)
+            .map_err(|why| uri_error(&self.path, &what, uri, why))?;
+        read_image(&file).map_err(|why| uri_error(&self.path, &what, uri, why))
+    }
+}
+
+fn input_folder(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// The bytes of buffer `i`: the GLB binary chunk, a data URI, or an external file (read up to
+/// its declared length); refused when they are fewer than declared.
+fn read_buffer(
+    path: &Path,
+    folder: &Path,
+    access: &Access,
+    i: usize,
+    b: &Value,
+    bin: &mut Option<&[u8]>,
+) -> Result<Vec<u8>> {
+    let declared = b["byteLength"].as_u64().unwrap_or(0);
+    let what = format!("buffer {i}");
+    let data = match b.get("uri").and_then(Value::as_str) {
+        None => {
+            let chunk = if i == 0 { bin.take() } else { None };
+            chunk.map(<[u8]>::to_vec).ok_or_else(|| {
+                at(
+                    path,
+                    format!("buffer {i} has no uri and there is no GLB binary chunk for it"),
+                )
+            })?
+        }
+        Some(uri) if uri.starts_with("data:") => decode_data_uri(uri).ok_or_else(|| {
+            at(
+                path,
+                format!("buffer {i} has a data URI that is not base64"),
+            )
+        })?,
+        Some(uri) => {
+            let file = access
+                .resolve(folder, uri)
+                .map_err(|why| uri_error(path, &what, uri, why))?;
+            read_prefix(&file, declared).map_err(|why| uri_error(path, &what, uri, why))?
+        }
+    };
+    if (data.len() as u64) < declared {
+        bail!(at(
+            path,
+            format!(
+                "buffer {i} declares {declared} bytes but holds {}",
+                data.len()
+            )
+        ));
+    }
+    Ok(data)
+}
+
+/// The parts of the JSON that the reader and writer index into must have the right kind:
+/// entries of the top-level arrays, primitives, attributes, targets, channels and samplers are
+/// objects.
+fn check_structure(json: &Value) -> std::result::Result<(), String> {
+    let objects = |v: &Value, at: &str| -> std::result::Result<(), String> {
+        match v {
+            Value::Null => Ok(()),
+            Value::Array(items) => match items.iter().position(|x| !x.is_object()) {
+                Some(k) => Err(format!("{at}[{k}] is not an object")),
+                None => Ok(()),
+            },
+            _ => Err(format!("{at} is not an array")),
+        }
+    };
+    for key in OBJECT_ARRAYS {
+        objects(&json[*key], key)?;
+    }
+    for (m, mesh) in arr(json, "meshes").iter().enumerate() {
+        objects(&mesh["primitives"], &format!("meshes[{m}].primitives"))?;
+        for (p, prim) in arr(mesh, "primitives").iter().enumerate() {
+            let here = format!("meshes[{m}].primitives[{p}]");
+            if !prim["attributes"].is_object() {
+                return Err(format!("{here}.attributes is not an object"));
+            }
+            objects(&prim["targets"], &format!("{here}.targets"))?;
+        }
+    }
+    for (a, anim) in arr(json, "animations").iter().enumerate() {
+        objects(&anim["channels"], &format!("animations[{a}].channels"))?;
+        objects(&anim["samplers"], &format!("animations[{a}].samplers"))?;
+        for (c, ch) in arr(anim, "channels").iter().enumerate() {
+            if !ch["target"].is_object() {
+                return Err(format!(
+                    "animations[{a}].channels[{c}].target is not an object"
+                ));
+            }
+        }
+    }
+    for key in ["extensionsUsed", "extensionsRequired"] {
+        match &json[key] {
+            Value::Null => {}
+            Value::Array(items) if items.iter().all(Value::is_string) => {}
+            _ => return Err(format!("{key} is not an array of names")),
+        }
+    }
+    Ok(())
 }
 
 /// The array under `key`, or an empty slice.
@@ -184,23 +320,4 @@ fn decode_data_uri(uri: &str) -> Option<Vec<u8>> {
     base64::engine::general_purpose::STANDARD
         .decode(data.trim())
         .ok()
-}
-
-/// Decode `%XX` escapes of a relative URI into a file path.
-pub fn percent_decode(uri: &str) -> String {
-    let b = uri.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' && i + 2 < b.len() {
-            if let Ok(v) = u8::from_str_radix(&uri[i + 1..i + 3], 16) {
-                out.push(v);
-                i += 3;
-                continue;
-            }
-        }
-        out.push(b[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
 }

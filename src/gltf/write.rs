@@ -7,11 +7,13 @@
 //! * Files are staged in an [`Outputs`] and renamed into place together.
 
 use super::build::{BinBuilder, Output};
-use super::read::{arr, percent_decode, Document};
-use crate::output::{Format, Outputs};
-use anyhow::{Context, Result};
+use super::read::{arr, Document};
+use super::uri::{percent_decode, reference, Reference};
+use crate::output::{folder_of, Format, Outputs};
+use anyhow::{anyhow, Result};
 use serde_json::{json, Value};
-use std::path::Path;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 /// Output container.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,7 +46,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         let data = doc
             .buffers
             .get(b)
-            .and_then(|d| d.get(start..start + len))
+            .and_then(|d| d.get(start..start.checked_add(len)?))
             .ok_or_else(|| doc.err(format!("bufferView {i} reaches past the end of buffer {b}")))?;
         let mut view = bv.clone();
         let idx = bin.push_view(data, None);
@@ -53,48 +55,94 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         view["byteOffset"] = placed["byteOffset"].clone();
         bin.views[idx] = view;
     }
-    // Images referenced by file.
-    let in_dir = doc.path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let out_dir = out_path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    if let Some(images) = json.get_mut("images").and_then(Value::as_array_mut) {
-        for (i, img) in images.iter_mut().enumerate() {
-            let Some(uri) = img.get("uri").and_then(Value::as_str).map(str::to_owned) else {
-                continue;
-            };
-            if uri.starts_with("data:") {
-                continue;
+    embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
+    Ok(Output { json, bin, copies })
+}
+
+/// Images referenced by file: embedded in a `.glb`, or (read, checked and) copied to the same
+/// relative place beside a `.gltf` written in another folder.
+fn embed_or_copy_images(
+    doc: &Document,
+    container: Container,
+    out_path: &Path,
+    json: &mut Value,
+    bin: &mut BinBuilder,
+    copies: &mut Vec<(Vec<u8>, PathBuf)>,
+) -> Result<()> {
+    let out_dir = folder_of(out_path);
+    let Some(images) = json.get_mut("images").and_then(Value::as_array_mut) else {
+        return Ok(());
+    };
+    // Names of the images copied to their own relative places, which the others must not take.
+    let mut taken: std::collections::HashSet<String> = images
+        .iter()
+        .filter_map(|img| match reference(img.get("uri")?.as_str()?) {
+            Ok(Reference::Inside(rel)) => Some(rel.to_string_lossy().into_owned()),
+            _ => None,
+        })
+        .collect();
+    for (i, img) in images.iter_mut().enumerate() {
+        let Some(uri) = img.get("uri").and_then(Value::as_str).map(str::to_owned) else {
+            continue;
+        };
+        if uri.starts_with("data:") {
+            continue;
+        }
+        match container {
+            Container::Glb => {
+                let (data, detected) = doc.read_image(i, &uri)?;
+                let mime = img
+                    .get("mimeType")
+                    .and_then(Value::as_str)
+                    .map(str::to_owned)
+                    .unwrap_or_else(|| detected.to_owned());
+                let view = bin.push_view(&data, None);
+                let o = img.as_object_mut().expect("checked when read");
+                o.remove("uri");
+                o.insert("bufferView".into(), json!(view));
+                o.insert("mimeType".into(), json!(mime));
             }
-            let src = in_dir.join(percent_decode(&uri));
-            match container {
-                Container::Glb => {
-                    let data = std::fs::read(&src).with_context(|| {
-                        doc.err(format!("image {i} file {} cannot be read", src.display()))
-                    })?;
-                    let mime = img
-                        .get("mimeType")
-                        .and_then(Value::as_str)
-                        .map(str::to_owned)
-                        .or_else(|| mime_of(&uri).map(str::to_owned))
-                        .unwrap_or_else(|| "image/png".into());
-                    let view = bin.push_view(&data, None);
-                    let o = img.as_object_mut().unwrap();
-                    o.remove("uri");
-                    o.insert("bufferView".into(), json!(view));
-                    o.insert("mimeType".into(), json!(mime));
-                }
-                Container::Gltf => {
-                    let dst = out_dir.join(percent_decode(&uri));
-                    if !same_file(&src, &dst) {
-                        if let Some(parent) = dst.parent() {
-                            std::fs::create_dir_all(parent).ok();
-                        }
-                        copies.push((src, dst));
+            Container::Gltf => match reference(&uri) {
+                // Beside the output at the same relative place, unless that is the input's
+                // own file.
+                Ok(Reference::Inside(rel)) => {
+                    let dst = out_dir.join(&rel);
+                    if !same_file(&doc.folder().join(&rel), &dst) {
+                        copies.push((doc.read_image(i, &uri)?.0, dst));
                     }
                 }
-            }
+                // Outside the input's folder (allowed by --allow-external): copied beside the
+                // output under its own name, and referred to by that name.
+                _ => {
+                    let data = doc.read_image(i, &uri)?.0;
+                    let name = unique_name(&uri, &mut taken);
+                    img["uri"] = json!(encode_uri(&name));
+                    copies.push((data, out_dir.join(&name)));
+                }
+            },
         }
     }
-    Ok(Output { json, bin, copies })
+    Ok(())
+}
+
+/// A file name for a copied image from outside the input's folder: the name it had, made
+/// unique among the names already given with `_1`, `_2`, ... before the extension.
+fn unique_name(uri: &str, taken: &mut std::collections::HashSet<String>) -> String {
+    let decoded = percent_decode(uri);
+    let path = Path::new(&decoded);
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("image");
+    let ext = path
+        .extension()
+        .and_then(|s| s.to_str())
+        .map(|e| format!(".{e}"))
+        .unwrap_or_default();
+    let mut name = format!("{stem}{ext}");
+    let mut k = 0;
+    while !taken.insert(name.clone()) {
+        k += 1;
+        name = format!("{stem}_{k}{ext}");
+    }
+    name
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {
@@ -102,20 +150,6 @@ fn same_file(a: &Path, b: &Path) -> bool {
         (Ok(x), Ok(y)) => x == y,
         _ => false,
     }
-}
-
-fn mime_of(uri: &str) -> Option<&'static str> {
-    let lower = uri.to_ascii_lowercase();
-    [
-        (".png", "image/png"),
-        (".jpg", "image/jpeg"),
-        (".jpeg", "image/jpeg"),
-        (".ktx2", "image/ktx2"),
-        (".webp", "image/webp"),
-    ]
-    .iter()
-    .find(|(e, _)| lower.ends_with(e))
-    .map(|(_, m)| *m)
 }
 
 /// Serialize `out` and write it (with a `.gltf`'s `.bin` and images) as one all-or-nothing step.
@@ -166,19 +200,26 @@ pub fn stage(
                 js.push(b' ');
             }
             let total = 12 + 8 + js.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-            let mut file = Vec::with_capacity(total);
-            file.extend_from_slice(b"glTF");
-            file.extend_from_slice(&2u32.to_le_bytes());
-            file.extend_from_slice(&(total as u32).to_le_bytes());
-            file.extend_from_slice(&(js.len() as u32).to_le_bytes());
-            file.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
-            file.extend_from_slice(&js);
-            if !bin.is_empty() {
-                file.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-                file.extend_from_slice(&0x004E_4942u32.to_le_bytes());
-                file.extend_from_slice(&bin);
-            }
-            files.write(path, &file)?;
+            let total = u32::try_from(total).map_err(|_| {
+                anyhow!(
+                    "{}: cannot write: {total} bytes is more than a GLB can hold (4 GiB); write .gltf or a USD point cache",
+                    path.display()
+                )
+            })?;
+            files.write_with(path, |w| {
+                w.write_all(b"glTF")?;
+                w.write_all(&2u32.to_le_bytes())?;
+                w.write_all(&total.to_le_bytes())?;
+                w.write_all(&(js.len() as u32).to_le_bytes())?;
+                w.write_all(&0x4E4F_534Au32.to_le_bytes())?;
+                w.write_all(&js)?;
+                if !bin.is_empty() {
+                    w.write_all(&(bin.len() as u32).to_le_bytes())?;
+                    w.write_all(&0x004E_4942u32.to_le_bytes())?;
+                    w.write_all(&bin)?;
+                }
+                Ok(())
+            })?;
         }
         Container::Gltf => {
             let js = serde_json::to_vec_pretty(&out.json)?;
@@ -188,8 +229,12 @@ pub fn stage(
             files.write(path, &js)?;
         }
     }
-    for (src, dst) in &out.copies {
-        files.copy(src, dst)?;
+    for (data, dst) in &out.copies {
+        if let Some(parent) = dst.parent() {
+            std::fs::create_dir_all(parent)
+                .map_err(|e| anyhow!("{}: cannot write: {e}", dst.display()))?;
+        }
+        files.write(dst, data)?;
     }
     Ok(())
 }

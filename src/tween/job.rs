@@ -6,12 +6,12 @@ use super::keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh};
 use super::morph_targets::apply_frames;
 use super::options::{Method, Timing, TweenOptions};
 use super::report::{MeshReport, Report};
-use super::schedule::{close_loop, plan};
-use crate::gltf::{self, Container, Document};
+use super::schedule::{close_loop, frame_estimate, plan, MAX_FRAMES};
+use crate::gltf::{self, Access, Container, Document};
 use crate::output::{Format, Outputs};
-use crate::progress::{peak_rss_mib, Progress};
+use crate::progress::{memory_available, peak_rss_mib, Progress};
 use crate::usd::{self, Delta, MeshPlan};
-use anyhow::Result;
+use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -32,6 +32,8 @@ pub struct TweenJob {
     pub extend: [f64; 2],
     /// Where to write the per-frame quality report (JSON).
     pub report: Option<PathBuf>,
+    /// Where external references of a `.gltf` input may lead besides its own folder.
+    pub access: Access,
 }
 
 /// What was done, for the summary line.
@@ -163,6 +165,46 @@ fn usd_deltas(deltas: &[PrimitiveDelta]) -> Vec<Delta<'_>> {
         .collect()
 }
 
+/// Refuse, before any work, a job whose tracks would have more than [`MAX_FRAMES`] frames or
+/// whose glTF output (every frame held until it is written) would not fit in memory.
+fn check_budget(
+    doc: &Document,
+    meshes: &[MorphMesh],
+    opts: &TweenOptions,
+    held: bool,
+) -> Result<()> {
+    let mut bytes = 0.0;
+    for m in meshes {
+        for (k, t) in m.tracks.iter().enumerate() {
+            let frames = frame_estimate(&t.times, opts);
+            if frames > MAX_FRAMES {
+                bail!(doc.err(format!(
+                    "track {k} of mesh {:?} would have about {frames:.3e} frames (keys from {} s to {} s), more than {MAX_FRAMES}; ask for fewer with --fps or --tweens",
+                    m.name,
+                    t.times.first().copied().unwrap_or(0.0),
+                    t.times.last().copied().unwrap_or(0.0)
+                )));
+            }
+            let normals = m.primitives.iter().all(|p| p.normals.is_some());
+            let tangents = normals && m.primitives.iter().all(|p| p.tangents.is_some());
+            let per_vertex = 12.0 * (1.0 + normals as u8 as f64 + tangents as u8 as f64);
+            // The frames as computed and again in the output buffer.
+            bytes += 2.0 * frames * m.vertex_count() as f64 * per_vertex;
+        }
+    }
+    let available = memory_available();
+    if let Some(available) = available.filter(|&a| held && bytes > a as f64) {
+        bail!(doc.err(format!(
+            "its frames need about {:.1} GiB in memory for a glTF output, more than the {:.1} GiB available; write fewer frames (--fps, --tweens) or a USD point cache (.usdc streams its frames)",
+            bytes / GIB,
+            available as f64 / GIB
+        )));
+    }
+    Ok(())
+}
+
+const GIB: f64 = (1u64 << 30) as f64;
+
 /// Run the tween job. Nothing is written unless every step succeeds.
 pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let started = Instant::now();
@@ -173,7 +215,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
             "--fps must be a positive number (got {f})"
         );
     }
-    let doc = Document::open(&job.input)?;
+    let doc = Document::open_with(&job.input, &job.access)?;
     let mut meshes = find_morph_meshes(
         &doc,
         &KeyOptions {
@@ -194,6 +236,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         wrap: job.looping != Some(false),
         extend: job.extend,
     };
+    check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
     let total: usize = meshes
         .iter()
         .flat_map(|m| m.tracks.iter().map(|t| plan(&t.times, &opts).len()))

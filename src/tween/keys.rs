@@ -4,7 +4,7 @@
 //! (`--keys animation`), or the base mesh followed by each target at weight 1 (`--keys targets`).
 //! A key pose is `base + sum_i w_i * delta_i` over the mesh's targets.
 
-use crate::gltf::{arr, read_triangles, read_vec3, Document};
+use crate::gltf::{arr, read_attribute, read_attribute3, read_triangles, read_vec3, Document};
 use anyhow::{bail, Result};
 use glam::DVec3;
 use serde_json::Value;
@@ -341,24 +341,13 @@ fn read_primitive(
     let pos = attr(p, "POSITION").ok_or_else(|| doc.err(what("has no POSITION")))?;
     let base = read_vec3(doc, pos, &what("POSITION"))?;
     let n = base.len();
-    let normals = match attr(p, "NORMAL") {
-        Some(a) => Some(read_vec3(doc, a, &what("NORMAL"))?),
-        None => None,
-    };
-    let tangents = match attr(p, "TANGENT") {
-        Some(a) => {
-            let (v, c) = doc.read_f64(a)?;
-            if c != 4 {
-                bail!(doc.err(what("TANGENT is not VEC4")));
-            }
-            Some(
-                v.chunks_exact(4)
-                    .map(|c| [c[0], c[1], c[2], c[3]])
-                    .collect(),
-            )
-        }
-        None => None,
-    };
+    let here = what("").trim_end().to_string();
+    let normals = read_attribute3(doc, p, "NORMAL", n, &here)?;
+    let tangents = read_attribute(doc, p, "TANGENT", 4, n, &here)?.map(|v| {
+        v.chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect()
+    });
     let targets = arr(p, "targets");
     if targets.len() != target_count {
         bail!(doc.err(what(&format!(

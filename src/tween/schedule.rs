@@ -14,6 +14,36 @@ pub struct FrameAt {
     pub t: f64,
 }
 
+/// Most frames one track may have (a bound checked before any is planned): an hour at 277
+/// frames a second. Key times or options asking for more are refused.
+pub const MAX_FRAMES: f64 = 1e6;
+
+/// About how many frames [`plan`] gives a track with keys at `times` (an upper bound, found
+/// without planning them).
+pub fn frame_estimate(times: &[f64], opts: &TweenOptions) -> f64 {
+    let segments = times.windows(2).filter(|w| w[1] > w[0]).count() as f64;
+    let span = times.last().copied().unwrap_or(0.0) - times.first().copied().unwrap_or(0.0);
+    let (frames, spacing) = match opts.timing {
+        Timing::Tweens(n) => {
+            let per = n as f64 + 1.0;
+            let shortest = times
+                .windows(2)
+                .map(|w| w[1] - w[0])
+                .filter(|d| *d > 0.0)
+                .fold(f64::INFINITY, f64::min);
+            (segments * per + 1.0, shortest / per)
+        }
+        Timing::Fps(fps) => (span * fps + 1.0, 1.0 / fps),
+    };
+    let [before, after] = opts.extend;
+    let extra = if spacing > 0.0 && spacing.is_finite() {
+        (before.max(0.0) + after.max(0.0)) / spacing
+    } else {
+        0.0
+    };
+    frames + extra + 1.0
+}
+
 /// Frame times for keys at `times` (non-decreasing).
 pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
     // Segments of positive duration, in order.

@@ -15,7 +15,7 @@
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
 
-use crate::gltf::{arr, read_triangles, read_vec3, Document};
+use crate::gltf::{arr, read_attribute, read_attribute3, read_triangles, read_vec3, Document};
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
@@ -274,21 +274,12 @@ impl Ctx<'_> {
             };
             let points = read_vec3(doc, pos as usize, &format!("{what} POSITION"))?;
             let n = points.len();
-            let normals = match p["attributes"]["NORMAL"].as_u64() {
-                Some(a) => Some(read_vec3(doc, a as usize, &format!("{what} NORMAL"))?),
-                None => None,
-            };
-            let st = match p["attributes"]["TEXCOORD_0"].as_u64() {
-                Some(a) => {
-                    let (v, c) = doc.read_f64(a as usize)?;
-                    (c == 2).then(|| {
-                        v.chunks_exact(2)
-                            .map(|t| [t[0] as f32, 1.0 - t[1] as f32])
-                            .collect()
-                    })
-                }
-                None => None,
-            };
+            let normals = read_attribute3(doc, p, "NORMAL", n, &what)?;
+            let st = read_attribute(doc, p, "TEXCOORD_0", 2, n, &what)?.map(|v| {
+                v.chunks_exact(2)
+                    .map(|t| [t[0] as f32, 1.0 - t[1] as f32])
+                    .collect()
+            });
             let indices: Vec<u32> = read_triangles(doc, p, n, &what)?
                 .into_iter()
                 .flatten()

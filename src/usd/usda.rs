@@ -5,7 +5,7 @@
 use super::stage::{
     animated, extent, for_each_sample, Animation, FrameSource, MeshPrim, Prim, Stage,
 };
-use crate::output::Outputs;
+use crate::output::{naming, Outputs};
 use anyhow::Result;
 use std::collections::HashMap;
 use std::io::Write;
@@ -281,9 +281,10 @@ fn spool_frames(
             }
             Ok(())
         })
-    })?;
+    })
+    .map_err(|e| naming(path, e))?;
     for (_, mut w) in writers {
-        w.flush()?;
+        w.flush().map_err(|e| naming(path, e.into()))?;
     }
     Ok(spool)
 }

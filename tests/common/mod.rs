@@ -194,3 +194,108 @@ pub fn tween_quietly(input: &Path, output: &Path, args: &[&str]) -> Output {
     all.push("-q");
     run_ok(&all)
 }
+
+/// Write a copy of `input` with its JSON changed by `edit` (GLB in, GLB out).
+pub fn edited_glb(input: &Path, out: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let doc = inbetween::gltf::Document::open(input).unwrap();
+    let mut json = doc.json.clone();
+    edit(&mut json);
+    write_glb(out, &json, &doc.buffers[0]);
+}
+
+/// `json` and `bin` as the bytes of a GLB file (JSON padded with spaces, `bin` as given).
+pub fn glb_bytes(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut js = serde_json::to_vec(json).unwrap();
+    while !js.len().is_multiple_of(4) {
+        js.push(b' ');
+    }
+    let total = 12 + 8 + js.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let mut f = b"glTF".to_vec();
+    f.extend(2u32.to_le_bytes());
+    f.extend((total as u32).to_le_bytes());
+    f.extend((js.len() as u32).to_le_bytes());
+    f.extend(0x4E4F534Au32.to_le_bytes());
+    f.extend(&js);
+    if !bin.is_empty() {
+        f.extend((bin.len() as u32).to_le_bytes());
+        f.extend(0x004E4942u32.to_le_bytes());
+        f.extend(bin);
+    }
+    f
+}
+
+/// Write `json` and `bin` as a GLB file, byte for byte as given.
+pub fn write_glb(path: &Path, json: &serde_json::Value, bin: &[u8]) {
+    std::fs::write(path, glb_bytes(json, bin)).unwrap();
+}
+
+/// Write a copy of the GLB `input` with the f32 at element `element` (component `comp`) of
+/// accessor `acc` set to `value`.
+pub fn poke_f32(input: &Path, out: &Path, acc: usize, element: usize, comp: usize, value: f32) {
+    let doc = inbetween::gltf::Document::open(input).unwrap();
+    let a = &doc.json["accessors"][acc];
+    let view = &doc.json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+    let ncomp = match a["type"].as_str().unwrap() {
+        "SCALAR" => 1,
+        "VEC3" => 3,
+        _ => 4,
+    };
+    let stride = view["byteStride"].as_u64().unwrap_or(4 * ncomp) as usize;
+    let at = view["byteOffset"].as_u64().unwrap_or(0) as usize
+        + a["byteOffset"].as_u64().unwrap_or(0) as usize
+        + element * stride
+        + 4 * comp;
+    let mut bin = doc.buffers[0].clone();
+    bin[at..at + 4].copy_from_slice(&value.to_le_bytes());
+    write_glb(out, &doc.json, &bin);
+}
+
+/// Run inbetween and insist that it refuses: exit 2, one line naming `file` and saying
+/// `what`, and `out` not written.
+pub fn assert_refused(args: &[&str], file: &str, what: &str, out: &Path) {
+    let r = inbetween(args);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(
+        err.trim_end().lines().count(),
+        1,
+        "{args:?}: one line: {err}"
+    );
+    assert!(
+        err.contains(file),
+        "{args:?}: the message names {file}: {err}"
+    );
+    assert!(err.contains(what), "{args:?}: expected {what:?} in {err}");
+    assert!(!out.exists(), "{args:?}: no output file");
+}
+
+/// Files in `dir` (recursively) whose names end in `.tmp`.
+pub fn temporaries(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(temporaries(&p));
+        } else if p.to_string_lossy().ends_with(".tmp") {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// Every file under `dir` (symbolic links left out).
+pub fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let p = e.path();
+        if p.is_symlink() {
+            continue;
+        }
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}

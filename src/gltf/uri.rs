@@ -1,0 +1,251 @@
+//! External references of a `.gltf` (buffer and image URIs): what a file may make us read.
+//!
+//! A URI is read only when it is a relative reference that stays inside the input file's
+//! folder (or a root the user named with `--allow-external`): after `%XX` decoding and `..`
+//! resolved, and again after symbolic links are followed. Absolute paths, `file:` and other
+//! schemes, references that climb out, device files and anything else that is not a regular
+//! file are refused with an error naming the URI. A buffer is read up to its declared
+//! `byteLength` and no further; an image up to [`MAX_IMAGE_BYTES`], and only when its first
+//! bytes are those of an image type glTF allows.
+
+use anyhow::{anyhow, bail, Result};
+use std::io::Read;
+use std::path::{Component, Path, PathBuf};
+
+/// Largest image file read (bytes): 512 MiB, far above any texture a real asset carries.
+pub const MAX_IMAGE_BYTES: u64 = 512 << 20;
+
+/// Where external references may lead: the input file's folder and the extra roots.
+#[derive(Clone, Debug, Default)]
+pub struct Access {
+    /// Folders the user allowed besides the input's own (`--allow-external`).
+    pub roots: Vec<PathBuf>,
+}
+
+/// Where a URI points, after the lexical checks: inside the input's folder (its path relative
+/// to it, normalised), or outside it (an absolute path, or one that climbs out), which only
+/// the extra roots may allow.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Reference {
+    Inside(PathBuf),
+    Outside(PathBuf, &'static str),
+}
+
+/// Decode `%XX` escapes of a relative URI into a file path.
+pub fn percent_decode(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let Some(v) = std::str::from_utf8(&b[i + 1..i + 3])
+                .ok()
+                .and_then(|h| u8::from_str_radix(h, 16).ok())
+            {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+const ABSOLUTE: &str = "is an absolute path (only references inside the input file's folder are read; --allow-external names other folders that may be)";
+const CLIMBS: &str =
+    "climbs out of the input file's folder (--allow-external names other folders that may be read)";
+
+/// The lexical checks: no scheme (`file:`, `http:`), no NUL, and a path that names a file.
+/// Returns where it points, `..` resolved.
+pub fn reference(uri: &str) -> Result<Reference, String> {
+    // A scheme is letters, digits, '+', '-' or '.' before the first ':' (RFC 3986), and it
+    // comes before any '/', '?' or '#'.
+    if let Some(colon) = uri.find(':') {
+        let head = &uri[..colon];
+        if !head.is_empty()
+            && !head.contains(['/', '?', '#'])
+            && head
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'))
+        {
+            return Err("is an absolute URI (only relative references are read)".into());
+        }
+    }
+    let path = percent_decode(uri.split(['?', '#']).next().unwrap_or(""));
+    if path.contains('\0') {
+        return Err("holds a NUL character".into());
+    }
+    if path.starts_with('/') || path.starts_with('\\') {
+        return Ok(Reference::Outside(PathBuf::from(path), ABSOLUTE));
+    }
+    let mut out = PathBuf::new();
+    let mut climbs = false;
+    for c in Path::new(&path).components() {
+        match c {
+            Component::Normal(part) => out.push(part),
+            Component::CurDir => {}
+            Component::ParentDir => climbs |= !out.pop(),
+            Component::RootDir | Component::Prefix(_) => {
+                return Ok(Reference::Outside(PathBuf::from(path), ABSOLUTE))
+            }
+        }
+    }
+    if climbs {
+        return Ok(Reference::Outside(PathBuf::from(path), CLIMBS));
+    }
+    if out.as_os_str().is_empty() {
+        return Err("names no file".into());
+    }
+    Ok(Reference::Inside(out))
+}
+
+impl Access {
+    /// The regular file `uri` names, seen from `folder` (the input's): lexically checked,
+    /// symbolic links followed, and the result checked against `folder` and the extra roots.
+    pub fn resolve(&self, folder: &Path, uri: &str) -> Result<PathBuf, String> {
+        let joined = match reference(uri)? {
+            Reference::Inside(rel) => folder.join(rel),
+            Reference::Outside(_, why) if self.roots.is_empty() => return Err(why.into()),
+            Reference::Outside(path, _) => folder.join(path),
+        };
+        let real = joined
+            .canonicalize()
+            .map_err(|e| format!("cannot be read: {e}"))?;
+        let inside = |root: &Path| root.canonicalize().is_ok_and(|r| real.starts_with(r));
+        if !inside(folder) && !self.roots.iter().any(|r| inside(r)) {
+            return Err(
+                "leads outside the input file's folder (through a symbolic link, or outside every --allow-external folder)"
+                    .into(),
+            );
+        }
+        let meta = std::fs::metadata(&real).map_err(|e| format!("cannot be read: {e}"))?;
+        if !meta.is_file() {
+            return Err("is not a regular file".into());
+        }
+        Ok(real)
+    }
+}
+
+/// Read exactly `len` bytes from the start of the regular file `path` (an error when it is
+/// shorter); nothing past them is read.
+pub fn read_prefix(path: &Path, len: u64) -> Result<Vec<u8>, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot be read: {e}"))?;
+    let size = file
+        .metadata()
+        .map_err(|e| format!("cannot be read: {e}"))?
+        .len();
+    if size < len {
+        return Err(format!("holds {size} bytes, fewer than the {len} declared"));
+    }
+    let mut data = Vec::with_capacity(len as usize);
+    file.take(len)
+        .read_to_end(&mut data)
+        .map_err(|e| format!("cannot be read: {e}"))?;
+    if (data.len() as u64) < len {
+        return Err(format!(
+            "holds {} bytes, fewer than the {len} declared",
+            data.len()
+        ));
+    }
+    Ok(data)
+}
+
+/// The image types glTF allows (core PNG and JPEG; KTX2, WebP and AVIF by extension), told by
+/// their first bytes.
+pub fn image_mime(bytes: &[u8]) -> Option<&'static str> {
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        Some("image/png")
+    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        Some("image/jpeg")
+    } else if bytes.starts_with(b"\xABKTX 20\xBB\r\n\x1a\n") {
+        Some("image/ktx2")
+    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
+        Some("image/webp")
+    } else if bytes.len() >= 12
+        && &bytes[4..8] == b"ftyp"
+        && matches!(&bytes[8..12], b"avif" | b"avis")
+    {
+        Some("image/avif")
+    } else {
+        None
+    }
+}
+
+/// Read an image file (at most [`MAX_IMAGE_BYTES`]) and check that it is one of the types glTF
+/// allows; returns the bytes and the MIME type.
+pub fn read_image(path: &Path) -> Result<(Vec<u8>, &'static str), String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot be read: {e}"))?;
+    let mut data = Vec::new();
+    file.take(MAX_IMAGE_BYTES + 1)
+        .read_to_end(&mut data)
+        .map_err(|e| format!("cannot be read: {e}"))?;
+    if data.len() as u64 > MAX_IMAGE_BYTES {
+        return Err(format!("is larger than {} MiB", MAX_IMAGE_BYTES >> 20));
+    }
+    let mime = image_mime(&data)
+        .ok_or_else(|| "is not a PNG, JPEG, KTX2, WebP or AVIF image".to_string())?;
+    Ok((data, mime))
+}
+
+/// An error naming the input file, the object and its URI.
+pub fn uri_error(file: &Path, what: &str, uri: &str, why: impl std::fmt::Display) -> anyhow::Error {
+    let shown: String = uri.chars().take(120).collect();
+    anyhow!("{}: {what} uri {shown:?} {why}", file.display())
+}
+
+/// Refuse a file that is not a regular file (a device, a folder, a pipe) before reading it.
+pub fn regular_file(path: &Path) -> Result<()> {
+    let meta =
+        std::fs::metadata(path).map_err(|e| anyhow!("{}: cannot read: {e}", path.display()))?;
+    if !meta.is_file() {
+        bail!("{}: cannot read: not a regular file", path.display());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn references_are_normalised_and_escapes_told_apart() {
+        let inside = |u: &str| match reference(u) {
+            Ok(Reference::Inside(p)) => p,
+            other => panic!("{u:?}: {other:?}"),
+        };
+        assert_eq!(inside("a/./b/../c.bin"), PathBuf::from("a/c.bin"));
+        assert_eq!(inside("My%20File.bin"), PathBuf::from("My File.bin"));
+        for outside in [
+            "/etc/hostname",
+            "../a.bin",
+            "a/../../b.bin",
+            "%2e%2e/secret",
+            "%2Fetc%2Fpasswd",
+        ] {
+            assert!(
+                matches!(reference(outside), Ok(Reference::Outside(..))),
+                "{outside:?}"
+            );
+        }
+        for bad in [
+            "file:///etc/hostname",
+            "FILE:x",
+            "http://example.com/a.bin",
+            "a%00b",
+            "",
+            ".",
+        ] {
+            assert!(reference(bad).is_err(), "{bad:?} was accepted");
+        }
+    }
+
+    #[test]
+    fn images_are_told_by_their_first_bytes() {
+        assert_eq!(image_mime(b"\x89PNG\r\n\x1a\nrest"), Some("image/png"));
+        assert_eq!(image_mime(&[0xFF, 0xD8, 0xFF, 0xE0]), Some("image/jpeg"));
+        assert_eq!(image_mime(b"RIFF\0\0\0\0WEBPVP8 "), Some("image/webp"));
+        assert_eq!(image_mime(b"root:x:0:0:root"), None);
+    }
+}

@@ -1,0 +1,408 @@
+//! Files from strangers: a file reads only what belongs to it (external references stay in its
+//! folder), malformed values are refused with one line instead of a panic or an abort (one
+//! regression test per crash found by mutation), and every output of a run appears together
+//! or not at all, also when the report cannot be written or the disk fills up.
+
+mod common;
+
+use common::*;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+const SECRET: &[u8] = b"TOP-SECRET-0123456789-TOP-SECRET-0123456789-TOP-SECRET-012345678";
+
+/// A `.gltf` morph file with an external buffer in `dir/model`, and a secret file in
+/// `dir/secret`; returns (the model's JSON, the model folder, the secret file).
+fn model_and_secret(dir: &Path) -> (serde_json::Value, PathBuf, PathBuf) {
+    let model = dir.join("model");
+    let secret_dir = dir.join("secret");
+    std::fs::create_dir_all(&secret_dir).unwrap();
+    std::fs::create_dir_all(&model).unwrap();
+    let secret = secret_dir.join("secret.bin");
+    std::fs::write(&secret, SECRET).unwrap();
+    // A .png that is only a PNG by its first bytes, the secret after them.
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend_from_slice(SECRET);
+    std::fs::write(secret_dir.join("secret.png"), &png).unwrap();
+    tween_quietly(&sample("bar_twist.glb"), &model.join("base.gltf"), &[]);
+    let json = serde_json::from_slice(&std::fs::read(model.join("base.gltf")).unwrap()).unwrap();
+    (json, model, secret)
+}
+
+/// No file under `dir` but the inputs holds the secret's bytes.
+fn assert_no_leak(dir: &Path, inputs: &[PathBuf]) {
+    for e in walk(dir) {
+        if inputs.contains(&e) || e.starts_with(dir.join("secret")) {
+            continue;
+        }
+        let bytes = std::fs::read(&e).unwrap_or_default();
+        assert!(
+            !bytes.windows(16).any(|w| w == &SECRET[..16]),
+            "{} holds the secret",
+            e.display()
+        );
+    }
+}
+
+#[test]
+fn external_references_stay_inside_the_input_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let (json, model, secret) = model_and_secret(dir.path());
+    std::os::unix::fs::symlink("../secret/secret.bin", model.join("leak.bin")).unwrap();
+    std::os::unix::fs::symlink("../secret/secret.png", model.join("leak.png")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", model.join("zero.bin")).unwrap();
+    std::fs::create_dir(model.join("folder.bin")).unwrap();
+    let abs = s(&secret).to_string();
+    let out = dir.path().join("out.glb");
+    let mut inputs = Vec::new();
+    let bad_uris = [
+        (abs.clone(), "absolute path"),
+        ("../secret/secret.bin".into(), "climbs out"),
+        (format!("file://{abs}"), "absolute URI"),
+        ("leak.bin".into(), "leads outside"),
+        ("/dev/zero".into(), "absolute path"),
+        ("zero.bin".into(), "leads outside"),
+        ("folder.bin".into(), "not a regular file"),
+        ("%2e%2e/secret/secret.bin".into(), "climbs out"),
+    ];
+    for (k, (uri, why)) in bad_uris.iter().enumerate() {
+        // As the buffer ...
+        let mut j = json.clone();
+        j["buffers"][0]["uri"] = json!(uri);
+        let input = model.join(format!("buffer{k}.gltf"));
+        std::fs::write(&input, serde_json::to_vec(&j).unwrap()).unwrap();
+        assert_refused(&["tween", s(&input), "-o", s(&out)], uri, why, &out);
+        inputs.push(input);
+        // ... and as an image, read to be embedded in a .glb.
+        let mut j = json.clone();
+        j["images"] = json!([{ "uri": uri.replace("secret.bin", "secret.png").replace("leak.bin", "leak.png") }]);
+        let input = model.join(format!("image{k}.gltf"));
+        std::fs::write(&input, serde_json::to_vec(&j).unwrap()).unwrap();
+        let r = inbetween(&["tween", s(&input), "-o", s(&out)]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "image {uri}: {err}");
+        assert!(
+            err.contains("image 0 uri") && !out.exists(),
+            "image {uri}: {err}"
+        );
+        inputs.push(input);
+    }
+    // A buffer is read up to its byteLength and refused when its file is shorter.
+    let bin = model.join("base.bin");
+    let mut padded = std::fs::read(&bin).unwrap();
+    let declared = padded.len();
+    padded.extend_from_slice(SECRET);
+    std::fs::write(&bin, &padded).unwrap();
+    tween_quietly(&model.join("base.gltf"), &out, &[]);
+    inputs.push(bin.clone());
+    assert_no_leak(dir.path(), &inputs);
+    std::fs::write(&bin, &padded[..declared - 4]).unwrap();
+    let out2 = dir.path().join("short.glb");
+    assert_refused(
+        &["tween", s(&model.join("base.gltf")), "-o", s(&out2)],
+        "base.bin",
+        "fewer than",
+        &out2,
+    );
+    std::fs::write(&bin, &padded[..declared]).unwrap();
+    // --allow-external opens other folders, and only those.
+    let mut j = json.clone();
+    j["images"] = json!([{ "uri": "../secret/secret.png" }, { "uri": "leak.png" }]);
+    let input = model.join("allowed.gltf");
+    std::fs::write(&input, serde_json::to_vec(&j).unwrap()).unwrap();
+    let secret_dir = dir.path().join("secret");
+    let gltf_out = dir.path().join("elsewhere/allowed.gltf");
+    std::fs::create_dir_all(gltf_out.parent().unwrap()).unwrap();
+    run_ok(&[
+        "tween",
+        s(&input),
+        "-o",
+        s(&gltf_out),
+        "-q",
+        "--allow-external",
+        s(&secret_dir),
+    ]);
+    // Both copies beside the output under their own names, never outside its folder.
+    let copied = std::fs::read_dir(gltf_out.parent().unwrap())
+        .unwrap()
+        .count();
+    assert_eq!(copied, 4, "allowed.gltf, allowed.bin and two images");
+    let written: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&gltf_out).unwrap()).unwrap();
+    assert_eq!(written["images"][0]["uri"], "secret.png");
+    assert_eq!(written["images"][1]["uri"], "leak.png");
+    let other = dir.path().join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    let refused = dir.path().join("refused.glb");
+    assert_refused(
+        &[
+            "tween",
+            s(&input),
+            "-o",
+            s(&refused),
+            "--allow-external",
+            s(&other),
+        ],
+        "../secret/secret.png",
+        "leads outside",
+        &refused,
+    );
+    assert!(temporaries(dir.path()).is_empty());
+}
+
+/// Fox with its JSON edited; `None` without the fixtures.
+fn fox() -> Option<PathBuf> {
+    fixtures().map(|f| f.join("skinned/Fox.glb"))
+}
+
+/// The accessors of Fox's "Walk" channels on `path` (input, output).
+fn walk_sampler(path: &str) -> (usize, usize) {
+    let doc = inbetween::gltf::Document::open(&fox().unwrap()).unwrap();
+    let anim = doc.json["animations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["name"] == "Walk")
+        .unwrap()
+        .clone();
+    let ch = anim["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["target"]["path"] == path)
+        .unwrap()
+        .clone();
+    let s = &anim["samplers"][ch["sampler"].as_u64().unwrap() as usize];
+    (
+        s["input"].as_u64().unwrap() as usize,
+        s["output"].as_u64().unwrap() as usize,
+    )
+}
+
+#[test]
+fn each_crash_found_by_mutation_is_a_clean_refusal() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n);
+    let out = p("out.glb");
+    let tween = |input: &Path, what: &str| {
+        assert_refused(&["tween", s(input), "-o", s(&out)], s(input), what, &out)
+    };
+    // 3. An accessor claiming 4294967295 elements (tween: positions).
+    edited_glb(&sample("bar_twist.glb"), &p("count.glb"), |j| {
+        let acc = j["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .unwrap() as usize;
+        j["accessors"][acc]["count"] = json!(4294967295u64);
+    });
+    tween(&p("count.glb"), "reads past the end");
+    // ... and without a buffer view, where nothing backs it.
+    edited_glb(&sample("bar_twist.glb"), &p("unbacked.glb"), |j| {
+        let acc = j["meshes"][0]["primitives"][0]["targets"][0]["POSITION"]
+            .as_u64()
+            .unwrap() as usize;
+        j["accessors"][acc]["count"] = json!(4294967295u64);
+        j["accessors"][acc]
+            .as_object_mut()
+            .unwrap()
+            .remove("bufferView");
+    });
+    tween(&p("unbacked.glb"), "more than any accessor the file holds");
+    // 5. A NORMAL accessor shorter than POSITION.
+    edited_glb(&sample("flag_wave.glb"), &p("normals.glb"), |j| {
+        let acc = j["meshes"][0]["primitives"][0]["attributes"]["NORMAL"]
+            .as_u64()
+            .unwrap() as usize;
+        let n = j["accessors"][acc]["count"].as_u64().unwrap();
+        j["accessors"][acc]["count"] = json!(n - 1);
+    });
+    tween(&p("normals.glb"), "NORMAL");
+    // 7. A buffer view that is not an object.
+    edited_glb(&sample("bar_twist.glb"), &p("view.glb"), |j| {
+        j["bufferViews"][0] = json!(7);
+    });
+    tween(&p("view.glb"), "bufferViews[0] is not an object");
+    let Some(fox) = fox() else { return };
+    let blend = |input: &Path, what: &str| {
+        assert_refused(
+            &["blend", s(input), "-o", s(&out), "--clips", "Walk", "Run"],
+            s(input),
+            what,
+            &out,
+        )
+    };
+    let (times, rotations) = walk_sampler("rotation");
+    // 1. An infinite or NaN rotation value, and a rotation accessor without its buffer view.
+    for (k, v) in [f32::INFINITY, f32::NAN].into_iter().enumerate() {
+        let f = p(&format!("rotation{k}.glb"));
+        poke_f32(&fox, &f, rotations, 3, 1, v);
+        blend(&f, "NaN or infinite");
+    }
+    edited_glb(&fox, &p("noview.glb"), |j| {
+        j["accessors"][rotations]
+            .as_object_mut()
+            .unwrap()
+            .remove("bufferView");
+    });
+    blend(&p("noview.glb"), "not a unit quaternion");
+    // 2. Key times in decreasing order.
+    let f = p("decreasing.glb");
+    poke_f32(&fox, &f, times, 1, 0, -5.0);
+    blend(&f, "do not increase");
+    // 4. A key time of 1e30.
+    let doc = inbetween::gltf::Document::open(&fox).unwrap();
+    let last = doc.json["accessors"][times]["count"].as_u64().unwrap() as usize - 1;
+    let f = p("late.glb");
+    poke_f32(&fox, &f, times, last, 0, 1e30);
+    blend(&f, "samples to analyse");
+    // 6. A NaN key time.
+    let f = p("nantime.glb");
+    poke_f32(&fox, &f, times, 1, 0, f32::NAN);
+    blend(&f, "NaN or infinite");
+    // 3 again, on the blend path.
+    edited_glb(&fox, &p("foxcount.glb"), |j| {
+        j["accessors"][times]["count"] = json!(4294967295u64);
+    });
+    blend(&p("foxcount.glb"), "reads past the end");
+    assert!(temporaries(dir.path()).is_empty());
+}
+
+/// Run inbetween in `sh` with `prefix` (ulimit and trap lines) first.
+fn run_in_shell(prefix: &str, args: &[&str]) -> std::process::Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!("{prefix} exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_inbetween"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn outputs_appear_together_or_not_at_all() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("flag_wave.glb");
+    std::fs::create_dir(dir.path().join("a-folder.json")).unwrap();
+    for ext in ["glb", "gltf", "usda", "usdc", "usdz"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        // The report cannot be written: its folder is missing, or a folder is in its place.
+        for report in ["missing/r.json", "a-folder.json"] {
+            let report = dir.path().join(report);
+            assert_refused(
+                &["tween", s(&input), "-o", s(&out), "--report", s(&report)],
+                s(&report),
+                "cannot write",
+                &out,
+            );
+            assert!(!dir.path().join("out.bin").exists(), "{ext}: no .bin");
+        }
+        // The disk fills up (a file-size limit of 64 KiB; SIGXFSZ ignored, so the write fails).
+        let r = run_in_shell(
+            "trap '' XFSZ; ulimit -f 64;",
+            &["tween", s(&input), "-o", s(&out), "--tweens", "40", "-q"],
+        );
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{ext}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{ext}: {err}");
+        assert!(
+            err.contains("cannot write") && err.contains("out."),
+            "{ext}: {err}"
+        );
+        assert!(
+            !out.exists() && !dir.path().join("out.bin").exists(),
+            "{ext}"
+        );
+        assert!(
+            temporaries(dir.path()).is_empty(),
+            "{ext}: temporaries left"
+        );
+    }
+    // blend: the same for its report.
+    if let Some(fox) = fox() {
+        let out = dir.path().join("fox.glb");
+        let report = dir.path().join("a-folder.json");
+        assert_refused(
+            &[
+                "blend",
+                s(&fox),
+                "-o",
+                s(&out),
+                "--clips",
+                "Walk",
+                "Run",
+                "--report",
+                s(&report),
+            ],
+            "a-folder.json",
+            "cannot write",
+            &out,
+        );
+    }
+}
+
+#[test]
+fn temporaries_of_a_killed_run_are_removed_by_the_next() {
+    let dir = tempfile::tempdir().unwrap();
+    // What a run killed while writing out.usda leaves: its file and spools, under a process
+    // id that no longer runs; a file of a live process (this one) and others stay.
+    let dead = "999999999";
+    let names = [
+        format!(".out.usda.inbetween-{dead}.tmp"),
+        format!(".out.usda.inbetween-{dead}.0_0_2.tmp"),
+    ];
+    for n in &names {
+        std::fs::write(dir.path().join(n), b"partial").unwrap();
+    }
+    let live = format!(".out.usda.inbetween-{}.tmp", std::process::id());
+    std::fs::write(dir.path().join(&live), b"in use").unwrap();
+    std::fs::write(dir.path().join("keep.tmp"), b"not ours").unwrap();
+    let out = dir.path().join("out.usda");
+    tween_quietly(&sample("bar_twist.glb"), &out, &[]);
+    for n in &names {
+        assert!(!dir.path().join(n).exists(), "{n} left");
+    }
+    assert!(dir.path().join(&live).exists() && dir.path().join("keep.tmp").exists());
+    // A real kill in the middle of a long write: the next run at that path cleans up.
+    let big = dir.path().join("big.glb");
+    let (x0, x1, triangles) = inbetween::bench::bench_keys(100_000);
+    let surface = inbetween::synth::Surface {
+        positions: x0,
+        triangles,
+        ..Default::default()
+    };
+    inbetween::synth::KeyframeFile {
+        meshes: vec![inbetween::synth::KeyedMesh::new("tube", surface, vec![x1])],
+        key_times: None,
+    }
+    .write(&big)
+    .unwrap();
+    let out = dir.path().join("killed.usda");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_inbetween"))
+        .args(["tween", s(&big), "-o", s(&out), "--tweens", "200", "-q"])
+        .spawn()
+        .unwrap();
+    // Wait until it has begun writing, then kill it.
+    let started = std::time::Instant::now();
+    while temporaries(dir.path())
+        .iter()
+        .all(|t| !t.to_string_lossy().contains("killed"))
+        && started.elapsed().as_secs() < 60
+    {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let left: Vec<PathBuf> = temporaries(dir.path())
+        .into_iter()
+        .filter(|t| t.to_string_lossy().contains("killed"))
+        .collect();
+    assert!(!left.is_empty(), "the killed run had begun writing");
+    tween_quietly(&sample("bar_twist.glb"), &out, &[]);
+    for t in &left {
+        assert!(!t.exists(), "{} left after the next run", t.display());
+    }
+}
