@@ -5,7 +5,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use inbetween::blend::{BlendJob, CycleMethod};
 use inbetween::gltf::Access;
-use inbetween::tween::{KeySource, Method, Timing, TweenJob};
+use inbetween::tween::{KeySource, Layout, Method, Timing, TweenJob};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -38,6 +38,14 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
 inbetween blend robot.glb -o jog.glb --clips Walking Running --weight 0.3 --name Jog --report jog.json"
     )]
     Blend(BlendArgs),
+    /// Show what inbetween finds in a file: morph meshes and their targets, animations (keys,
+    /// key rate, duration), what `tween` would write with its defaults (frames, new targets,
+    /// bytes), the skinned clips `blend` can mix, and the extensions with whether they are
+    /// decoded.
+    #[command(
+        after_help = "Examples:\n  inbetween inspect Flamingo.glb\n  inbetween inspect face.glb --json"
+    )]
+    Inspect(InspectArgs),
     /// Hold-out accuracy: keep every K-th key, predict the dropped ones with each method, and
     /// print the RMS vertex error over the bounding-box diagonal (mean and max) per method.
     Eval(EvalArgs),
@@ -74,6 +82,33 @@ impl From<MethodArg> for Method {
             MethodArg::Seed => Method::Seed,
             MethodArg::Linear => Method::Linear,
             MethodArg::Spline => Method::Spline,
+        }
+    }
+}
+
+/// `--layout`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum LayoutArg {
+    /// Authored targets kept; frames between keys added as targets (keys not stored twice).
+    Rig,
+    /// One target per frame, the authored targets replaced.
+    Frames,
+}
+
+impl From<Layout> for LayoutArg {
+    fn from(l: Layout) -> LayoutArg {
+        match l {
+            Layout::Rig => LayoutArg::Rig,
+            Layout::Frames => LayoutArg::Frames,
+        }
+    }
+}
+
+impl From<LayoutArg> for Layout {
+    fn from(l: LayoutArg) -> Layout {
+        match l {
+            LayoutArg::Rig => Layout::Rig,
+            LayoutArg::Frames => Layout::Frames,
         }
     }
 }
@@ -143,12 +178,26 @@ pub struct TweenArgs {
     /// Output file; the format follows the extension (.glb, .gltf, .usda, .usdc or .usdz).
     #[arg(short, long)]
     output: PathBuf,
-    /// Frames inserted evenly between each pair of consecutive keys.
-    #[arg(long, default_value_t = 4, conflicts_with = "fps")]
-    tweens: usize,
-    /// Instead of --tweens: frames at this fixed rate (per second) over the keys' time span.
-    #[arg(long)]
+    /// Frames per second between keys [default: 30]: every key is kept as it is, the gap
+    /// between two keys gets round(gap x RATE) - 1 evenly spaced frames, and keys already
+    /// closer than 1/RATE s get none (a clip baked at 30 or 60 samples a second stays as it
+    /// is). Keys on a 1/10, 1/15 or 1/30 s grid give frames exactly on the 30 per second grid.
+    #[arg(long, value_name = "RATE", conflicts_with_all = ["tweens", "fps"])]
+    rate: Option<f64>,
+    /// Instead: exactly N frames inserted evenly between each pair of consecutive keys.
+    #[arg(long, value_name = "N", conflicts_with = "fps")]
+    tweens: Option<usize>,
+    /// Instead: frames at this fixed rate (per second) from the first key over the keys' time
+    /// span; the first and the last key are always frames, keys between them only where the
+    /// grid meets them.
+    #[arg(long, value_name = "FPS")]
     fps: Option<f64>,
+    /// How a glTF output carries the frames. `rig`: the authored morph targets stay (names,
+    /// other animations driving them); keys are played by the authored weights and only the
+    /// frames between keys get targets of their own. `frames`: one target per frame, keys
+    /// included, replacing the authored targets.
+    #[arg(long, value_enum, default_value_t = Layout::default().into())]
+    layout: LayoutArg,
     /// Interpolation method.
     #[arg(long, value_enum, default_value_t = Method::default().into())]
     method: MethodArg,
@@ -195,10 +244,13 @@ impl TweenArgs {
             method: self.method.into(),
             keys: self.keys.into(),
             animation: self.animation,
-            timing: self
-                .fps
-                .map(Timing::Fps)
-                .unwrap_or(Timing::Tweens(self.tweens)),
+            timing: match (self.fps, self.tweens, self.rate) {
+                (Some(f), _, _) => Timing::Fps(f),
+                (_, Some(n), _) => Timing::Tweens(n),
+                (_, _, Some(r)) => Timing::Rate(r),
+                _ => Timing::default(),
+            },
+            layout: self.layout.into(),
             quiet: self.quiet,
             looping: match (self.looping, self.no_loop) {
                 (true, _) => Some(true),
@@ -263,6 +315,26 @@ impl BlendArgs {
             access: Access {
                 roots: self.allow_external,
             },
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct InspectArgs {
+    /// Input .gltf or .glb.
+    pub input: PathBuf,
+    /// Print JSON (schema: schemas/inspect.schema.json) instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Also read external buffers and images under this folder (repeatable).
+    #[arg(long, value_name = "FOLDER")]
+    allow_external: Vec<PathBuf>,
+}
+
+impl InspectArgs {
+    pub fn access(&self) -> Access {
+        Access {
+            roots: self.allow_external.clone(),
         }
     }
 }

@@ -3,13 +3,16 @@
 //!
 //! The product path, one folder per command or format, each opening with its pipeline:
 //! [`gltf`] (read and write glTF) -> [`tween`] (keys -> frames -> morph animation) -> [`usd`]
-//! (point caches); [`blend`] (skeletal clips). Shared rooms: `output` (the one way files are
-//! written: staged, then renamed together) and `progress` (what the user sees while it runs).
+//! (point caches); [`blend`] (skeletal clips); [`inspect`] (what a file holds). Shared rooms: `output` (the one way files are
+//! written: staged, then renamed together), `progress` (what the user sees while it runs) and
+//! `memory` (peak and available memory).
 //! Developer tools apart: [`synth`], [`eval`], [`bench`].
 
 pub mod blend;
 mod dev;
 pub mod gltf;
+pub mod inspect;
+mod memory;
 mod output;
 mod progress;
 pub mod tween;

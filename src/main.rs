@@ -4,7 +4,7 @@ mod cli;
 
 use clap::Parser;
 use cli::{BenchArgs, Cli, Command, EvalArgs};
-use inbetween::{bench, blend, eval, tween};
+use inbetween::{bench, blend, eval, inspect, tween};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -19,6 +19,13 @@ fn main() -> ExitCode {
             let quiet = args.quiet;
             let job = args.job();
             finish(blend::run_blend(&job), |s| summary(quiet, s.line(&job)))
+        }
+        Command::Inspect(args) => {
+            let found = inspect::inspect(&args.input, &args.access());
+            finish(found, |i| match args.json {
+                true => println!("{}", serde_json::to_string_pretty(&i).unwrap_or_default()),
+                false => print!("{}", inspect::text(&i)),
+            })
         }
         Command::Eval(args) => run_eval(&args),
         Command::Bench(args) => run_bench(args),

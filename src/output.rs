@@ -145,12 +145,12 @@ impl Outputs {
         Outputs::default()
     }
 
-    /// Stage `path`, streaming its contents through `fill`.
+    /// Stage `path`, streaming its contents through `fill`; returns its size in bytes.
     pub fn write_with(
         &mut self,
         path: &Path,
         fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
-    ) -> Result<()> {
+    ) -> Result<u64> {
         folder_exists(path)?;
         remove_stale(path);
         let tmp = temporary(path, "");
@@ -160,11 +160,14 @@ impl Outputs {
         let mut w = BufWriter::with_capacity(1 << 20, file);
         fill(&mut w).map_err(|e| naming(path, e))?;
         w.flush().map_err(|e| cannot_write(path, e))?;
-        Ok(())
+        w.get_ref()
+            .metadata()
+            .map(|m| m.len())
+            .map_err(|e| cannot_write(path, e))
     }
 
-    /// Stage `path` with the bytes `data`.
-    pub fn write(&mut self, path: &Path, data: &[u8]) -> Result<()> {
+    /// Stage `path` with the bytes `data`; returns its size in bytes.
+    pub fn write(&mut self, path: &Path, data: &[u8]) -> Result<u64> {
         self.write_with(path, |w| {
             w.write_all(data).map_err(|e| cannot_write(path, e))
         })

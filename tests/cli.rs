@@ -18,6 +18,35 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Assert that the animation `out` plays (first weights channel of mesh 0, primitive 0) shows
+/// `frames` (welded positions, expanded through `of_vertex`) within 1e-6 of the diagonal `d`.
+fn assert_plays(
+    out: &Path,
+    frames: &[Vec<DVec3>],
+    of_vertex: &[u32],
+    d: f64,
+    what: &str,
+) -> Played {
+    let played = played(out, 0, 0, 0);
+    assert_eq!(
+        played.times.len(),
+        frames.len(),
+        "{what}: one key per frame"
+    );
+    assert!(played.times.windows(2).all(|w| w[1] > w[0]), "{what}");
+    for (f, (want, got)) in frames.iter().zip(&played.positions).enumerate() {
+        for (v, g) in got.iter().enumerate() {
+            let g = DVec3::new(g[0] as f64, g[1] as f64, g[2] as f64);
+            let w = want[of_vertex[v] as usize];
+            assert!(
+                (g - w).length() <= 1e-6 * d,
+                "{what} frame {f} vertex {v}: {g} vs {w}"
+            );
+        }
+    }
+    played
+}
+
 #[test]
 fn samples_tween_to_valid_files_with_the_computed_frames() {
     let dir = tempfile::tempdir().unwrap();
@@ -26,81 +55,39 @@ fn samples_tween_to_valid_files_with_the_computed_frames() {
         ("tube_bend.glb", 6),
         ("flag_wave.glb", 3),
     ] {
-        for ext in ["glb", "gltf"] {
-            let out = out_in(&dir, &format!("{name}.{ext}"));
-            let input = sample(name);
-            run_ok(&[
-                "tween",
-                s(&input),
-                "-o",
-                s(&out),
-                "--tweens",
-                &tweens.to_string(),
-                "--quiet",
-            ]);
+        let input = sample(name);
+        // Frames from the library, expanded to input vertices.
+        let meshes = morph_meshes(&input);
+        let opts = TweenOptions::new(Method::Spline, Timing::Tweens(tweens));
+        let (welded, frames) =
+            track_frames_welded(&meshes[0], &meshes[0].tracks[0], &opts).unwrap();
+        let keys = meshes[0].tracks[0].times.len();
+        assert_eq!(frames.len(), (keys - 1) * (tweens + 1) + 1);
+        let d = diag(&meshes[0].primitives[0].base);
+        let authored = meshes[0].target_count;
+        for (ext, layout) in [("glb", "rig"), ("gltf", "rig"), ("glb", "frames")] {
+            let out = out_in(&dir, &format!("{name}.{layout}.{ext}"));
+            tween_quietly(
+                &input,
+                &out,
+                &["--tweens", &tweens.to_string(), "--layout", layout],
+            );
             assert_valid(&out);
-            // Frames from the library, expanded to input vertices.
-            let meshes = morph_meshes(&input);
-            let opts = TweenOptions::new(Method::Spline, Timing::Tweens(tweens));
-            let (welded, frames) =
-                track_frames_welded(&meshes[0], &meshes[0].tracks[0], &opts).unwrap();
-            let (base, targets) = read_targets(&out, 0, 0);
-            assert_eq!(targets.len(), frames.len(), "{name}: one target per frame");
-            let keys = meshes[0].tracks[0].times.len();
-            assert_eq!(frames.len(), (keys - 1) * (tweens + 1) + 1);
-            let d = diag(&meshes[0].primitives[0].base);
-            for (f, t) in frames.iter().zip(&targets) {
-                for (v, (b, dlt)) in base.iter().zip(t).enumerate() {
-                    let got = DVec3::new(
-                        (b[0] + dlt[0]) as f64,
-                        (b[1] + dlt[1]) as f64,
-                        (b[2] + dlt[2]) as f64,
-                    );
-                    let want = f[welded.of_vertex[v] as usize];
-                    assert!(
-                        (got - want).length() <= 1e-6 * d,
-                        "{name} vertex {v}: {got} vs {want}"
-                    );
-                }
-            }
-            // The weights animation: one key per frame, one-hot.
-            let (gdoc, buffers, _) = gltf::import(&out).unwrap();
-            let anim = gdoc
-                .animations()
-                .find(|a| {
-                    a.channels().any(|c| {
-                        c.target().property() == gltf::animation::Property::MorphTargetWeights
-                    })
-                })
-                .unwrap();
-            let ch = anim
-                .channels()
-                .find(|c| c.target().property() == gltf::animation::Property::MorphTargetWeights)
-                .unwrap();
-            let r = ch.reader(|b| Some(&buffers[b.index()]));
-            let times: Vec<f32> = r.read_inputs().unwrap().collect();
-            assert_eq!(times.len(), frames.len());
-            assert!(times.windows(2).all(|w| w[1] > w[0]));
-            let gltf::animation::util::ReadOutputs::MorphTargetWeights(w) =
-                r.read_outputs().unwrap()
-            else {
-                panic!()
+            let what = format!("{name} {layout} .{ext}");
+            let p = assert_plays(&out, &frames, &welded.of_vertex, d, &what);
+            // rig: the authored targets and one per frame between keys; frames: one per frame.
+            let expected = match layout {
+                "rig" => authored + (keys - 1) * tweens,
+                _ => frames.len(),
             };
-            let w: Vec<f32> = w.into_f32().collect();
-            for (i, row) in w.chunks(frames.len()).enumerate() {
-                for (j, x) in row.iter().enumerate() {
-                    assert_eq!(*x, if i == j { 1.0 } else { 0.0 });
-                }
-            }
-            let names = gdoc
-                .meshes()
-                .next()
-                .unwrap()
-                .extras()
-                .as_ref()
-                .map(|e| e.get().to_string())
-                .unwrap();
-            assert!(names.contains("targetNames"), "{names}");
+            assert_eq!(p.targets, expected, "{what}: targets");
+            let doc = Document::open(&out).unwrap();
+            let names = &doc.json["meshes"][0]["extras"]["targetNames"];
+            assert_eq!(
+                names.as_array().map(Vec::len),
+                Some(expected),
+                "{what}: {names}"
+            );
         }
     }
 }
@@ -119,16 +106,24 @@ fn fps_and_tweens_set_the_frame_count() {
         "30",
         "-q",
     ]);
-    assert_eq!(read_targets(&out, 0, 0).1.len(), 61);
+    assert_eq!(played(&out, 0, 0, 0).times.len(), 61);
     tween_quietly(&sample("flag_wave.glb"), &out, &["--tweens", "0"]);
-    assert_eq!(read_targets(&out, 0, 0).1.len(), 5);
+    assert_eq!(played(&out, 0, 0, 0).times.len(), 5);
+    // The default: 30 frames a second between keys 0.5 s apart, keys kept: 4 x 15 + 1.
+    tween_quietly(&sample("flag_wave.glb"), &out, &[]);
+    let p = played(&out, 0, 0, 0);
+    assert_eq!(p.times.len(), 61);
+    let want: Vec<f32> = (0..61).map(|i| (i as f64 / 30.0) as f32).collect();
+    assert_eq!(p.times, want, "frames on the 30 per second grid");
     // --keys targets ignores the animation: base + 4 targets at 0..4 s, 2 tweens between.
     tween_quietly(
         &sample("flag_wave.glb"),
         &out,
         &["--keys", "targets", "--tweens", "2"],
     );
-    assert_eq!(read_targets(&out, 0, 0).1.len(), 13);
+    // The new animation follows the file's own (kept, padded for the new targets).
+    assert_eq!(played(&out, 0, 0, 1).times.len(), 13);
+    assert_eq!(played(&out, 0, 0, 0).times.len(), 5);
     assert_valid(&out);
 }
 
@@ -153,13 +148,17 @@ fn everything_else_comes_through() {
         .unwrap() as usize;
     assert_eq!(a.read_f64(pa).unwrap(), b.read_f64(pb).unwrap());
     assert_eq!(b.json["animations"][0]["name"], "keys");
-    assert_eq!(
-        b.json["meshes"][0]["extras"]["targetNames"]
-            .as_array()
-            .unwrap()
-            .len(),
-        21
-    );
+    // The 4 authored targets (names kept) and the 56 frames between the 5 keys.
+    let names = b.json["meshes"][0]["extras"]["targetNames"]
+        .as_array()
+        .unwrap();
+    assert_eq!(names.len(), 60);
+    let authored = a.json["meshes"][0]["extras"]["targetNames"]
+        .as_array()
+        .cloned();
+    if let Some(authored) = authored {
+        assert_eq!(&names[..authored.len()], &authored[..]);
+    }
 }
 
 #[test]
@@ -178,7 +177,10 @@ fn summary_unless_quiet() {
     let out = out_in(&dir, "a.glb");
     let r = run_ok(&["tween", s(&sample("bar_twist.glb")), "-o", s(&out)]);
     let err = String::from_utf8_lossy(&r.stderr);
-    assert!(err.contains("6 frames") && err.contains("spline"), "{err}");
+    assert!(
+        err.contains("2 keys -> 31 frames") && err.contains("spline") && err.contains(" B -> "),
+        "{err}"
+    );
     let r = run_ok(&[
         "tween",
         s(&sample("bar_twist.glb")),
@@ -190,6 +192,8 @@ fn summary_unless_quiet() {
     let help = run_ok(&["tween", "--help"]);
     let help = String::from_utf8_lossy(&help.stdout);
     for word in [
+        "--rate",
+        "--layout",
         "--tweens",
         "--fps",
         "--method",
@@ -232,13 +236,20 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     edited_glb(&good, &p("lines.glb"), |j| {
         j["meshes"][0]["primitives"][0]["mode"] = 1.into()
     });
-    edited_glb(&good, &p("draco.glb"), |j| {
-        j["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression"]);
-        j["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
-    });
     edited_glb(&good, &p("meshopt.glb"), |j| {
+        // A meshopt view whose compressed bytes lie outside the buffer.
         j["extensionsUsed"] = serde_json::json!(["EXT_meshopt_compression"]);
         j["extensionsRequired"] = serde_json::json!(["EXT_meshopt_compression"]);
+        j["bufferViews"][0]["extensions"] = serde_json::json!({ "EXT_meshopt_compression": {
+            "buffer": 0, "byteOffset": 0, "byteLength": 1 << 30, "byteStride": 12,
+            "count": 8, "mode": "ATTRIBUTES" } });
+    });
+    edited_glb(&good, &p("draco.glb"), |j| {
+        // A Draco primitive whose stream is not Draco.
+        j["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+        j["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+        j["meshes"][0]["primitives"][0]["extensions"] = serde_json::json!({
+            "KHR_draco_mesh_compression": { "bufferView": 0, "attributes": { "POSITION": 0 } } });
     });
     // NaN positions: overwrite the first base position with NaN bytes.
     let doc = Document::open(&good).unwrap();
@@ -262,8 +273,8 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
         ("nomorph.gltf", "no mesh with morph targets"),
         ("count.glb", "deltas but the base has"),
         ("lines.glb", "not made of triangles"),
-        ("draco.glb", "KHR_draco_mesh_compression"),
-        ("meshopt.glb", "EXT_meshopt_compression"),
+        ("draco.glb", "(Draco) does not decode"),
+        ("meshopt.glb", "(meshopt): its compressed bytes lie outside"),
         ("nan.glb", "NaN or infinite"),
         ("does-not-exist.glb", "cannot read"),
     ];
@@ -496,26 +507,17 @@ fn hard_edges_stay_hard_and_key_normals_are_kept() {
     let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
     let r = prim.reader(|b| Some(&buffers[b.index()]));
     let base: Vec<[f32; 3]> = r.read_normals().unwrap().collect();
-    let frames: Vec<Vec<[f32; 3]>> = r
-        .read_morph_targets()
-        .map(|(_, n, _)| n.unwrap().collect())
-        .collect();
+    let frames = played(&out, 0, 0, 0).normals.unwrap();
     let pos: Vec<[f32; 3]> = r.read_positions().unwrap().collect();
     let rim_pairs: Vec<(usize, usize)> = (0..pos.len())
         .flat_map(|i| (i + 1..pos.len()).map(move |j| (i, j)))
         .filter(|&(i, j)| pos[i] == pos[j])
         .collect();
     assert_eq!(rim_pairs.len(), 24);
-    let add = |a: [f32; 3], b: [f32; 3]| {
-        DVec3::new(
-            (a[0] + b[0]) as f64,
-            (a[1] + b[1]) as f64,
-            (a[2] + b[2]) as f64,
-        )
-    };
-    for (f, d) in frames.iter().enumerate() {
+    let v = |a: [f32; 3]| DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+    for (f, n) in frames.iter().enumerate() {
         for &(i, j) in &rim_pairs {
-            let (ni, nj) = (add(base[i], d[i]), add(base[j], d[j]));
+            let (ni, nj) = (v(n[i]), v(n[j]));
             assert!((ni.length() - 1.0).abs() < 1e-5 && (nj.length() - 1.0).abs() < 1e-5);
             assert!(
                 ni.dot(nj).abs() < 0.2,
@@ -524,8 +526,11 @@ fn hard_edges_stay_hard_and_key_normals_are_kept() {
         }
     }
     // Frame 0 is key 0: the authored normals exactly.
-    for (v, d) in frames[0].iter().enumerate() {
-        assert!(d.iter().all(|x| x.abs() < 1e-6), "vertex {v}: {d:?}");
+    for (k, (n, b)) in frames[0].iter().zip(&base).enumerate() {
+        assert!(
+            (v(*n) - v(*b)).length() < 1e-6,
+            "vertex {k}: {n:?} vs {b:?}"
+        );
     }
 }
 
@@ -537,10 +542,10 @@ fn loop_closes_the_motion_and_extension_adds_frames() {
     tween_quietly(
         &sample("flag_wave.glb"),
         &out,
-        &["--loop", "--method", "spline"],
+        &["--loop", "--method", "spline", "--tweens", "4"],
     );
     assert_valid(&out);
-    let (_, t) = read_targets(&out, 0, 0);
+    let t = played(&out, 0, 0, 0).positions;
     assert_eq!(t.len(), 26);
     for (a, b) in t[0].iter().zip(&t[25]) {
         for c in 0..3 {
@@ -551,10 +556,17 @@ fn loop_closes_the_motion_and_extension_adds_frames() {
     tween_quietly(
         &sample("bar_twist.glb"),
         &ext,
-        &["--extend-before", "0.5", "--extend-after", "0.4"],
+        &[
+            "--extend-before",
+            "0.5",
+            "--extend-after",
+            "0.4",
+            "--tweens",
+            "4",
+        ],
     );
     assert_valid(&ext);
-    assert_eq!(read_targets(&ext, 0, 0).1.len(), 6 + 2 + 2);
+    assert_eq!(played(&ext, 0, 0, 0).times.len(), 6 + 2 + 2);
     let r = inbetween(&[
         "tween",
         s(&sample("bar_twist.glb")),

@@ -22,7 +22,8 @@ fn check_input(input: &Path, args: &[&str]) -> usize {
     let Some(python) = python() else { return 0 };
     let dir = tempfile::tempdir().unwrap();
     let glb = dir.path().join("out.glb");
-    let mut a = vec!["tween", s(input), "-o", s(&glb), "-q"];
+    // One target per frame: each target's points are the frame's (base + delta, as the USD).
+    let mut a = vec!["tween", s(input), "-o", s(&glb), "-q", "--layout", "frames"];
     a.extend_from_slice(args);
     run_ok(&a);
     let (gdoc, buffers, _) = gltf::import(&glb).unwrap();

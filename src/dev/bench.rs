@@ -12,7 +12,7 @@
 //!   `../shared/peers/ref_tween.py` (set-up and per-frame median) and the ratios.
 
 use super::synth;
-use crate::progress::peak_rss_mib;
+use crate::memory::peak_rss_mib;
 use crate::tween::{KeyTrack, Method, Pattern, Segment};
 use anyhow::{Context, Result};
 use glam::DVec3;

@@ -1,7 +1,8 @@
 //! glTF in and out.
 //!
 //! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
-//! container, buffers) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles) ... the
+//! container, buffers; [`uri`] says what external files it may read) -> [`decode`] (meshopt
+//! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles) ... the
 //! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`]) ->
 //! [`compact`] (channels and accessors nothing uses any more dropped) -> [`write`] (`.glb` or
 //! `.gltf` with its `.bin` and images, staged as one all-or-nothing set of files).
@@ -9,6 +10,7 @@
 mod accessor;
 mod build;
 mod compact;
+mod decode;
 mod read;
 mod uri;
 mod write;
@@ -16,6 +18,6 @@ mod write;
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{BinBuilder, Output};
 pub(crate) use compact::{compact, drop_channels};
-pub use read::{arr, at, Document, UNDECODABLE_EXTENSIONS};
+pub use read::{arr, at, Document};
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

@@ -4,18 +4,12 @@
 //! not touch — unknown extensions, `extras`, names, vendor fields — is written back unchanged.
 //! Accessors are decoded in [`super::accessor`].
 
+use super::decode::decode;
 use super::uri::{read_image, read_prefix, reference, regular_file, uri_error, Access, Reference};
 use anyhow::{anyhow, bail, Context, Result};
 use base64::Engine;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-/// Extensions whose data we cannot decode: a file that *requires* one of them is refused.
-pub const UNDECODABLE_EXTENSIONS: &[&str] = &[
-    "EXT_meshopt_compression",
-    "KHR_meshopt_compression",
-    "KHR_draco_mesh_compression",
-];
 
 /// A loaded glTF asset: the JSON tree plus the bytes of every buffer.
 pub struct Document {
@@ -26,6 +20,10 @@ pub struct Document {
     pub buffers: Vec<Vec<u8>>,
     /// Where external references (images) may lead.
     pub access: Access,
+    /// Bytes read: the file and its external buffers.
+    pub input_bytes: u64,
+    /// The compression extensions decoded on read (no longer in the JSON).
+    pub decoded: Vec<String>,
     /// The largest element count of an accessor its buffer view holds (found once, when an
     /// accessor without a buffer view is read).
     pub(crate) largest_backed: std::sync::OnceLock<usize>,
@@ -92,22 +90,21 @@ impl Document {
             ));
         }
         check_structure(&json).map_err(|e| at(path, e))?;
-        if let Some(req) = json.get("extensionsRequired").and_then(Value::as_array) {
-            for ext in req.iter().filter_map(Value::as_str) {
-                if UNDECODABLE_EXTENSIONS.contains(&ext) {
-                    return Err(at(
-                        path,
-                        format!("requires extension {ext}, which inbetween cannot decode (decompress the file first)"),
-                    ));
-                }
-            }
-        }
         let folder = input_folder(path);
         let mut buffers = Vec::new();
         let mut bin = bin;
+        let mut input_bytes = bytes.len() as u64;
         for (i, b) in arr(&json, "buffers").iter().enumerate() {
             buffers.push(read_buffer(path, &folder, access, i, b, &mut bin)?);
+            if b.get("uri")
+                .and_then(Value::as_str)
+                .is_some_and(|u| !u.starts_with("data:"))
+            {
+                input_bytes += buffers[i].len() as u64;
+            }
         }
+        let mut json = json;
+        let decoded = decode(&mut json, &mut buffers).map_err(|e| at(path, e))?;
         // Images are read only when an output needs them, but every reference is checked now.
         for (i, img) in arr(&json, "images").iter().enumerate() {
             if let Some(uri) = img.get("uri").and_then(Value::as_str) {
@@ -130,6 +127,8 @@ impl Document {
             json,
             buffers,
             access: access.clone(),
+            input_bytes,
+            decoded,
             largest_backed: std::sync::OnceLock::new(),
         })
     }
@@ -174,7 +173,13 @@ fn read_buffer(
 ) -> Result<Vec<u8>> {
     let declared = b["byteLength"].as_u64().unwrap_or(0);
     let what = format!("buffer {i}");
+    // A meshopt fallback buffer holds no data: its views are decoded from another buffer.
+    let ext = &b["extensions"];
+    let fallback = ["EXT_meshopt_compression", "KHR_meshopt_compression"]
+        .iter()
+        .any(|e| ext[*e]["fallback"].as_bool() == Some(true));
     let data = match b.get("uri").and_then(Value::as_str) {
+        None if fallback => Vec::new(),
         None => {
             let chunk = if i == 0 { bin.take() } else { None };
             chunk.map(<[u8]>::to_vec).ok_or_else(|| {
@@ -197,7 +202,7 @@ fn read_buffer(
             read_prefix(&file, declared).map_err(|why| uri_error(path, &what, uri, why))?
         }
     };
-    if (data.len() as u64) < declared {
+    if (data.len() as u64) < declared && !fallback {
         bail!(at(
             path,
             format!(

@@ -159,13 +159,14 @@ pub fn finish(out: Output, container: Container, path: &Path) -> Result<()> {
     files.commit()
 }
 
-/// Serialize `out` into `files` (staged: the caller adds its other files and commits).
+/// Serialize `out` into `files` (staged: the caller adds its other files and commits); returns
+/// the bytes of every file staged.
 pub fn stage(
     mut out: Output,
     container: Container,
     path: &Path,
     files: &mut Outputs,
-) -> Result<()> {
+) -> Result<u64> {
     let views = std::mem::take(&mut out.bin.views);
     let json = out.json.as_object_mut().unwrap();
     if views.is_empty() {
@@ -193,6 +194,7 @@ pub fn stage(
         }
         json.insert("buffers".into(), json!([b]));
     }
+    let mut bytes = 0;
     match container {
         Container::Glb => {
             let mut js = serde_json::to_vec(&out.json)?;
@@ -206,7 +208,7 @@ pub fn stage(
                     path.display()
                 )
             })?;
-            files.write_with(path, |w| {
+            bytes += files.write_with(path, |w| {
                 w.write_all(b"glTF")?;
                 w.write_all(&2u32.to_le_bytes())?;
                 w.write_all(&total.to_le_bytes())?;
@@ -224,9 +226,9 @@ pub fn stage(
         Container::Gltf => {
             let js = serde_json::to_vec_pretty(&out.json)?;
             if let Some(name) = bin_name.filter(|_| !bin.is_empty()) {
-                files.write(&path.with_file_name(name), &bin)?;
+                bytes += files.write(&path.with_file_name(name), &bin)?;
             }
-            files.write(path, &js)?;
+            bytes += files.write(path, &js)?;
         }
     }
     for (data, dst) in &out.copies {
@@ -234,9 +236,9 @@ pub fn stage(
             std::fs::create_dir_all(parent)
                 .map_err(|e| anyhow!("{}: cannot write: {e}", dst.display()))?;
         }
-        files.write(dst, data)?;
+        bytes += files.write(dst, data)?;
     }
-    Ok(())
+    Ok(bytes)
 }
 
 /// Minimal percent-encoding of a file name for a relative URI.

@@ -15,11 +15,13 @@ use glam::DVec3;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
-/// Output of one track: its frames occupy `first..first + frames.len()` of the mesh's targets.
+/// Output of one track: its frames are `first..first + frames.len()` of the mesh's frames.
 pub struct TrackFrames {
     pub origin: TrackOrigin,
     pub first: usize,
     pub frames: Vec<FrameAt>,
+    /// The authored weights of each key.
+    pub keys: Vec<Vec<f64>>,
 }
 
 /// Per-primitive morph target deltas, one entry per output frame.
@@ -48,12 +50,6 @@ pub struct MeshStats {
     pub frames: usize,
     pub setup: Duration,
     pub solve: Duration,
-}
-
-impl MeshFrames {
-    pub fn frame_count(&self) -> usize {
-        self.stats.frames
-    }
 }
 
 /// Key poses of a track, in input vertex order.
@@ -213,6 +209,7 @@ impl<'a> MeshTween<'a> {
             origin: track.origin.clone(),
             first: stats.frames,
             frames: frames.clone(),
+            keys: track.weights.clone(),
         });
         // Frames grouped by segment, each segment prepared once.
         let mut i = 0;

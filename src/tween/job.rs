@@ -3,13 +3,15 @@
 
 use super::frames::{collect_mesh, tween_mesh, MeshStats, PrimitiveDelta};
 use super::keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh};
-use super::morph_targets::apply_frames;
-use super::options::{Method, Timing, TweenOptions};
+use super::morph_targets::{apply_frames, MostTargets};
+use super::options::{Layout, Method, Timing, TweenOptions};
 use super::report::{MeshReport, Report};
 use super::schedule::{close_loop, frame_estimate, plan, MAX_FRAMES};
+use super::timegrid::timeline;
 use crate::gltf::{self, Access, Container, Document};
+use crate::memory::{memory_available, peak_rss_mib};
 use crate::output::{Format, Outputs};
-use crate::progress::{memory_available, peak_rss_mib, Progress};
+use crate::progress::Progress;
 use crate::usd::{self, Delta, MeshPlan};
 use anyhow::{bail, Result};
 use std::path::PathBuf;
@@ -32,6 +34,8 @@ pub struct TweenJob {
     pub extend: [f64; 2],
     /// Where to write the per-frame quality report (JSON).
     pub report: Option<PathBuf>,
+    /// How a glTF output carries the frames.
+    pub layout: Layout,
     /// Where external references of a `.gltf` input may lead besides its own folder.
     pub access: Access,
 }
@@ -43,17 +47,46 @@ pub struct Summary {
     pub seconds: f64,
     /// Peak resident memory of the process, MiB (Linux; 0 elsewhere).
     pub peak_rss_mib: f64,
+    /// Bytes read (the input and its buffers) and written (the output and its files).
+    pub input_bytes: u64,
+    pub output_bytes: u64,
+    /// The primitive with the most morph targets in a glTF output (mesh, primitive, count).
+    pub most_targets: MostTargets,
+}
+
+/// Output growth over the input above which the summary warns.
+pub const GROWTH_WARNING: f64 = 10.0;
+
+/// Morph targets per primitive above which web viewers stop animating: three.js packs one
+/// texture-array layer per target, and WebGL2 guarantees 2,048 layers (MAX_ARRAY_TEXTURE_LAYERS
+/// in headless Chromium, three.js 0.187): beyond them the mesh stays in its rest pose.
+pub const WEB_TARGET_LIMIT: usize = 2048;
+
+/// A size in bytes, in the unit that reads best.
+fn size(bytes: u64) -> String {
+    match bytes {
+        b if b < 10 << 10 => format!("{b} B"),
+        b if b < 10 << 20 => format!("{:.0} KB", b as f64 / 1024.0),
+        b => format!("{:.1} MB", b as f64 / 1048576.0),
+    }
 }
 
 impl Summary {
+    /// The summary line, and a warning line for each thing a user should know.
     pub fn line(&self, job: &TweenJob) -> String {
         let frames: usize = self.meshes.iter().map(|m| m.frames).sum();
         let tris: usize = self.meshes.iter().map(|m| m.triangles).sum();
         let keys: usize = self.meshes.iter().map(|m| m.keys).sum();
         let setup: f64 = self.meshes.iter().map(|m| m.setup.as_secs_f64()).sum();
         let solve: f64 = self.meshes.iter().map(|m| m.solve.as_secs_f64()).sum();
-        format!(
-            "{}: {} mesh{} ({} triangles), {} keys -> {} frames by the {} method; {:.3} s (set-up {:.3} s, frames {:.3} s), peak memory {:.0} MiB",
+        let timing = match job.timing {
+            Timing::Rate(r) => format!("every key kept, {r} frames/s between keys"),
+            Timing::Tweens(n) => format!("{n} between each pair of keys"),
+            Timing::Fps(f) => format!("{f} frames/s over the keys' span"),
+        };
+        let growth = self.output_bytes as f64 / self.input_bytes.max(1) as f64;
+        let mut out = format!(
+            "{}: {} mesh{} ({} triangles), {} keys -> {} frames ({timing}) by the {} method; {} -> {} ({growth:.1}x); {:.3} s (set-up {:.3} s, frames {:.3} s), peak memory {:.0} MiB",
             job.output.display(),
             self.meshes.len(),
             if self.meshes.len() == 1 { "" } else { "es" },
@@ -61,11 +94,28 @@ impl Summary {
             keys,
             frames,
             job.method.name(),
+            size(self.input_bytes),
+            size(self.output_bytes),
             self.seconds,
             setup,
             solve,
             self.peak_rss_mib,
-        )
+        );
+        if growth > GROWTH_WARNING {
+            out += &format!(
+                "\nwarning: the output is {growth:.1}x the size of the input: --rate, --tweens or --fps set how many frames are written"
+            );
+        }
+        if let Some((mesh, prim, n)) = self
+            .most_targets
+            .as_ref()
+            .filter(|m| m.2 > WEB_TARGET_LIMIT)
+        {
+            out += &format!(
+                "\nwarning: mesh {mesh:?} primitive {prim} has {n} morph targets; web viewers (three.js) animate at most {WEB_TARGET_LIMIT} and show the rest pose beyond: write fewer frames (--rate, --tweens, --fps)"
+            );
+        }
+        out
     }
 }
 
@@ -78,6 +128,8 @@ struct Run<'a> {
     progress: Progress,
     stats: Vec<MeshStats>,
     reports: Vec<MeshReport>,
+    output_bytes: u64,
+    most_targets: MostTargets,
 }
 
 impl Run<'_> {
@@ -91,7 +143,8 @@ impl Run<'_> {
             output: self.job.output.display().to_string(),
             meshes: std::mem::take(&mut self.reports),
         };
-        files.write(path, &serde_json::to_vec_pretty(&report)?)
+        files.write(path, &serde_json::to_vec_pretty(&report)?)?;
+        Ok(())
     }
 
     /// Every mesh's frames collected, then written as morph targets into the glTF output.
@@ -103,36 +156,51 @@ impl Run<'_> {
         }
         self.progress.finish();
         let mut out = gltf::begin(&self.doc, container, &self.job.output)?;
-        apply_frames(&mut out, &results)?;
+        self.most_targets = apply_frames(
+            &mut out,
+            &self.doc,
+            &results,
+            &self.meshes,
+            self.opts.layout,
+        )?;
         for r in results {
             self.stats.push(r.stats);
             self.reports.extend(r.report);
         }
-        gltf::stage(out, container, &self.job.output, files)
+        self.output_bytes = gltf::stage(out, container, &self.job.output, files)?;
+        Ok(())
     }
 
     /// The frames streamed from the solver into a USD point cache, one chunk at a time.
     fn usd(&mut self, format: Format, files: &mut Outputs) -> Result<()> {
-        let fps = match self.opts.timing {
-            Timing::Fps(f) => Some(f),
+        let fallback = match self.opts.timing {
+            Timing::Fps(r) | Timing::Rate(r) => Some(r),
             Timing::Tweens(_) => None,
         };
+        let times: Vec<Vec<Vec<f64>>> = self
+            .meshes
+            .iter()
+            .map(|m| {
+                m.tracks
+                    .iter()
+                    .map(|t| plan(&t.times, &self.opts).iter().map(|f| f.time).collect())
+                    .collect()
+            })
+            .collect();
+        let (rate, codes) = timeline(&times, fallback);
         let plans: Vec<MeshPlan> = self
             .meshes
             .iter()
-            .map(|m| MeshPlan {
+            .zip(codes)
+            .map(|(m, codes)| MeshPlan {
                 mesh: m.mesh,
-                tracks: m
-                    .tracks
-                    .iter()
-                    .map(|t| plan(&t.times, &self.opts).iter().map(|f| f.time).collect())
-                    .collect(),
+                codes,
             })
             .collect();
-        let stage = usd::build_stage(&self.doc, &plans, fps)?;
+        let stage = usd::build_stage(&self.doc, &plans, rate)?;
         let (meshes, opts, progress) = (&self.meshes, &self.opts, &self.progress);
         let (stats, reports) = (&mut self.stats, &mut self.reports);
-        usd::write_file(
+        self.output_bytes = usd::write_file(
             &stage,
             format,
             &self.job.output,
@@ -209,10 +277,10 @@ const GIB: f64 = (1u64 << 30) as f64;
 pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let started = Instant::now();
     let format = Format::of(&job.output)?;
-    if let Timing::Fps(f) = job.timing {
+    if let Timing::Fps(f) | Timing::Rate(f) = job.timing {
         anyhow::ensure!(
             f.is_finite() && f > 0.0,
-            "--fps must be a positive number (got {f})"
+            "--fps and --rate must be positive numbers (got {f})"
         );
     }
     let doc = Document::open_with(&job.input, &job.access)?;
@@ -235,6 +303,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         report: job.report.is_some(),
         wrap: job.looping != Some(false),
         extend: job.extend,
+        layout: job.layout,
     };
     check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
     let total: usize = meshes
@@ -249,6 +318,8 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         progress: Progress::new(total as u64, "tween", job.quiet),
         stats: Vec::new(),
         reports: Vec::new(),
+        output_bytes: 0,
+        most_targets: None,
     };
     let mut files = Outputs::new();
     match Container::of(format) {
@@ -261,5 +332,8 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         meshes: run.stats,
         seconds: started.elapsed().as_secs_f64(),
         peak_rss_mib: peak_rss_mib(),
+        input_bytes: run.doc.input_bytes,
+        output_bytes: run.output_bytes,
+        most_targets: run.most_targets,
     })
 }

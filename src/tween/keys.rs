@@ -4,6 +4,7 @@
 //! (`--keys animation`), or the base mesh followed by each target at weight 1 (`--keys targets`).
 //! A key pose is `base + sum_i w_i * delta_i` over the mesh's targets.
 
+use super::timegrid::snap;
 use crate::gltf::{arr, read_attribute, read_attribute3, read_triangles, read_vec3, Document};
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -33,6 +34,8 @@ pub struct Primitive {
     pub target_pos: Vec<Vec<DVec3>>,
     /// NORMAL deltas per target, when the target has them.
     pub target_nrm: Vec<Option<Vec<DVec3>>>,
+    /// TANGENT (xyz) deltas per target, when the target has them.
+    pub target_tan: Vec<Option<Vec<DVec3>>>,
     /// Triangles in local vertex indices.
     pub triangles: Vec<[u32; 3]>,
 }
@@ -139,10 +142,19 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
         }
     }
     if out.is_empty() {
+        let clips = skeletal_clips(&doc.json);
         let hint = if held_one_pose {
             " (its weights animations hold a single pose; --keys targets tweens the targets)"
+                .to_string()
+        } else if !arr(&doc.json, "skins").is_empty() && !clips.is_empty() {
+            format!(
+                "; it has a skinned character with {} clip{} ({}): `inbetween blend` mixes skeletal clips",
+                clips.len(),
+                if clips.len() == 1 { "" } else { "s" },
+                clips.join(", ")
+            )
         } else {
-            ""
+            String::new()
         };
         bail!(doc.err(format!(
             "no mesh with morph targets and at least two distinct keys{hint}"
@@ -286,6 +298,27 @@ fn target_track(target_count: usize, nodes: Vec<usize>) -> Track {
     }
 }
 
+/// Names of the animations that move nodes (translation, rotation or scale channels).
+pub fn skeletal_clips(json: &Value) -> Vec<String> {
+    arr(json, "animations")
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| {
+            arr(a, "channels").iter().any(|c| {
+                matches!(
+                    c["target"]["path"].as_str(),
+                    Some("translation" | "rotation" | "scale")
+                )
+            })
+        })
+        .map(|(i, a)| {
+            a["name"]
+                .as_str()
+                .map_or_else(|| i.to_string(), |n| format!("{n:?}"))
+        })
+        .collect()
+}
+
 /// True when at least two keys of the track give different poses.
 fn has_distinct_keys(mesh: &MorphMesh, track: &Track) -> bool {
     let first = &track.weights[0];
@@ -355,34 +388,24 @@ fn read_primitive(
             targets.len()
         ))));
     }
-    let mut target_pos = Vec::new();
-    let mut target_nrm = Vec::new();
-    for (ti, t) in targets.iter().enumerate() {
-        let d = match t["POSITION"].as_u64() {
-            Some(a) => read_vec3(doc, a as usize, &what(&format!("target {ti} POSITION")))?,
-            None => vec![DVec3::ZERO; n],
+    let delta = |ti: usize, t: &Value, name: &str| -> Result<Option<Vec<DVec3>>> {
+        let Some(a) = t[name].as_u64() else {
+            return Ok(None);
         };
+        let d = read_vec3(doc, a as usize, &what(&format!("target {ti} {name}")))?;
         if d.len() != n {
             bail!(doc.err(what(&format!(
-                "target {ti} has {} POSITION deltas but the base has {n} vertices",
+                "target {ti} has {} {name} deltas but the base has {n} vertices",
                 d.len()
             ))));
         }
-        target_pos.push(d);
-        let nd = match t["NORMAL"].as_u64() {
-            Some(a) => {
-                let d = read_vec3(doc, a as usize, &what(&format!("target {ti} NORMAL")))?;
-                if d.len() != n {
-                    bail!(doc.err(what(&format!(
-                        "target {ti} has {} NORMAL deltas but the base has {n} vertices",
-                        d.len()
-                    ))));
-                }
-                Some(d)
-            }
-            None => None,
-        };
-        target_nrm.push(nd);
+        Ok(Some(d))
+    };
+    let (mut target_pos, mut target_nrm, mut target_tan) = (Vec::new(), Vec::new(), Vec::new());
+    for (ti, t) in targets.iter().enumerate() {
+        target_pos.push(delta(ti, t, "POSITION")?.unwrap_or_else(|| vec![DVec3::ZERO; n]));
+        target_nrm.push(delta(ti, t, "NORMAL")?);
+        target_tan.push(delta(ti, t, "TANGENT")?);
     }
     let triangles = read_triangles(doc, p, n, &what(""))?;
     Ok(Primitive {
@@ -392,6 +415,7 @@ fn read_primitive(
         tangents,
         target_pos,
         target_nrm,
+        target_tan,
         triangles,
     })
 }
@@ -436,5 +460,6 @@ fn read_weight_keys(
             values[at..at + target_count].to_vec()
         })
         .collect();
-    Ok((times, weights))
+    // Key times on a frame grid within float32 precision are taken as the grid's.
+    Ok((snap(&times).0, weights))
 }

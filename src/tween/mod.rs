@@ -21,13 +21,17 @@ mod seed;
 mod segment;
 mod solve;
 mod spline;
+mod timegrid;
 mod weld;
 
 pub use frames::{key_poses, track_frames_welded};
 pub use job::{run_tween, Summary, TweenJob};
-pub use keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh, Track};
-pub use options::{Method, Timing, TweenOptions};
+pub use keys::{
+    find_morph_meshes, skeletal_clips, KeyOptions, KeySource, MorphMesh, Track, TrackOrigin,
+};
+pub use options::{Layout, Method, Timing, TweenOptions, DEFAULT_RATE};
 pub use schedule::{plan, schedule, FrameAt};
+pub use timegrid::{grid_of, Grid};
 pub use weld::bbox_diagonal;
 
 pub(crate) use segment::{KeyTrack, Segment};

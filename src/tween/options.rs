@@ -25,12 +25,39 @@ impl Method {
 }
 
 /// How output frames are placed in time.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Timing {
+    /// Every key kept; between two keys, frames evenly spaced at about this many per second
+    /// (round(gap x rate) - 1 of them), none between keys closer than that. The default, at
+    /// [`DEFAULT_RATE`]: on keys that lie on a grid of 1/30 s (or 1/10, 1/15 ...), frames land
+    /// exactly on the 30 per second grid.
+    Rate(f64),
     /// N frames inserted evenly between each pair of consecutive keys.
     Tweens(usize),
-    /// Frames at a fixed rate (per second) over the keys' time span.
+    /// Frames at a fixed rate (per second) over the keys' time span; the first and the last key
+    /// are always frames.
     Fps(f64),
+}
+
+/// Frames per second of the default timing: what game and web pipelines play at.
+pub const DEFAULT_RATE: f64 = 30.0;
+
+impl Default for Timing {
+    fn default() -> Timing {
+        Timing::Rate(DEFAULT_RATE)
+    }
+}
+
+/// How the frames become morph targets in a glTF output.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Layout {
+    /// The authored morph targets stay (names, order, their other animations); the keys are
+    /// played by the authored weights at their times, and only the frames between keys get
+    /// targets of their own. The default.
+    #[default]
+    Rig,
+    /// One target per frame, keys included; the authored targets are replaced.
+    Frames,
 }
 
 /// Options of the tween job.
@@ -45,6 +72,15 @@ pub struct TweenOptions {
     /// Seconds of motion continued before the first key and after the last
     /// (`--extend-before`, `--extend-after`).
     pub extend: [f64; 2],
+    /// How a glTF output carries the frames.
+    pub layout: Layout,
+}
+
+impl Default for TweenOptions {
+    /// What `inbetween tween` does without options.
+    fn default() -> TweenOptions {
+        TweenOptions::new(Method::default(), Timing::default())
+    }
 }
 
 impl TweenOptions {
@@ -56,6 +92,7 @@ impl TweenOptions {
             report: false,
             wrap: true,
             extend: [0.0, 0.0],
+            layout: Layout::default(),
         }
     }
 }

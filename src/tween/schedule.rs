@@ -2,6 +2,7 @@
 
 use super::keys::Track;
 use super::options::{Timing, TweenOptions};
+use super::timegrid::ON_GRID;
 
 /// One output frame of a track: the time and where it falls between keys.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,17 +24,18 @@ pub const MAX_FRAMES: f64 = 1e6;
 pub fn frame_estimate(times: &[f64], opts: &TweenOptions) -> f64 {
     let segments = times.windows(2).filter(|w| w[1] > w[0]).count() as f64;
     let span = times.last().copied().unwrap_or(0.0) - times.first().copied().unwrap_or(0.0);
+    let gaps = || times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0);
     let (frames, spacing) = match opts.timing {
         Timing::Tweens(n) => {
             let per = n as f64 + 1.0;
-            let shortest = times
-                .windows(2)
-                .map(|w| w[1] - w[0])
-                .filter(|d| *d > 0.0)
-                .fold(f64::INFINITY, f64::min);
+            let shortest = gaps().fold(f64::INFINITY, f64::min);
             (segments * per + 1.0, shortest / per)
         }
-        Timing::Fps(fps) => (span * fps + 1.0, 1.0 / fps),
+        Timing::Rate(rate) => {
+            let frames: f64 = gaps().map(|g| (g * rate).round().max(1.0)).sum();
+            (frames + 1.0, 1.0 / rate)
+        }
+        Timing::Fps(fps) => (span * fps + 2.0, 1.0 / fps),
     };
     let [before, after] = opts.extend;
     let extra = if spacing > 0.0 && spacing.is_finite() {
@@ -42,6 +44,15 @@ pub fn frame_estimate(times: &[f64], opts: &TweenOptions) -> f64 {
         0.0
     };
     frames + extra + 1.0
+}
+
+/// Frames inserted between two keys `gap` seconds apart by `timing` (`Fps` places its own).
+fn tweens_between(gap: f64, timing: Timing) -> usize {
+    match timing {
+        Timing::Tweens(n) => n,
+        Timing::Rate(rate) => ((gap * rate).round() as usize).saturating_sub(1),
+        Timing::Fps(_) => 0,
+    }
 }
 
 /// Frame times for keys at `times` (non-decreasing).
@@ -59,48 +70,62 @@ pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
             t: 0.0,
         }];
     };
+    let (a, b) = segments[segments.len() - 1];
+    let last = FrameAt {
+        time: times[last_b],
+        key_a: a,
+        key_b: b,
+        t: 1.0,
+    };
     let mut out = Vec::new();
-    match timing {
-        Timing::Tweens(n) => {
-            for &(a, b) in &segments {
-                for j in 0..=n {
-                    let t = j as f64 / (n + 1) as f64;
-                    out.push(FrameAt {
-                        time: times[a] + (times[b] - times[a]) * t,
-                        key_a: a,
-                        key_b: b,
-                        t,
-                    });
-                }
-            }
-            let (a, b) = segments[segments.len() - 1];
+    if let Timing::Fps(fps) = timing {
+        out = fixed_rate(times, &segments, fps);
+        // The last key is always a frame.
+        if out.last().is_some_and(|f| f.time < last.time) {
+            out.push(last);
+        }
+        return out;
+    }
+    for &(a, b) in &segments {
+        let n = tweens_between(times[b] - times[a], timing);
+        for j in 0..=n {
+            let t = j as f64 / (n + 1) as f64;
             out.push(FrameAt {
-                time: times[last_b],
+                time: times[a] + (times[b] - times[a]) * t,
                 key_a: a,
                 key_b: b,
-                t: 1.0,
+                t,
             });
         }
-        Timing::Fps(fps) => {
-            let start = times[segments[0].0];
-            let span = times[last_b] - start;
-            let count = (span * fps + 1e-9).floor() as usize;
-            let mut seg = 0;
-            for i in 0..=count {
-                let time = start + i as f64 / fps;
-                while seg + 1 < segments.len() && time >= times[segments[seg].1] {
-                    seg += 1;
-                }
-                let (a, b) = segments[seg];
-                let t = ((time - times[a]) / (times[b] - times[a])).min(1.0);
-                out.push(FrameAt {
-                    time,
-                    key_a: a,
-                    key_b: b,
-                    t,
-                });
-            }
+    }
+    out.push(last);
+    out
+}
+
+/// Frames every 1/fps s from the first key; one that falls on the last key (within
+/// [`ON_GRID`] of a frame) is that key.
+fn fixed_rate(times: &[f64], segments: &[(usize, usize)], fps: f64) -> Vec<FrameAt> {
+    let start = times[segments[0].0];
+    let end = times[segments[segments.len() - 1].1];
+    let count = ((end - start) * fps + ON_GRID).floor() as usize;
+    let mut seg = 0;
+    let mut out = Vec::with_capacity(count + 2);
+    for i in 0..=count {
+        let mut time = start + i as f64 / fps;
+        if i == count && (time - end).abs() * fps <= ON_GRID {
+            time = end;
         }
+        while seg + 1 < segments.len() && time >= times[segments[seg].1] {
+            seg += 1;
+        }
+        let (a, b) = segments[seg];
+        let t = ((time - times[a]) / (times[b] - times[a])).min(1.0);
+        out.push(FrameAt {
+            time,
+            key_a: a,
+            key_b: b,
+            t,
+        });
     }
     out
 }

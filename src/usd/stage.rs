@@ -113,54 +113,17 @@ fn unique(name: String, taken: &mut HashMap<String, usize>) -> String {
 }
 
 /// A processed mesh as the USD writer sees it before any frame is computed: the glTF mesh
-/// index and the frame times (seconds) of each of its tracks.
+/// index and the time code of each of its frames (every track's, in order).
 pub struct MeshPlan {
     pub mesh: usize,
-    pub tracks: Vec<Vec<f64>>,
+    pub codes: Vec<f64>,
 }
 
-/// Frame rate and time codes of every processed mesh's frames (`codes[mesh][frame]`).
-fn timeline(meshes: &[MeshPlan], fps: Option<f64>) -> (f64, Vec<Vec<f64>>) {
-    let rate = fps.unwrap_or_else(|| {
-        let spacing = meshes
-            .iter()
-            .flat_map(|m| m.tracks.iter())
-            .flat_map(|t| t.windows(2).map(|w| w[1] - w[0]))
-            .filter(|d| *d > 0.0)
-            .fold(f64::INFINITY, f64::min);
-        if spacing.is_finite() {
-            ((1.0 / spacing) * 1e6).round() / 1e6
-        } else {
-            24.0
-        }
-    });
-    let round = |x: f64| (x * 1e9).round() / 1e9;
-    let codes = meshes
-        .iter()
-        .map(|m| {
-            let mut codes = Vec::new();
-            let mut next_start: Option<f64> = None;
-            for t in &m.tracks {
-                let first = t.first().copied().unwrap_or(0.0) * rate;
-                let offset = match next_start {
-                    Some(s) if s > first => s - first,
-                    _ => 0.0,
-                };
-                for time in t {
-                    codes.push(round(time * rate + offset));
-                }
-                next_start = codes.last().map(|c| c + 1.0);
-            }
-            codes
-        })
-        .collect();
-    (rate, codes)
-}
-
-/// Build the stage from the glTF document and the processed meshes' frames.
-pub fn build_stage(doc: &Document, meshes: &[MeshPlan], fps: Option<f64>) -> Result<Stage> {
+/// Build the stage from the glTF document and the processed meshes' frames, at `rate` time
+/// codes per second.
+pub fn build_stage(doc: &Document, meshes: &[MeshPlan], rate: f64) -> Result<Stage> {
     let json = &doc.json;
-    let (rate, codes) = timeline(meshes, fps);
+    let codes: Vec<Vec<f64>> = meshes.iter().map(|m| m.codes.clone()).collect();
     let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
     let scene = arr(json, "scenes").get(scene_index);
     let roots: Vec<usize> = match scene {

@@ -225,7 +225,7 @@ pub fn write(
     path: &Path,
     source: &mut FrameSource,
     files: &mut Outputs,
-) -> Result<()> {
+) -> Result<u64> {
     let spool = spool_frames(stage, path, source, files)?;
     files.write_with(path, |w| write_usda(stage, w, &spool))
 }

@@ -8,14 +8,14 @@ use anyhow::{bail, Result};
 use std::path::Path;
 
 /// Stage `stage` at `path` in `format` in `files`, taking the frames from `source` as they
-/// are computed.
+/// are computed; returns the file's size in bytes.
 pub fn write_file(
     stage: &Stage,
     format: Format,
     path: &Path,
     source: &mut FrameSource,
     files: &mut Outputs,
-) -> Result<()> {
+) -> Result<u64> {
     match format {
         Format::Usda => usda::write(stage, path, source, files),
         Format::Usdc => files.write_with(path, |w| usdc::write_usdc(stage, w, source).map(|_| ())),

@@ -299,3 +299,97 @@ pub fn walk(dir: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+/// A morph animation as a renderer plays it, at its key times: for each key of the `channel`-th
+/// weights channel aimed at mesh `mesh`, primitive `prim`'s positions (and normals) =
+/// base + sum of weight x target delta.
+pub struct Played {
+    pub times: Vec<f32>,
+    pub positions: Vec<Vec<[f32; 3]>>,
+    pub normals: Option<Vec<Vec<[f32; 3]>>>,
+    /// Morph targets of the primitive.
+    pub targets: usize,
+}
+
+pub fn played(path: &Path, mesh: usize, prim: usize, channel: usize) -> Played {
+    let (doc, buffers, _) = gltf::import(path).expect("gltf crate reads the output");
+    let m = doc.meshes().nth(mesh).unwrap();
+    let p = m.primitives().nth(prim).unwrap();
+    let r = p.reader(|b| Some(&buffers[b.index()]));
+    let base: Vec<[f32; 3]> = r.read_positions().unwrap().collect();
+    let base_n: Option<Vec<[f32; 3]>> = r.read_normals().map(|n| n.collect());
+    let mut dp = Vec::new();
+    let mut dn = Vec::new();
+    for (pos, nrm, _) in r.read_morph_targets() {
+        dp.push(
+            pos.map(|i| i.collect::<Vec<_>>())
+                .unwrap_or_else(|| vec![[0.0; 3]; base.len()]),
+        );
+        dn.push(nrm.map(|i| i.collect::<Vec<_>>()));
+    }
+    let nodes: Vec<usize> = doc
+        .nodes()
+        .filter(|n| n.mesh().is_some_and(|x| x.index() == mesh))
+        .map(|n| n.index())
+        .collect();
+    let ch = doc
+        .animations()
+        .flat_map(|a| a.channels().collect::<Vec<_>>())
+        .filter(|c| {
+            c.target().property() == gltf::animation::Property::MorphTargetWeights
+                && nodes.contains(&c.target().node().index())
+        })
+        .nth(channel)
+        .expect("a weights channel for the mesh");
+    let rd = ch.reader(|b| Some(&buffers[b.index()]));
+    let times: Vec<f32> = rd.read_inputs().unwrap().collect();
+    let weights: Vec<f32> = match rd.read_outputs().unwrap() {
+        gltf::animation::util::ReadOutputs::MorphTargetWeights(w) => w.into_f32().collect(),
+        _ => panic!("not weights"),
+    };
+    let n = dp.len();
+    assert_eq!(
+        weights.len(),
+        times.len() * n,
+        "one weight per target and key"
+    );
+    let blend = |b: &[[f32; 3]], deltas: &[Option<&Vec<[f32; 3]>>], w: &[f32]| -> Vec<[f32; 3]> {
+        let mut out: Vec<[f64; 3]> = b.iter().map(|v| v.map(f64::from)).collect();
+        for (d, &wi) in deltas.iter().zip(w) {
+            if let (Some(d), true) = (d, wi != 0.0) {
+                for (o, x) in out.iter_mut().zip(d.iter()) {
+                    for c in 0..3 {
+                        o[c] += wi as f64 * x[c] as f64;
+                    }
+                }
+            }
+        }
+        out.iter().map(|v| v.map(|x| x as f32)).collect()
+    };
+    let pos_refs: Vec<Option<&Vec<[f32; 3]>>> = dp.iter().map(Some).collect();
+    let nrm_refs: Vec<Option<&Vec<[f32; 3]>>> = dn.iter().map(Option::as_ref).collect();
+    let positions = weights
+        .chunks(n)
+        .map(|w| blend(&base, &pos_refs, w))
+        .collect();
+    let normals = base_n.map(|bn| {
+        weights
+            .chunks(n)
+            .map(|w| {
+                blend(&bn, &nrm_refs, w)
+                    .into_iter()
+                    .map(|v| {
+                        let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-30);
+                        v.map(|x| x / l)
+                    })
+                    .collect()
+            })
+            .collect()
+    });
+    Played {
+        times,
+        positions,
+        normals,
+        targets: n,
+    }
+}

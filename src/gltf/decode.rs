@@ -1,0 +1,437 @@
+//! Decode stage (on read): data compressed by `EXT_meshopt_compression` /
+//! `KHR_meshopt_compression` (buffer views, with their octahedral, quaternion, exponential and
+//! colour filters; meshoptimizer's own decoders through the `meshopt` crate) and by
+//! `KHR_draco_mesh_compression` (primitives; the `draco-core` decoder) is decoded into one new
+//! buffer, and the views and accessors are pointed at it, so the rest of the pipeline reads
+//! plain accessors and the writer writes them uncompressed. The extensions are then no longer
+//! used and leave `extensionsUsed` / `extensionsRequired`. Quantized attributes
+//! (`KHR_mesh_quantization`) need no decoding: accessors read them as they are.
+//!
+//! Sizes are checked before decoding: a view decodes to at most its declared length, and all
+//! decoded data together to at most [`MAX_DECODED`] bytes.
+
+use super::read::arr;
+use serde_json::{json, Value};
+
+/// The compression extensions this stage removes.
+pub const DECODED_EXTENSIONS: &[&str] = &[
+    "EXT_meshopt_compression",
+    "KHR_meshopt_compression",
+    "KHR_draco_mesh_compression",
+];
+
+/// Most bytes all compressed data of one file may decode to (16 GiB): a hostile header that
+/// claims more is refused before anything is allocated.
+pub const MAX_DECODED: u64 = 16 << 30;
+
+/// Decode every compressed view and primitive of `json` whose data are in `buffers`, appending
+/// the decoded data as a new buffer; returns the extensions decoded. Errors say what is wrong
+/// (the caller names the file).
+pub fn decode(json: &mut Value, buffers: &mut Vec<Vec<u8>>) -> Result<Vec<String>, String> {
+    let decoded: Vec<String> = arr(json, "extensionsUsed")
+        .iter()
+        .filter_map(Value::as_str)
+        .filter(|e| DECODED_EXTENSIONS.contains(e))
+        .map(str::to_owned)
+        .collect();
+    if decoded.is_empty() {
+        return Ok(decoded);
+    }
+    let mut out = Decoded {
+        bytes: Vec::new(),
+        buffer: buffers.len(),
+    };
+    for v in 0..arr(json, "bufferViews").len() {
+        meshopt_view(json, buffers, v, &mut out)?;
+    }
+    // Draco streams may themselves sit in views that meshopt decoded.
+    for m in 0..arr(json, "meshes").len() {
+        for p in 0..arr(&json["meshes"][m], "primitives").len() {
+            draco_primitive(json, buffers, m, p, &mut out)?;
+        }
+    }
+    json["buffers"]
+        .as_array_mut()
+        .ok_or("has compressed data but no buffers")?
+        .push(json!({ "byteLength": out.bytes.len() }));
+    buffers.push(out.bytes);
+    remove_extensions(json);
+    Ok(decoded)
+}
+
+/// The decoded data so far, to become buffer `buffer`.
+struct Decoded {
+    bytes: Vec<u8>,
+    buffer: usize,
+}
+
+impl Decoded {
+    /// Append `data` (4-byte aligned) and return its offset; refused past [`MAX_DECODED`].
+    fn push(&mut self, data: &[u8]) -> Result<usize, String> {
+        pad4(&mut self.bytes);
+        if (self.bytes.len() + data.len()) as u64 > MAX_DECODED {
+            return Err(format!(
+                "compressed data decode to more than {} GiB",
+                MAX_DECODED >> 30
+            ));
+        }
+        let at = self.bytes.len();
+        self.bytes.extend_from_slice(data);
+        Ok(at)
+    }
+}
+
+fn pad4(v: &mut Vec<u8>) {
+    while !v.len().is_multiple_of(4) {
+        v.push(0);
+    }
+}
+
+/// The meshopt extension object of a buffer view, under either name.
+fn meshopt_ext(view: &Value) -> Option<&Value> {
+    let ext = &view["extensions"];
+    ext.get("KHR_meshopt_compression")
+        .or_else(|| ext.get("EXT_meshopt_compression"))
+}
+
+/// Decode buffer view `v` when it is meshopt-compressed: its data land in `out` and the view
+/// points there.
+fn meshopt_view(
+    json: &mut Value,
+    buffers: &[Vec<u8>],
+    v: usize,
+    out: &mut Decoded,
+) -> Result<(), String> {
+    let view = &json["bufferViews"][v];
+    let Some(ext) = meshopt_ext(view) else {
+        return Ok(());
+    };
+    let what = format!("bufferView {v} (meshopt)");
+    let num = |k: &str| ext[k].as_u64().ok_or(format!("{what} has no {k}"));
+    let (buffer, offset, length) = (
+        num("buffer")?,
+        ext["byteOffset"].as_u64().unwrap_or(0),
+        num("byteLength")?,
+    );
+    let (stride, count) = (num("byteStride")? as usize, num("count")? as usize);
+    let source = buffers
+        .get(buffer as usize)
+        .and_then(|b| b.get(offset as usize..offset.checked_add(length)? as usize))
+        .ok_or(format!(
+            "{what}: its compressed bytes lie outside buffer {buffer}"
+        ))?;
+    let size = count
+        .checked_mul(stride)
+        .filter(|&s| s as u64 <= view["byteLength"].as_u64().unwrap_or(0))
+        .ok_or(format!(
+            "{what}: {count} elements of {stride} bytes exceed the view's byteLength"
+        ))?;
+    if (out.bytes.len() + size) as u64 > MAX_DECODED {
+        return Err(format!(
+            "compressed data decode to more than {} GiB",
+            MAX_DECODED >> 30
+        ));
+    }
+    let mode = ext["mode"].as_str().unwrap_or("");
+    let filter = ext["filter"].as_str().unwrap_or("NONE");
+    let mut data = match mode {
+        "ATTRIBUTES" => {
+            if stride == 0 || !stride.is_multiple_of(4) || stride > 256 {
+                return Err(format!(
+                    "{what}: ATTRIBUTES byteStride {stride} is not a multiple of 4 up to 256"
+                ));
+            }
+            let mut data = vec![0u8; size];
+            // SAFETY: `data` holds count * stride bytes, what the decoder writes; it reads only
+            // `source`, and is documented safe on untrusted input.
+            let rc = unsafe {
+                meshopt::ffi::meshopt_decodeVertexBuffer(
+                    data.as_mut_ptr().cast(),
+                    count,
+                    stride,
+                    source.as_ptr(),
+                    source.len(),
+                )
+            };
+            if rc != 0 {
+                return Err(format!(
+                    "{what}: the vertex stream does not decode (code {rc})"
+                ));
+            }
+            data
+        }
+        "TRIANGLES" | "INDICES" => {
+            if stride != 2 && stride != 4 || mode == "TRIANGLES" && !count.is_multiple_of(3) {
+                return Err(format!(
+                    "{what}: {mode} with byteStride {stride} and count {count}"
+                ));
+            }
+            let bad =
+                |e: meshopt::Error| format!("{what}: the index stream does not decode ({e:?})");
+            match (mode, stride) {
+                ("TRIANGLES", 2) => {
+                    bytes_of(&meshopt::decode_index_buffer::<u16>(source, count).map_err(bad)?)
+                }
+                ("TRIANGLES", _) => {
+                    bytes_of(&meshopt::decode_index_buffer::<u32>(source, count).map_err(bad)?)
+                }
+                (_, 2) => {
+                    bytes_of(&meshopt::decode_index_sequence::<u16>(source, count).map_err(bad)?)
+                }
+                _ => bytes_of(&meshopt::decode_index_sequence::<u32>(source, count).map_err(bad)?),
+            }
+        }
+        m => return Err(format!("{what}: unknown mode {m:?}")),
+    };
+    unfilter(&mut data, filter, stride, count).map_err(|e| format!("{what}: {e}"))?;
+    data.resize(view["byteLength"].as_u64().unwrap_or(0) as usize, 0);
+    let at = out.push(&data)?;
+    let buffer_index = out.buffer;
+    let view = &mut json["bufferViews"][v];
+    view["buffer"] = json!(buffer_index);
+    view["byteOffset"] = json!(at);
+    if let Some(o) = view.get_mut("extensions").and_then(Value::as_object_mut) {
+        o.remove("EXT_meshopt_compression");
+        o.remove("KHR_meshopt_compression");
+        if o.is_empty() {
+            view.as_object_mut().map(|v| v.remove("extensions"));
+        }
+    }
+    Ok(())
+}
+
+fn bytes_of<T: Copy + Into<u32>>(v: &[T]) -> Vec<u8> {
+    let size = std::mem::size_of::<T>();
+    v.iter()
+        .flat_map(|&x| x.into().to_le_bytes().into_iter().take(size))
+        .collect()
+}
+
+/// Undo a meshopt filter in place on `count` elements of `stride` bytes.
+fn unfilter(data: &mut [u8], filter: &str, stride: usize, count: usize) -> Result<(), String> {
+    type Filter = unsafe extern "C" fn(*mut std::ffi::c_void, usize, usize);
+    let (run, allowed): (Filter, bool) = match filter {
+        "NONE" => return Ok(()),
+        "OCTAHEDRAL" => (
+            meshopt::ffi::meshopt_decodeFilterOct,
+            stride == 4 || stride == 8,
+        ),
+        "QUATERNION" => (meshopt::ffi::meshopt_decodeFilterQuat, stride == 8),
+        "EXPONENTIAL" => (
+            meshopt::ffi::meshopt_decodeFilterExp,
+            stride.is_multiple_of(4),
+        ),
+        "COLOR" => (
+            meshopt::ffi::meshopt_decodeFilterColor,
+            stride == 4 || stride == 8,
+        ),
+        f => return Err(format!("unknown filter {f:?}")),
+    };
+    if !allowed {
+        return Err(format!("filter {filter} with byteStride {stride}"));
+    }
+    // SAFETY: `data` holds at least count * stride bytes (checked by the caller), which is
+    // what the filter reads and writes.
+    unsafe { run(data.as_mut_ptr().cast(), count, stride) };
+    Ok(())
+}
+
+/// Decode primitive `p` of mesh `m` when it is Draco-compressed: its attributes and indices
+/// land in `out`, in the types their accessors declare, and the accessors point there.
+fn draco_primitive(
+    json: &mut Value,
+    buffers: &[Vec<u8>],
+    m: usize,
+    p: usize,
+    out: &mut Decoded,
+) -> Result<(), String> {
+    let prim = json["meshes"][m]["primitives"][p].clone();
+    let Some(ext) = prim["extensions"].get("KHR_draco_mesh_compression") else {
+        return Ok(());
+    };
+    let what = format!("mesh {m} primitive {p} (Draco)");
+    let view = ext["bufferView"]
+        .as_u64()
+        .ok_or(format!("{what} has no bufferView"))? as usize;
+    let stream = view_bytes(json, buffers, out, view)
+        .ok_or(format!("{what}: bufferView {view} lies outside its buffer"))?;
+    let mut reader = draco_core::DecoderBuffer::new(&stream).with_limits(
+        draco_core::DecodeLimits::default()
+            .with_max_decoded_bytes(MAX_DECODED.saturating_sub(out.bytes.len() as u64)),
+    );
+    let mut mesh = draco_core::Mesh::new();
+    draco_core::MeshDecoder::new()
+        .decode(&mut reader, &mut mesh)
+        .map_err(|e| format!("{what} does not decode: {e}"))?;
+    let points = mesh.num_points();
+    for (name, id) in ext["attributes"].as_object().into_iter().flatten() {
+        let id = id
+            .as_u64()
+            .ok_or(format!("{what}: attribute {name} has no id"))? as u32;
+        let acc = prim["attributes"][name]
+            .as_u64()
+            .ok_or(format!("{what}: attribute {name} has no accessor"))? as usize;
+        let attr = mesh
+            .attribute_by_unique_id(id)
+            .ok_or(format!("{what}: the stream has no attribute {id} ({name})"))?;
+        let ty = json["accessors"][acc]["componentType"]
+            .as_u64()
+            .unwrap_or(5126) as u32;
+        let ncomp = components(json["accessors"][acc]["type"].as_str().unwrap_or(""))
+            .ok_or(format!("{what}: accessor {acc} has an unknown type"))?;
+        let values = attr.read_f32s(points, ncomp);
+        let at = out.push(&encode_as(&values, ty))?;
+        point_accessor(json, acc, at, ty, points, ncomp, out.buffer);
+        // The bounds the file declares are the values before Draco quantized them.
+        if json["accessors"][acc].get("min").is_some() && points > 0 {
+            let stored: Vec<f64> = values
+                .iter()
+                .map(|&v| match ty {
+                    5126 => v as f64,
+                    _ => v.round() as f64,
+                })
+                .collect();
+            let bound = |pick: fn(f64, f64) -> f64| -> Vec<f64> {
+                (0..ncomp)
+                    .map(|c| {
+                        stored
+                            .iter()
+                            .skip(c)
+                            .step_by(ncomp)
+                            .copied()
+                            .reduce(pick)
+                            .unwrap_or(0.0)
+                    })
+                    .collect()
+            };
+            json["accessors"][acc]["min"] = json!(bound(f64::min));
+            json["accessors"][acc]["max"] = json!(bound(f64::max));
+        }
+    }
+    if let Some(acc) = prim["indices"].as_u64().map(|a| a as usize) {
+        let declared = json["accessors"][acc]["componentType"]
+            .as_u64()
+            .unwrap_or(5125) as u32;
+        let ty = if points > 65_535 { 5125 } else { declared };
+        let mut flat = Vec::with_capacity(mesh.num_faces() * 3);
+        for f in 0..mesh.num_faces() {
+            flat.extend(
+                mesh.face(draco_core::FaceIndex(f as u32))
+                    .map(|i| i.0 as f32),
+            );
+        }
+        let at = out.push(&encode_as(&flat, ty))?;
+        point_accessor(json, acc, at, ty, flat.len(), 1, out.buffer);
+    }
+    let prim = &mut json["meshes"][m]["primitives"][p];
+    if let Some(o) = prim.get_mut("extensions").and_then(Value::as_object_mut) {
+        o.remove("KHR_draco_mesh_compression");
+        if o.is_empty() {
+            prim.as_object_mut().map(|v| v.remove("extensions"));
+        }
+    }
+    Ok(())
+}
+
+/// The bytes of buffer view `view`, from the buffers read or from what is decoded so far.
+fn view_bytes(json: &Value, buffers: &[Vec<u8>], out: &Decoded, view: usize) -> Option<Vec<u8>> {
+    let bv = json["bufferViews"].get(view)?;
+    let buffer = bv["buffer"].as_u64()? as usize;
+    let start = bv["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let len = bv["byteLength"].as_u64()? as usize;
+    let data = if buffer == out.buffer {
+        &out.bytes
+    } else {
+        buffers.get(buffer)?
+    };
+    data.get(start..start.checked_add(len)?).map(<[u8]>::to_vec)
+}
+
+/// Point accessor `acc` at `count` elements of `ncomp` components of type `ty`, `at` bytes into
+/// the decoded buffer (through a new buffer view).
+fn point_accessor(
+    json: &mut Value,
+    acc: usize,
+    at: usize,
+    ty: u32,
+    count: usize,
+    ncomp: usize,
+    buffer: usize,
+) {
+    let view = json!({
+        "buffer": buffer,
+        "byteOffset": at,
+        "byteLength": count * ncomp * component_size(ty),
+    });
+    if !json["bufferViews"].is_array() {
+        json["bufferViews"] = json!([]);
+    }
+    let views = json["bufferViews"].as_array_mut().expect("an array");
+    views.push(view);
+    let index = views.len() - 1;
+    let a = &mut json["accessors"][acc];
+    a["bufferView"] = json!(index);
+    a["componentType"] = json!(ty);
+    a["count"] = json!(count);
+    if let Some(o) = a.as_object_mut() {
+        o.remove("byteOffset");
+    }
+}
+
+fn components(ty: &str) -> Option<usize> {
+    Some(match ty {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" | "MAT2" => 4,
+        "MAT3" => 9,
+        "MAT4" => 16,
+        _ => return None,
+    })
+}
+
+fn component_size(ty: u32) -> usize {
+    match ty {
+        5120 | 5121 => 1,
+        5122 | 5123 => 2,
+        _ => 4,
+    }
+}
+
+/// Values (as Draco gives them: floats, or raw integers widened) in component type `ty`.
+fn encode_as(values: &[f32], ty: u32) -> Vec<u8> {
+    let mut out = Vec::with_capacity(values.len() * component_size(ty));
+    for &v in values {
+        match ty {
+            5120 => out.push(v.round().clamp(-128.0, 127.0) as i8 as u8),
+            5121 => out.push(v.round().clamp(0.0, 255.0) as u8),
+            5122 => out.extend((v.round().clamp(-32768.0, 32767.0) as i16).to_le_bytes()),
+            5123 => out.extend((v.round().clamp(0.0, 65535.0) as u16).to_le_bytes()),
+            5125 => out.extend((v.round().max(0.0) as u32).to_le_bytes()),
+            _ => out.extend(v.to_le_bytes()),
+        }
+    }
+    out
+}
+
+/// Take the decoded extensions out of `extensionsUsed` and `extensionsRequired`, and the
+/// meshopt fallback markers off the buffers.
+fn remove_extensions(json: &mut Value) {
+    for key in ["extensionsUsed", "extensionsRequired"] {
+        if let Some(list) = json.get_mut(key).and_then(Value::as_array_mut) {
+            list.retain(|e| !DECODED_EXTENSIONS.contains(&e.as_str().unwrap_or("")));
+            if list.is_empty() {
+                json.as_object_mut().map(|o| o.remove(key));
+            }
+        }
+    }
+    for b in json["buffers"].as_array_mut().into_iter().flatten() {
+        if let Some(o) = b.get_mut("extensions").and_then(Value::as_object_mut) {
+            o.remove("EXT_meshopt_compression");
+            o.remove("KHR_meshopt_compression");
+            if o.is_empty() {
+                b.as_object_mut().map(|v| v.remove("extensions"));
+            }
+        }
+    }
+}

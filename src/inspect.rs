@@ -1,0 +1,412 @@
+//! `inbetween inspect FILE`: what the tool finds in a file before anything is run. Morph meshes
+//! (targets, names, vertices, triangles), animations (channels, keys, key rate and grid,
+//! duration, interpolation), the tracks `tween` would use with its default options and what
+//! it would write (frames, new targets, about how many bytes), the skinned clips `blend` can
+//! mix, and the required extensions with whether they are decoded. Text, or JSON
+//! (`schemas/inspect.schema.json`).
+
+use crate::gltf::{arr, Access, Document};
+use crate::tween::{
+    find_morph_meshes, grid_of, plan, skeletal_clips, KeyOptions, KeySource, MorphMesh,
+    TrackOrigin, TweenOptions,
+};
+use anyhow::Result;
+use serde::Serialize;
+use serde_json::Value;
+use std::collections::BTreeSet;
+use std::path::Path;
+
+/// Extensions whose data inbetween passes through untouched (it never needs to read them).
+const PASSED_THROUGH: &[&str] = &[
+    "KHR_texture_basisu",
+    "KHR_texture_transform",
+    "EXT_texture_webp",
+    "EXT_texture_avif",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_clearcoat",
+    "KHR_materials_ior",
+    "KHR_materials_iridescence",
+    "KHR_materials_sheen",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+    "KHR_materials_unlit",
+    "KHR_materials_variants",
+    "KHR_materials_volume",
+    "KHR_materials_anisotropy",
+    "KHR_materials_dispersion",
+    "KHR_materials_pbrSpecularGlossiness",
+    "KHR_lights_punctual",
+    "KHR_xmp_json_ld",
+    "EXT_mesh_gpu_instancing",
+];
+
+#[derive(Serialize)]
+pub struct Inspection {
+    pub file: String,
+    pub bytes: u64,
+    pub generator: Option<String>,
+    pub extensions: Vec<Extension>,
+    pub morph_meshes: Vec<MorphMeshInfo>,
+    pub animations: Vec<AnimationInfo>,
+    pub tween: TweenInfo,
+    pub blend: BlendInfo,
+}
+
+#[derive(Serialize)]
+pub struct Extension {
+    pub name: String,
+    pub required: bool,
+    /// `decoded` (decompressed on read), `kept` (read as it is: quantized data), `passed
+    /// through` (not read, written back unchanged) or `unknown`.
+    pub status: &'static str,
+}
+
+#[derive(Serialize)]
+pub struct MorphMeshInfo {
+    pub mesh: usize,
+    pub name: String,
+    pub primitives: usize,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub targets: usize,
+    pub target_names: Vec<String>,
+}
+
+#[derive(Serialize)]
+pub struct AnimationInfo {
+    pub index: usize,
+    pub name: String,
+    pub channels: usize,
+    /// Channels that drive morph weights.
+    pub weights_channels: usize,
+    /// Keys of the sampler with the most.
+    pub keys: usize,
+    /// Keys per second of the densest sampler.
+    pub key_rate: f64,
+    /// The frame grid every key time lies on (per second), if any.
+    pub grid: Option<f64>,
+    pub duration: f64,
+    pub interpolation: Vec<String>,
+}
+
+#[derive(Serialize)]
+pub struct TweenInfo {
+    pub tracks: Vec<TrackInfo>,
+    /// Why `tween` would refuse the file, when it would.
+    pub refused: Option<String>,
+}
+
+#[derive(Serialize)]
+pub struct TrackInfo {
+    pub mesh: String,
+    /// `animation NAME` or `targets`.
+    pub keys_from: String,
+    pub keys: usize,
+    pub frames: usize,
+    /// Targets a glTF output adds (frames between keys).
+    pub new_targets: usize,
+    /// About how many bytes a glTF output adds for this track.
+    pub added_bytes: u64,
+}
+
+#[derive(Serialize)]
+pub struct BlendInfo {
+    pub skins: usize,
+    /// Animations that move joints of a skin: what `blend --clips` can name.
+    pub clips: Vec<String>,
+}
+
+/// Inspect the file at `path`.
+pub fn inspect(path: &Path, access: &Access) -> Result<Inspection> {
+    let doc = Document::open_with(path, access)?;
+    let json = &doc.json;
+    let meshes = find_morph_meshes(
+        &doc,
+        &KeyOptions {
+            source: KeySource::Auto,
+            animation: None,
+        },
+    );
+    let (tracks, refused) = match &meshes {
+        Ok(m) => (tween_tracks(m), None),
+        Err(e) => (Vec::new(), Some(format!("{e:#}"))),
+    };
+    Ok(Inspection {
+        file: path.display().to_string(),
+        bytes: doc.input_bytes,
+        generator: json["asset"]["generator"].as_str().map(str::to_owned),
+        extensions: extensions(&doc),
+        morph_meshes: morph_meshes(&doc),
+        animations: animations(&doc),
+        tween: TweenInfo { tracks, refused },
+        blend: BlendInfo {
+            skins: arr(json, "skins").len(),
+            clips: blend_clips(json),
+        },
+    })
+}
+
+fn extensions(doc: &Document) -> Vec<Extension> {
+    let names = |key: &str| -> Vec<String> {
+        arr(&doc.json, key)
+            .iter()
+            .filter_map(Value::as_str)
+            .map(str::to_owned)
+            .collect()
+    };
+    let required = names("extensionsRequired");
+    let mut out: Vec<Extension> = doc
+        .decoded
+        .iter()
+        .map(|n| Extension {
+            name: n.clone(),
+            // A compressed file requires its compression (or relies on a fallback).
+            required: true,
+            status: "decoded",
+        })
+        .collect();
+    for name in names("extensionsUsed") {
+        let status = match name.as_str() {
+            "KHR_mesh_quantization" => "kept",
+            n if PASSED_THROUGH.contains(&n) => "passed through",
+            _ => "unknown",
+        };
+        out.push(Extension {
+            required: required.contains(&name),
+            name,
+            status,
+        });
+    }
+    out
+}
+
+fn morph_meshes(doc: &Document) -> Vec<MorphMeshInfo> {
+    let json = &doc.json;
+    arr(json, "meshes")
+        .iter()
+        .enumerate()
+        .filter_map(|(mi, m)| {
+            let prims = arr(m, "primitives");
+            let targets = prims.first().map_or(0, |p| arr(p, "targets").len());
+            if targets == 0 {
+                return None;
+            }
+            let count = |acc: Option<u64>| {
+                acc.and_then(|a| doc.accessor_count(a as usize).ok())
+                    .unwrap_or(0)
+            };
+            let vertices = prims
+                .iter()
+                .map(|p| count(p["attributes"]["POSITION"].as_u64()))
+                .sum();
+            let triangles = prims
+                .iter()
+                .map(|p| {
+                    count(
+                        p["indices"]
+                            .as_u64()
+                            .or(p["attributes"]["POSITION"].as_u64()),
+                    ) / 3
+                })
+                .sum();
+            Some(MorphMeshInfo {
+                mesh: mi,
+                name: m["name"].as_str().unwrap_or("").to_string(),
+                primitives: prims.len(),
+                vertices,
+                triangles,
+                targets,
+                target_names: arr(&m["extras"], "targetNames")
+                    .iter()
+                    .filter_map(Value::as_str)
+                    .map(str::to_owned)
+                    .collect(),
+            })
+        })
+        .collect()
+}
+
+fn animations(doc: &Document) -> Vec<AnimationInfo> {
+    arr(&doc.json, "animations")
+        .iter()
+        .enumerate()
+        .map(|(ai, a)| {
+            let samplers = arr(a, "samplers");
+            let times: Vec<Vec<f64>> = samplers
+                .iter()
+                .filter_map(|s| doc.read_f64(s["input"].as_u64()? as usize).ok())
+                .map(|(t, _)| t)
+                .collect();
+            let all: Vec<f64> = times.iter().flatten().copied().collect();
+            let (lo, hi) = all
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &t| {
+                    (l.min(t), h.max(t))
+                });
+            let rate = times
+                .iter()
+                .filter(|t| t.len() > 1)
+                .map(|t| (t.len() - 1) as f64 / (t[t.len() - 1] - t[0]).max(1e-9))
+                .fold(0.0, f64::max);
+            let interpolation: BTreeSet<String> = samplers
+                .iter()
+                .map(|s| s["interpolation"].as_str().unwrap_or("LINEAR").to_string())
+                .collect();
+            AnimationInfo {
+                index: ai,
+                name: a["name"].as_str().unwrap_or("").to_string(),
+                channels: arr(a, "channels").len(),
+                weights_channels: arr(a, "channels")
+                    .iter()
+                    .filter(|c| c["target"]["path"] == "weights")
+                    .count(),
+                keys: times.iter().map(Vec::len).max().unwrap_or(0),
+                key_rate: rate,
+                grid: grid_of(&all).map(|g| g.rate()),
+                duration: if hi >= lo { hi - lo } else { 0.0 },
+                interpolation: interpolation.into_iter().collect(),
+            }
+        })
+        .collect()
+}
+
+/// What `tween` with its default options would do with each track.
+fn tween_tracks(meshes: &[MorphMesh]) -> Vec<TrackInfo> {
+    let opts = TweenOptions::default();
+    let mut out = Vec::new();
+    for m in meshes {
+        let normals = m.primitives.iter().all(|p| p.normals.is_some());
+        let tangents = normals && m.primitives.iter().all(|p| p.tangents.is_some());
+        let per_vertex = 12 * (1 + normals as u64 + tangents as u64);
+        for t in &m.tracks {
+            let frames = plan(&t.times, &opts);
+            let new_targets = frames.iter().filter(|f| f.t != 0.0 && f.t != 1.0).count();
+            let targets = (m.target_count + new_targets) as u64;
+            out.push(TrackInfo {
+                mesh: m.name.clone(),
+                keys_from: match &t.origin {
+                    TrackOrigin::Animation { animation, .. } => format!("animation {animation}"),
+                    TrackOrigin::Targets { .. } => "targets".into(),
+                },
+                keys: t.times.len(),
+                frames: frames.len(),
+                new_targets,
+                added_bytes: new_targets as u64 * m.vertex_count() as u64 * per_vertex
+                    + frames.len() as u64 * (4 + 4 * targets),
+            });
+        }
+    }
+    out
+}
+
+/// Animations that move joints of a skin.
+fn blend_clips(json: &Value) -> Vec<String> {
+    let joints: BTreeSet<u64> = arr(json, "skins")
+        .iter()
+        .flat_map(|s| arr(s, "joints").iter().filter_map(Value::as_u64))
+        .collect();
+    let moving = skeletal_clips(json);
+    arr(json, "animations")
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| {
+            arr(a, "channels").iter().any(|c| {
+                c["target"]["node"]
+                    .as_u64()
+                    .is_some_and(|n| joints.contains(&n))
+                    && c["target"]["path"] != "weights"
+            })
+        })
+        .map(|(i, a)| {
+            a["name"]
+                .as_str()
+                .map_or_else(|| i.to_string(), |n| format!("{n:?}"))
+        })
+        .filter(|n| moving.contains(n))
+        .collect()
+}
+
+/// The inspection as text for a person.
+pub fn text(i: &Inspection) -> String {
+    let mut s = format!("{}: {} bytes", i.file, i.bytes);
+    if let Some(g) = &i.generator {
+        s += &format!(", written by {g}");
+    }
+    s += "\n";
+    for e in &i.extensions {
+        s += &format!(
+            "extension {}{}: {}\n",
+            e.name,
+            if e.required { " (required)" } else { "" },
+            e.status
+        );
+    }
+    for m in &i.morph_meshes {
+        s += &format!(
+            "morph mesh {} {:?}: {} primitive{}, {} vertices, {} triangles, {} targets",
+            m.mesh,
+            m.name,
+            m.primitives,
+            if m.primitives == 1 { "" } else { "s" },
+            m.vertices,
+            m.triangles,
+            m.targets
+        );
+        if !m.target_names.is_empty() {
+            let shown: Vec<&str> = m.target_names.iter().take(8).map(String::as_str).collect();
+            let more = m.target_names.len().saturating_sub(8);
+            s += &format!(
+                " ({}{})",
+                shown.join(", "),
+                if more > 0 {
+                    format!(", ... {more} more")
+                } else {
+                    String::new()
+                }
+            );
+        }
+        s += "\n";
+    }
+    for a in &i.animations {
+        s += &format!(
+            "animation {} {:?}: {} channels ({} weights), {} keys, {:.3} s, {:.2} keys/s{}, {}\n",
+            a.index,
+            a.name,
+            a.channels,
+            a.weights_channels,
+            a.keys,
+            a.duration,
+            a.key_rate,
+            a.grid
+                .map_or(String::new(), |g| format!(" on a {g} per second grid")),
+            a.interpolation.join("/")
+        );
+    }
+    match &i.tween.refused {
+        Some(why) => s += &format!("tween: refuses it: {why}\n"),
+        None => {
+            for t in &i.tween.tracks {
+                s += &format!(
+                    "tween (defaults): mesh {:?}, keys from {}: {} keys -> {} frames, {} new targets, about {} KB added\n",
+                    t.mesh,
+                    t.keys_from,
+                    t.keys,
+                    t.frames,
+                    t.new_targets,
+                    t.added_bytes.div_ceil(1024)
+                );
+            }
+        }
+    }
+    if i.blend.clips.is_empty() {
+        s += "blend: no skinned clips\n";
+    } else {
+        s += &format!(
+            "blend: {} skin{}, clips {}\n",
+            i.blend.skins,
+            if i.blend.skins == 1 { "" } else { "s" },
+            i.blend.clips.join(", ")
+        );
+    }
+    s
+}

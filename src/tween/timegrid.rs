@@ -1,0 +1,185 @@
+//! Exact times: key times that lie on a frame grid (24, 25, 30, 60 ... per second, or the NTSC
+//! rates 24000/1001 ...) within what float32 storage and an exporter's summing leave of them
+//! are snapped onto it, so that frames land on the grid, USD time codes come out whole and
+//! rates exact (a glTF stores 4.2 s as 4.19999743).
+
+/// Frame rates a grid is looked for at, coarsest first (frames per second, as a fraction).
+const RATES: &[(f64, f64)] = &[
+    (1.0, 1.0),
+    (2.0, 1.0),
+    (4.0, 1.0),
+    (5.0, 1.0),
+    (8.0, 1.0),
+    (10.0, 1.0),
+    (12.0, 1.0),
+    (15.0, 1.0),
+    (20.0, 1.0),
+    (24.0, 1.0),
+    (25.0, 1.0),
+    (30.0, 1.0),
+    (40.0, 1.0),
+    (48.0, 1.0),
+    (50.0, 1.0),
+    (60.0, 1.0),
+    (72.0, 1.0),
+    (75.0, 1.0),
+    (90.0, 1.0),
+    (96.0, 1.0),
+    (100.0, 1.0),
+    (120.0, 1.0),
+    (144.0, 1.0),
+    (150.0, 1.0),
+    (180.0, 1.0),
+    (200.0, 1.0),
+    (240.0, 1.0),
+    (300.0, 1.0),
+    (24000.0, 1001.0),
+    (25000.0, 1001.0),
+    (30000.0, 1001.0),
+    (48000.0, 1001.0),
+    (60000.0, 1001.0),
+    (120000.0, 1001.0),
+];
+
+/// How far (in frames of the grid) a time may lie from a grid point and still be on it: a
+/// float32 key time carries about 1e-7 of itself, and exporters that sum spans in float32 drift
+/// by a few hundred of those over thousands of keys (AnimatedMorphSphere's 7.2 s is stored as
+/// 7.19999456, 1.6e-4 of a frame at 30 per second).
+pub const ON_GRID: f64 = 2e-3;
+
+/// A frame grid: `rate` = num / den frames per second.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    pub num: f64,
+    pub den: f64,
+}
+
+impl Grid {
+    pub fn rate(&self) -> f64 {
+        self.num / self.den
+    }
+
+    /// Frame number of time `t` on this grid, when it lies on it.
+    pub fn frame(&self, t: f64) -> Option<f64> {
+        let x = t * self.num / self.den;
+        let n = x.round();
+        ((x - n).abs() <= ON_GRID).then_some(n)
+    }
+
+    /// The time of frame `n`, as the nearest double to n den / num.
+    pub fn time(&self, n: f64) -> f64 {
+        n * self.den / self.num
+    }
+}
+
+/// The coarsest grid every time of `times` lies on, if there is one. Times of several seconds
+/// or more need not be integral multiples of the grid to be on it, but each one is.
+pub fn grid_of(times: &[f64]) -> Option<Grid> {
+    if times.is_empty() || times.iter().any(|t| !t.is_finite()) {
+        return None;
+    }
+    // Distinct times must stay distinct frames on the grid.
+    let distinct = |g: &Grid| {
+        let frames: Option<Vec<f64>> = times.iter().map(|&t| g.frame(t)).collect();
+        frames.is_some_and(|f| {
+            let mut pairs: Vec<(f64, f64)> = times.iter().copied().zip(f).collect();
+            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pairs
+                .windows(2)
+                .all(|w| (w[0].0 == w[1].0) == (w[0].1 == w[1].1))
+        })
+    };
+    RATES
+        .iter()
+        .map(|&(num, den)| Grid { num, den })
+        .find(distinct)
+}
+
+/// `times` snapped onto their coarsest grid (unchanged when they lie on none), and the grid.
+pub fn snap(times: &[f64]) -> (Vec<f64>, Option<Grid>) {
+    match grid_of(times) {
+        Some(g) => (
+            times
+                .iter()
+                .map(|&t| g.time(g.frame(t).expect("on the grid")))
+                .collect(),
+            Some(g),
+        ),
+        None => (times.to_vec(), None),
+    }
+}
+
+/// Time codes of a USD point cache: the rate (per second) and every frame's code, for meshes
+/// whose tracks have frames at `tracks[mesh][track][frame]` seconds. On a grid (the coarsest
+/// one all frames lie on) the rate is the grid's and every code is whole; elsewhere the rate
+/// is `fallback` (or one over the shortest spacing). Several tracks of one mesh follow one
+/// another on the timeline, one frame apart.
+pub fn timeline(tracks: &[Vec<Vec<f64>>], fallback: Option<f64>) -> (f64, Vec<Vec<f64>>) {
+    let all: Vec<f64> = tracks.iter().flatten().flatten().copied().collect();
+    let grid = grid_of(&all);
+    let rate = match (grid, fallback) {
+        (Some(g), _) => g.rate(),
+        (None, Some(r)) => r,
+        (None, None) => {
+            let spacing = tracks
+                .iter()
+                .flatten()
+                .flat_map(|t| t.windows(2).map(|w| w[1] - w[0]))
+                .filter(|d| *d > 0.0)
+                .fold(f64::INFINITY, f64::min);
+            if spacing.is_finite() {
+                ((1.0 / spacing) * 1e6).round() / 1e6
+            } else {
+                24.0
+            }
+        }
+    };
+    let code = |time: f64| match grid {
+        Some(g) => g.frame(time).unwrap_or(time * rate),
+        None => (time * rate * 1e9).round() / 1e9,
+    };
+    let codes = tracks
+        .iter()
+        .map(|mesh| {
+            let mut codes = Vec::new();
+            let mut next_start: Option<f64> = None;
+            for t in mesh {
+                let first = t.first().copied().map_or(0.0, code);
+                let offset = match next_start {
+                    Some(s) if s > first => s - first,
+                    _ => 0.0,
+                };
+                codes.extend(t.iter().map(|&time| code(time) + offset));
+                next_start = codes.last().map(|c| c + 1.0);
+            }
+            codes
+        })
+        .collect();
+    (rate, codes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn float32_key_times_snap_to_their_grid() {
+        // Flamingo's keys: 0.1 s apart as float32.
+        let keys: Vec<f64> = (0..15).map(|k| (k as f32 * 0.1f32) as f64).collect();
+        let (snapped, grid) = snap(&keys);
+        assert_eq!(grid.unwrap().rate(), 10.0);
+        assert_eq!(snapped[14], 1.4);
+        assert_eq!(snapped[3], 0.3);
+        // AnimatedMorphCube's last key, 4.2 s as an exporter summed it.
+        let (snapped, grid) = snap(&[0.0, 0.033333335, 4.199997425079346]);
+        assert_eq!(grid.unwrap().rate(), 30.0);
+        assert_eq!(snapped[2], 4.2);
+        // NTSC: 1001/24000 steps are not 24 per second.
+        let ntsc: Vec<f64> = (0..100).map(|k| k as f64 * 1001.0 / 24000.0).collect();
+        let g = grid_of(&ntsc).unwrap();
+        assert_eq!((g.num, g.den), (24000.0, 1001.0));
+        // Off any grid: left alone.
+        let odd = [0.0, 0.137, 0.291];
+        assert_eq!(snap(&odd), (odd.to_vec(), None));
+    }
+}
