@@ -423,6 +423,7 @@ fn split_tube(dir: &Path, normals: bool) -> PathBuf {
     KeyframeFile {
         meshes: vec![m],
         key_times: None,
+        key_weights: None,
     }
     .write(&path)
     .unwrap();
@@ -497,6 +498,7 @@ fn hard_edges_stay_hard_and_key_normals_are_kept() {
     KeyframeFile {
         meshes: vec![KeyedMesh::new("hard", surface, vec![key])],
         key_times: None,
+        key_weights: None,
     }
     .write(&input)
     .unwrap();

@@ -377,6 +377,7 @@ fn temporaries_of_a_killed_run_are_removed_by_the_next() {
     inbetween::synth::KeyframeFile {
         meshes: vec![inbetween::synth::KeyedMesh::new("tube", surface, vec![x1])],
         key_times: None,
+        key_weights: None,
     }
     .write(&big)
     .unwrap();

@@ -14,6 +14,7 @@ fn write_keys(surface: Surface, keys: Vec<Vec<DVec3>>) -> (tempfile::TempDir, st
     KeyframeFile {
         meshes: vec![KeyedMesh::new("m", surface, keys)],
         key_times: None,
+        key_weights: None,
     }
     .write(&path)
     .unwrap();

@@ -275,6 +275,7 @@ fn usdc_size_is_close_to_usd_core_resave() {
     inbetween::synth::KeyframeFile {
         meshes: vec![inbetween::synth::KeyedMesh::new("tube", surface, vec![x1])],
         key_times: None,
+        key_weights: None,
     }
     .write(&keys)
     .unwrap();

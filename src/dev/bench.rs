@@ -356,6 +356,7 @@ pub fn end_to_end(triangles: usize, tweens: usize, format: &str) -> Result<EndTo
     synth::KeyframeFile {
         meshes: vec![synth::KeyedMesh::new("tube", s, vec![k1, k2])],
         key_times: None,
+        key_weights: None,
     }
     .write(&input)?;
     let exe = std::env::current_exe()?;

@@ -194,12 +194,13 @@ fn sub_mesh(m: &KeyedMesh, triangles: &[[u32; 3]]) -> KeyedMesh {
     }
 }
 
-/// A keyframe file: meshes (each on its own node) and optionally a one-hot weights animation
-/// for the first mesh, stepping through its targets at `key_times` (key k shows target k-1,
-/// key 0 the base).
+/// A keyframe file: meshes (each on its own node) and optionally a weights animation for the
+/// first mesh at `key_times`: one-hot, stepping through its targets (key k shows target k-1,
+/// key 0 the base), or `key_weights` (one weight per target and key: a rig's baked clip).
 pub struct KeyframeFile {
     pub meshes: Vec<KeyedMesh>,
     pub key_times: Option<Vec<f64>>,
+    pub key_weights: Option<Vec<Vec<f64>>>,
 }
 
 impl KeyframeFile {
@@ -290,7 +291,10 @@ impl KeyframeFile {
             let t: Vec<f32> = times.iter().map(|&t| t as f32).collect();
             let mut w = Vec::new();
             for k in 0..times.len() {
-                w.extend((0..n).map(|i| if k == i + 1 { 1.0f32 } else { 0.0 }));
+                match &self.key_weights {
+                    Some(kw) => w.extend(kw[k].iter().map(|&x| x as f32)),
+                    None => w.extend((0..n).map(|i| if k == i + 1 { 1.0f32 } else { 0.0 })),
+                }
             }
             let input = out.push_f32(&t, "SCALAR", 1, true, None);
             let output = out.push_f32(&w, "SCALAR", 1, false, None);
@@ -305,6 +309,69 @@ impl KeyframeFile {
             _ => Container::Glb,
         };
         gltf::finish(out, container, path)
+    }
+}
+
+/// A face-rig-like file: a 40 x 40 grid ("face", 2 x 2 units) with `shapes` blend shapes (the
+/// first a "jaw" turning the lower third 25 degrees about a horizontal axis, the others round
+/// bumps of varied size at varied places, some raising and some sinking) and a weights clip of
+/// `seconds` baked at `rate` samples a second, every weight a smooth curve in [0, 1]. Like a
+/// capture-driven face: many targets, blended weights, dense keys.
+pub fn face_rig(shapes: usize, rate: f64, seconds: f64) -> KeyframeFile {
+    let face = grid(40, 40, 2.0, 2.0);
+    let mut targets = Vec::new();
+    for k in 0..shapes {
+        let t: Vec<DVec3> = if k == 0 {
+            let jaw = DQuat::from_axis_angle(DVec3::X, 25f64.to_radians());
+            face.positions
+                .iter()
+                .map(|p| {
+                    let pivot = DVec3::new(p.x, 0.7, 0.0);
+                    let f = ((0.7 - p.y) / 0.2).clamp(0.0, 1.0);
+                    let turned = pivot + jaw * (*p - pivot);
+                    p.lerp(turned, f * f * (3.0 - 2.0 * f))
+                })
+                .collect()
+        } else {
+            let a = k as f64 * 2.399_963; // golden angle: spread over the face
+            let centre = DVec3::new(
+                1.0 + 0.7 * a.cos() * (k as f64 / shapes as f64).sqrt(),
+                1.0 + 0.7 * a.sin() * (k as f64 / shapes as f64).sqrt(),
+                0.0,
+            );
+            let radius = 0.15 + 0.1 * ((k * 7) % 5) as f64 / 4.0;
+            let height = if k % 3 == 0 { -0.12 } else { 0.18 };
+            face.positions
+                .iter()
+                .map(|p| {
+                    let d2 = (*p - centre).length_squared() / (radius * radius);
+                    *p + DVec3::Z * height * (-d2).exp()
+                })
+                .collect()
+        };
+        targets.push(t);
+    }
+    let keys = (seconds * rate).round() as usize + 1;
+    let key_times: Vec<f64> = (0..keys).map(|i| i as f64 / rate).collect();
+    let key_weights = key_times
+        .iter()
+        .map(|&t| {
+            (0..shapes)
+                .map(|k| {
+                    let (f, phase) = (0.4 + 0.13 * (k % 7) as f64, k as f64 * 0.9);
+                    let x = 0.5 + 0.5 * (2.0 * PI * f * t + phase).sin();
+                    x * x
+                })
+                .collect()
+        })
+        .collect();
+    KeyframeFile {
+        meshes: vec![KeyedMesh {
+            color: [0.9, 0.75, 0.65, 1.0],
+            ..KeyedMesh::new("face", face, targets)
+        }],
+        key_times: Some(key_times),
+        key_weights: Some(key_weights),
     }
 }
 
@@ -381,6 +448,7 @@ pub fn samples() -> Vec<(&'static str, KeyframeFile)> {
             KeyframeFile {
                 meshes: vec![bar],
                 key_times: None,
+                key_weights: None,
             },
         ),
         (
@@ -388,6 +456,7 @@ pub fn samples() -> Vec<(&'static str, KeyframeFile)> {
             KeyframeFile {
                 meshes: vec![tube_bend],
                 key_times: None,
+                key_weights: None,
             },
         ),
         (
@@ -395,6 +464,7 @@ pub fn samples() -> Vec<(&'static str, KeyframeFile)> {
             KeyframeFile {
                 meshes: vec![flag, pole],
                 key_times: Some(vec![0.0, 0.5, 1.0, 1.5, 2.0]),
+                key_weights: None,
             },
         ),
     ]

@@ -279,9 +279,20 @@ fn draco_primitive(
             .unwrap_or(5126) as u32;
         let ncomp = components(json["accessors"][acc]["type"].as_str().unwrap_or(""))
             .ok_or(format!("{what}: accessor {acc} has an unknown type"))?;
-        let values = attr.read_f32s(points, ncomp);
+        let mut values = attr.read_f32s(points, ncomp);
+        if name.starts_with("COLOR_") && ty == 5126 {
+            // Colours are 0..1; Draco's dequantization can land a rounding step past 1.
+            values.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0));
+        }
         let at = out.push(&encode_as(&values, ty))?;
-        point_accessor(json, acc, at, ty, points, ncomp, out.buffer);
+        let placed = Placed {
+            at,
+            ty,
+            count: points,
+            ncomp,
+            target: 34962,
+        };
+        point_accessor(json, acc, placed, out.buffer);
         // The bounds the file declares are the values before Draco quantized them.
         if json["accessors"][acc].get("min").is_some() && points > 0 {
             let stored: Vec<f64> = values
@@ -321,7 +332,14 @@ fn draco_primitive(
             );
         }
         let at = out.push(&encode_as(&flat, ty))?;
-        point_accessor(json, acc, at, ty, flat.len(), 1, out.buffer);
+        let placed = Placed {
+            at,
+            ty,
+            count: flat.len(),
+            ncomp: 1,
+            target: 34963,
+        };
+        point_accessor(json, acc, placed, out.buffer);
     }
     let prim = &mut json["meshes"][m]["primitives"][p];
     if let Some(o) = prim.get_mut("extensions").and_then(Value::as_object_mut) {
@@ -347,21 +365,23 @@ fn view_bytes(json: &Value, buffers: &[Vec<u8>], out: &Decoded, view: usize) -> 
     data.get(start..start.checked_add(len)?).map(<[u8]>::to_vec)
 }
 
-/// Point accessor `acc` at `count` elements of `ncomp` components of type `ty`, `at` bytes into
-/// the decoded buffer (through a new buffer view).
-fn point_accessor(
-    json: &mut Value,
-    acc: usize,
+/// Where decoded data of one accessor went: `count` elements of `ncomp` components of type
+/// `ty`, `at` bytes into the decoded buffer, vertex (34962) or index (34963) data.
+struct Placed {
     at: usize,
     ty: u32,
     count: usize,
     ncomp: usize,
-    buffer: usize,
-) {
+    target: u32,
+}
+
+/// Point accessor `acc` at its decoded data `p` in buffer `buffer`, through a new view.
+fn point_accessor(json: &mut Value, acc: usize, p: Placed, buffer: usize) {
     let view = json!({
         "buffer": buffer,
-        "byteOffset": at,
-        "byteLength": count * ncomp * component_size(ty),
+        "byteOffset": p.at,
+        "byteLength": p.count * p.ncomp * component_size(p.ty),
+        "target": p.target,
     });
     if !json["bufferViews"].is_array() {
         json["bufferViews"] = json!([]);
@@ -371,8 +391,8 @@ fn point_accessor(
     let index = views.len() - 1;
     let a = &mut json["accessors"][acc];
     a["bufferView"] = json!(index);
-    a["componentType"] = json!(ty);
-    a["count"] = json!(count);
+    a["componentType"] = json!(p.ty);
+    a["count"] = json!(p.count);
     if let Some(o) = a.as_object_mut() {
         o.remove("byteOffset");
     }

@@ -60,9 +60,9 @@ pub fn run_ok(args: &[&str]) -> Output {
 /// The validator report of a file: (errors, warnings, full JSON line); `None` if the validator
 /// is not installed and tools are not required.
 pub fn validate(file: &Path) -> Option<(u64, u64, String)> {
-    let dir = root().join("tools/validator");
+    let dir = root().join("tools/node");
     if !dir.join("node_modules/gltf-validator").is_dir()
-        && missing_tool("the glTF validator (tools/validator/node_modules)")
+        && missing_tool("the glTF validator (tools/node/node_modules)")
     {
         return None;
     }
@@ -392,4 +392,83 @@ pub fn played(path: &Path, mesh: usize, prim: usize, channel: usize) -> Played {
         normals,
         targets: n,
     }
+}
+
+/// The (animation, sampler) of every weights channel aimed at a node of mesh 0, in file order.
+pub fn mesh0_samplers(doc: &inbetween::gltf::Document) -> Vec<(usize, usize)> {
+    let nodes: Vec<u64> = doc.json["nodes"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .enumerate()
+        .filter(|(_, n)| n["mesh"].as_u64() == Some(0))
+        .map(|(i, _)| i as u64)
+        .collect();
+    let mut out = Vec::new();
+    for (ai, a) in doc.json["animations"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .enumerate()
+    {
+        for c in a["channels"].as_array().into_iter().flatten() {
+            if c["target"]["path"] == "weights"
+                && c["target"]["node"]
+                    .as_u64()
+                    .is_some_and(|n| nodes.contains(&n))
+            {
+                out.push((ai, c["sampler"].as_u64().unwrap() as usize));
+            }
+        }
+    }
+    out
+}
+
+/// The positions (mesh space) primitive `prim` of mesh 0 takes at each key of sampler
+/// `(animation, sampler)`, read with inbetween's own reader (quantized data decoded):
+/// base + sum of weight x target delta. Returns the key times too.
+pub fn doc_poses(
+    doc: &inbetween::gltf::Document,
+    prim: usize,
+    (anim, sampler): (usize, usize),
+) -> (Vec<f64>, Vec<Vec<glam::DVec3>>) {
+    use glam::DVec3;
+    let p = &doc.json["meshes"][0]["primitives"][prim];
+    let vec3 = |a: u64| -> Vec<DVec3> {
+        let (v, _) = doc.read_f64(a as usize).unwrap();
+        v.chunks_exact(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]))
+            .collect()
+    };
+    let base = vec3(p["attributes"]["POSITION"].as_u64().unwrap());
+    let targets: Vec<Vec<DVec3>> = p["targets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| {
+            t["POSITION"]
+                .as_u64()
+                .map_or_else(|| vec![DVec3::ZERO; base.len()], vec3)
+        })
+        .collect();
+    let s = &doc.json["animations"][anim]["samplers"][sampler];
+    let (times, _) = doc.read_f64(s["input"].as_u64().unwrap() as usize).unwrap();
+    let (w, _) = doc
+        .read_f64(s["output"].as_u64().unwrap() as usize)
+        .unwrap();
+    let poses = w
+        .chunks(targets.len())
+        .map(|w| {
+            (0..base.len())
+                .map(|v| {
+                    base[v]
+                        + w.iter()
+                            .zip(&targets)
+                            .map(|(x, t)| *x * t[v])
+                            .sum::<DVec3>()
+                })
+                .collect()
+        })
+        .collect();
+    (times, poses)
 }

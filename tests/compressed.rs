@@ -1,0 +1,281 @@
+//! Real pipeline files: every morph fixture compressed by the real tools (gltfpack -cc with
+//! EXT and KHR meshopt, glTF-Transform meshopt, draco and quantize) tweens to the frames of the
+//! uncompressed file within the compression's quantization, and the output validates.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The node tools' folder, or `None` (skipped with the reason) where they are not installed.
+fn node_bin() -> Option<PathBuf> {
+    let bin = root().join("tools/node/node_modules/.bin");
+    if bin.join("gltfpack").exists() && bin.join("gltf-transform").exists() {
+        Some(bin)
+    } else {
+        missing_tool("gltfpack and gltf-transform (tools/node)");
+        None
+    }
+}
+
+/// The compressors, as (name, command line after the tool's name with IN and OUT).
+const VARIANTS: &[(&str, &str, &[&str])] = &[
+    // -af 0: no resampling of the animation (gltfpack resamples at 30 Hz by default, which
+    // makes new keys); -kn -km -ke: names, materials and extras kept.
+    (
+        "gltfpack -cc",
+        "gltfpack",
+        &[
+            "-i", "IN", "-o", "OUT", "-cc", "-af", "0", "-kn", "-km", "-ke",
+        ],
+    ),
+    (
+        "gltfpack -c -ce khr",
+        "gltfpack",
+        &[
+            "-i", "IN", "-o", "OUT", "-c", "-ce", "khr", "-af", "0", "-kn", "-km", "-ke",
+        ],
+    ),
+    (
+        "gltf-transform meshopt",
+        "gltf-transform",
+        &["meshopt", "IN", "OUT"],
+    ),
+    (
+        "gltf-transform draco",
+        "gltf-transform",
+        &["draco", "IN", "OUT"],
+    ),
+    (
+        "gltf-transform quantize",
+        "gltf-transform",
+        &["quantize", "IN", "OUT"],
+    ),
+];
+
+/// The morph fixtures with key animations.
+fn morph_fixtures(fx: &Path) -> Vec<PathBuf> {
+    [
+        "morph-keyframes/Flamingo.glb",
+        "morph-keyframes/Parrot.glb",
+        "morph-keyframes/Flamingo_cubicspline_unindexed.glb",
+        "morph-khronos/AnimatedMorphCube/glTF/AnimatedMorphCube.gltf",
+        "morph-khronos/AnimatedMorphSphere/glTF/AnimatedMorphSphere.gltf",
+        "morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf",
+        "morph-khronos/SimpleMorph/glTF/SimpleMorph.gltf",
+    ]
+    .iter()
+    .map(|f| fx.join(f))
+    .collect()
+}
+
+/// World matrix of the first node that instances mesh 0 (`inbetween`'s reader: the gltf crate
+/// refuses KHR_mesh_quantization).
+fn mesh_world(doc: &Document) -> glam::DMat4 {
+    let nodes = doc.json["nodes"].as_array().cloned().unwrap_or_default();
+    let local = |n: &serde_json::Value| -> glam::DMat4 {
+        let f = |k: &str| -> Option<Vec<f64>> {
+            n[k].as_array()
+                .map(|a| a.iter().filter_map(|x| x.as_f64()).collect())
+        };
+        if let Some(m) = f("matrix").filter(|m| m.len() == 16) {
+            return glam::DMat4::from_cols_slice(&m);
+        }
+        let t = f("translation").map_or(glam::DVec3::ZERO, |v| glam::DVec3::new(v[0], v[1], v[2]));
+        let r = f("rotation").map_or(glam::DQuat::IDENTITY, |v| {
+            glam::DQuat::from_xyzw(v[0], v[1], v[2], v[3])
+        });
+        let s = f("scale").map_or(glam::DVec3::ONE, |v| glam::DVec3::new(v[0], v[1], v[2]));
+        glam::DMat4::from_scale_rotation_translation(s, r, t)
+    };
+    let parent = |i: usize| {
+        nodes.iter().position(|n| {
+            n["children"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|x| x.as_u64() == Some(i as u64)))
+        })
+    };
+    let Some(mut i) = nodes.iter().position(|n| n["mesh"].as_u64() == Some(0)) else {
+        return glam::DMat4::IDENTITY;
+    };
+    let mut world = local(&nodes[i]);
+    while let Some(p) = parent(i) {
+        world = local(&nodes[p]) * world;
+        i = p;
+    }
+    world
+}
+
+/// Every frame's world positions of mesh 0 primitive `prim` as its `channel`-th weights channel
+/// plays it, read with inbetween's own reader (quantized attributes decoded).
+fn world_frames(path: &Path, prim: usize, channel: usize) -> (Vec<f64>, Vec<Vec<glam::DVec3>>) {
+    let doc = Document::open(path).unwrap();
+    let world = mesh_world(&doc);
+    let (times, poses) = doc_poses(&doc, prim, mesh0_samplers(&doc)[channel]);
+    let frames = poses
+        .iter()
+        .map(|f| f.iter().map(|p| world.transform_point3(*p)).collect())
+        .collect();
+    (times, frames)
+}
+
+/// For each vertex of `a`, the vertex of `b` nearest to it.
+fn matching(a: &[glam::DVec3], b: &[glam::DVec3]) -> Vec<usize> {
+    a.iter()
+        .map(|p| {
+            (0..b.len())
+                .min_by(|&i, &j| {
+                    p.distance_squared(b[i])
+                        .total_cmp(&p.distance_squared(b[j]))
+                })
+                .unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn compressed_fixtures_tween_to_the_frames_of_the_uncompressed_files() {
+    let (Some(fx), Some(bin)) = (fixtures(), node_bin()) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut rows = Vec::new();
+    for (k, input) in morph_fixtures(&fx).iter().enumerate() {
+        let plain = dir.path().join(format!("plain{k}.glb"));
+        tween_quietly(input, &plain, &[]);
+        let prims = Document::open(&plain).unwrap().json["meshes"][0]["primitives"]
+            .as_array()
+            .unwrap()
+            .len();
+        for (name, tool, args) in VARIANTS {
+            let packed = dir
+                .path()
+                .join(format!("packed{k}_{}.glb", tool.len() + args.len()));
+            let args: Vec<String> = args
+                .iter()
+                .map(|a| match *a {
+                    "IN" => s(input).to_string(),
+                    "OUT" => s(&packed).to_string(),
+                    a => a.to_string(),
+                })
+                .collect();
+            let r = Command::new(bin.join(tool)).args(&args).output().unwrap();
+            assert!(
+                r.status.success(),
+                "{name} on {}: {}",
+                input.display(),
+                String::from_utf8_lossy(&r.stderr)
+            );
+            let out = dir.path().join(format!("out{k}.glb"));
+            tween_quietly(&packed, &out, &[]);
+            assert_valid(&out);
+            // The output is uncompressed: no compression extension is left.
+            let written = Document::open(&out).unwrap().json;
+            for e in [
+                "EXT_meshopt_compression",
+                "KHR_meshopt_compression",
+                "KHR_draco_mesh_compression",
+            ] {
+                assert!(
+                    !written.to_string().contains(e),
+                    "{name}: {e} left in the output"
+                );
+            }
+            // inspect says what it decodes.
+            let v: serde_json::Value =
+                serde_json::from_slice(&run_ok(&["inspect", s(&packed), "--json"]).stdout).unwrap();
+            let decoded: Vec<&str> = v["extensions"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|e| e["status"] == "decoded")
+                .map(|e| e["name"].as_str().unwrap())
+                .collect();
+            assert_eq!(
+                decoded.is_empty(),
+                name.ends_with("quantize"),
+                "{name}: {v}"
+            );
+            if let Some(py) = python() {
+                let json = dir.path().join("inspect.json");
+                std::fs::write(&json, v.to_string()).unwrap();
+                let schema = root().join("schemas/inspect.schema.json");
+                run_tool(
+                    &py,
+                    "check_schema.py",
+                    &[schema.as_os_str(), json.as_os_str()],
+                    name,
+                );
+            }
+            let diag = {
+                let (_, f) = world_frames(&plain, 0, 0);
+                let (lo, hi) = f[0]
+                    .iter()
+                    .fold((glam::DVec3::MAX, glam::DVec3::MIN), |(l, h), p| {
+                        (l.min(*p), h.max(*p))
+                    });
+                (hi - lo).length()
+            };
+            // Every primitive and every clip of mesh 0.
+            let (mut worst_key, mut worst_frame, mut frames) = (0.0f64, 0.0f64, 0);
+            for prim in 0..prims {
+                for channel in 0.. {
+                    if channel >= mesh0_samplers(&Document::open(&plain).unwrap()).len() {
+                        break;
+                    }
+                    let (ta, fa) = world_frames(&plain, prim, channel);
+                    let (tb, fb) = world_frames(&out, prim, channel);
+                    assert_eq!(ta, tb, "{name} on {}: frame times", input.display());
+                    let keys = key_times(input, channel);
+                    let m = matching(&fb[0], &fa[0]);
+                    for ((t, a), b) in ta.iter().zip(&fa).zip(&fb) {
+                        let e = b
+                            .iter()
+                            .zip(&m)
+                            .map(|(p, &i)| p.distance(a[i]))
+                            .fold(0.0f64, f64::max);
+                        if keys.iter().any(|k| (k - t).abs() < 1e-5) {
+                            worst_key = worst_key.max(e);
+                        }
+                        worst_frame = worst_frame.max(e);
+                        frames += 1;
+                    }
+                }
+            }
+            // In-between frames deviate no more than the keys' own quantization puts them off.
+            assert!(
+                worst_frame <= 2.0 * worst_key + 1e-6 * diag,
+                "{name} on {}: frames {worst_frame} off, keys {worst_key}",
+                input.display()
+            );
+            rows.push(format!(
+                "{} | {name} | {} | {:.2e} | {:.2e}",
+                input.file_name().unwrap().to_string_lossy(),
+                frames,
+                worst_key / diag,
+                worst_frame / diag
+            ));
+        }
+    }
+    eprintln!("fixture | compressed by | frames | worst key / diagonal | worst frame / diagonal");
+    for r in &rows {
+        eprintln!("{r}");
+    }
+}
+
+/// Key times of the `channel`-th weights channel of mesh 0 in `path`.
+fn key_times(path: &Path, channel: usize) -> Vec<f64> {
+    let doc = Document::open(path).unwrap();
+    let (anim, sampler) = mesh0_samplers(&doc)[channel];
+    let input = doc.json["animations"][anim]["samplers"][sampler]["input"]
+        .as_u64()
+        .unwrap();
+    doc.read_f64(input as usize).unwrap().0
+}
+
+use inbetween::gltf::Document;
