@@ -14,3 +14,35 @@ done
 [ -d $F ] && cp $F/skinned/*.glb corpus/blend/ && cp $F/skinned/*.glb corpus/gltf_read/ || true
 [ -d $F ] && cp $F/bvh/*.bvh corpus/bvh/ || true
 echo "corpora: $(for t in corpus/*; do echo -n "$(basename $t)=$(ls $t | wc -l) "; done)"
+# The decoders: streams cut from compressed variants made by the real tools (when installed).
+B=../tools/node/node_modules/.bin
+mkdir -p corpus/decoders
+if [ -x $B/gltfpack ] && [ -d $F ]; then
+  tmp=$(mktemp -d)
+  $B/gltfpack -i $F/morph-keyframes/Flamingo.glb -o $tmp/cc.glb -cc >/dev/null 2>&1 || true
+  $B/gltf-transform draco $F/morph-keyframes/Flamingo.glb $tmp/draco.glb >/dev/null 2>&1 || true
+  cp $tmp/*.glb corpus/gltf_read/ 2>/dev/null || true
+  # Raw streams with a 4-byte header choosing the decoder (see fuzz_targets/decoders.rs).
+  python3 - "$tmp" corpus/decoders <<'PY'
+import json, struct, sys, os
+src, dst = sys.argv[1], sys.argv[2]
+for name in ("cc.glb", "draco.glb"):
+    p = os.path.join(src, name)
+    if not os.path.exists(p): continue
+    b = open(p, "rb").read(); n = struct.unpack("<I", b[12:16])[0]; j = json.loads(b[20:20+n]); bin0 = b[28+n:]
+    for i, v in enumerate(j.get("bufferViews", [])):
+        e = v.get("extensions", {}).get("EXT_meshopt_compression")
+        if e:
+            s = bin0[e.get("byteOffset", 0):e.get("byteOffset", 0) + e["byteLength"]]
+            mode = ["ATTRIBUTES", "TRIANGLES", "INDICES"].index(e["mode"])
+            open(os.path.join(dst, f"{name}-{i}"), "wb").write(bytes([mode, 0]) + struct.pack("<H", e["count"] % 4096) + s)
+    for m in j.get("meshes", []):
+        for pr in m["primitives"]:
+            d = pr.get("extensions", {}).get("KHR_draco_mesh_compression")
+            if d:
+                v = j["bufferViews"][d["bufferView"]]; s = bin0[v.get("byteOffset", 0):v.get("byteOffset", 0) + v["byteLength"]]
+                open(os.path.join(dst, f"{name}-draco"), "wb").write(bytes([3, 0, 0, 0]) + s)
+PY
+  rm -rf $tmp
+fi
+echo "decoders corpus: $(ls corpus/decoders | wc -l)"

@@ -5,7 +5,9 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use inbetween::blend::{BlendJob, CycleMethod};
 use inbetween::gltf::Access;
-use inbetween::tween::{KeySource, Layout, Method, Timing, TweenJob};
+use inbetween::tween::{
+    Basis, CompactOptions, KeySource, Layout, Method, Timing, TweenJob, DEFAULT_TOLERANCE,
+};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -198,6 +200,34 @@ pub struct TweenArgs {
     /// included, replacing the authored targets.
     #[arg(long, value_enum, default_value_t = Layout::default().into())]
     layout: LayoutArg,
+    /// Write the smallest glTF whose every frame is within --tolerance of the dense frames: a
+    /// basis of few targets (truncated SVD; authored targets kept in the rig layout count
+    /// towards it), quantized deltas with their scale in the weights (KHR_mesh_quantization),
+    /// sparse accessors where they pay, and EXT_meshopt_compression of every view. Each part
+    /// alone: --basis, --quantize, --sparse, --meshopt. A USD output is already written in
+    /// the smallest encoding usd-core reads (a .usdc crate file the size usd-core writes):
+    /// --compact changes nothing there.
+    #[arg(long)]
+    compact: bool,
+    /// With --compact or its parts: RMS deviation per frame allowed, relative to the
+    /// bounding-box diagonal (no vertex more than 3x it; normals within 100x it) [default:
+    /// 1e-4].
+    #[arg(long, value_name = "T")]
+    tolerance: Option<f64>,
+    /// Basis targets: `auto` (as few as the tolerance allows; the default of --compact), a
+    /// number (at most that many: engines that blend few targets at a time), or `off`.
+    #[arg(long, value_name = "K|auto|off")]
+    basis: Option<String>,
+    /// Store new targets as normalized SHORT/BYTE with their scale in the weights.
+    #[arg(long)]
+    quantize: bool,
+    /// Store targets that move part of the mesh as sparse accessors.
+    #[arg(long)]
+    sparse: bool,
+    /// Compress vertex, index, target and animation data with EXT_meshopt_compression (float
+    /// targets through its exponential filter, within the tolerance).
+    #[arg(long)]
+    meshopt: bool,
     /// Interpolation method.
     #[arg(long, value_enum, default_value_t = Method::default().into())]
     method: MethodArg,
@@ -237,8 +267,38 @@ pub struct TweenArgs {
 }
 
 impl TweenArgs {
-    pub fn job(self) -> TweenJob {
-        TweenJob {
+    /// What --compact and its parts ask for (None: a dense output).
+    fn compact(&self) -> Result<Option<CompactOptions>, String> {
+        let basis = match self.basis.as_deref() {
+            None => None,
+            Some("auto") => Some(Basis::Auto),
+            Some("off") => Some(Basis::Off),
+            Some(k) => Some(Basis::Count(k.parse().map_err(|_| {
+                format!("--basis takes a number, auto or off (got {k:?})")
+            })?)),
+        };
+        if !(self.compact || basis.is_some() || self.quantize || self.sparse || self.meshopt) {
+            return Ok(None);
+        }
+        let tolerance = self.tolerance.unwrap_or(DEFAULT_TOLERANCE);
+        if !(tolerance.is_finite() && tolerance > 0.0) {
+            return Err(format!(
+                "--tolerance must be a positive number (got {tolerance})"
+            ));
+        }
+        let all = self.compact;
+        Ok(Some(CompactOptions {
+            tolerance,
+            basis: basis.unwrap_or(if all { Basis::Auto } else { Basis::Off }),
+            quantize: all || self.quantize,
+            sparse: all || self.sparse,
+            meshopt: all || self.meshopt,
+        }))
+    }
+
+    pub fn job(self) -> Result<TweenJob, String> {
+        let compact = self.compact()?;
+        Ok(TweenJob {
             input: self.input,
             output: self.output,
             method: self.method.into(),
@@ -251,6 +311,7 @@ impl TweenArgs {
                 _ => Timing::default(),
             },
             layout: self.layout.into(),
+            compact,
             quiet: self.quiet,
             looping: match (self.looping, self.no_loop) {
                 (true, _) => Some(true),
@@ -262,7 +323,7 @@ impl TweenArgs {
             access: Access {
                 roots: self.allow_external,
             },
-        }
+        })
     }
 }
 
@@ -396,4 +457,7 @@ pub struct BenchArgs {
     /// With --end-to-end: output format (glb, gltf, usda, usdc, usdz).
     #[arg(long, default_value = "glb")]
     pub e2e_format: String,
+    /// With --end-to-end: more `tween` options for the timed run (e.g. --e2e-arg=--compact).
+    #[arg(long = "e2e-arg", value_name = "ARG", allow_hyphen_values = true)]
+    pub e2e_args: Vec<String>,
 }

@@ -12,8 +12,10 @@ fn main() -> ExitCode {
         Command::Tween(args) => {
             set_threads(args.threads);
             let quiet = args.quiet;
-            let job = args.job();
-            finish(tween::run_tween(&job), |s| summary(quiet, s.line(&job)))
+            match args.job() {
+                Ok(job) => finish(tween::run_tween(&job), |s| summary(quiet, s.line(&job))),
+                Err(e) => finish::<()>(Err(anyhow::anyhow!(e)), |_| {}),
+            }
         }
         Command::Blend(args) => {
             let quiet = args.quiet;
@@ -77,7 +79,7 @@ fn run_eval(args: &EvalArgs) -> ExitCode {
 fn run_bench(args: BenchArgs) -> ExitCode {
     set_threads(args.threads);
     if let Some(triangles) = args.end_to_end {
-        let r = bench::end_to_end(triangles, args.e2e_tweens, &args.e2e_format);
+        let r = bench::end_to_end(triangles, args.e2e_tweens, &args.e2e_format, &args.e2e_args);
         return finish(r, |r| {
             println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
         });

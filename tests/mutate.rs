@@ -376,6 +376,37 @@ struct Case {
     command: &'static [&'static str],
 }
 
+/// Flamingo compressed by gltfpack -cc (meshopt) and glTF-Transform draco, in `dir`, when the
+/// node tools are installed: mutations then reach the decoders.
+fn compressed_cases(dir: &Path) -> Vec<Case> {
+    let (Some(fx), bin) = (fixtures(), root().join("tools/node/node_modules/.bin")) else {
+        return Vec::new();
+    };
+    if !bin.join("gltfpack").exists() {
+        missing_tool("gltfpack (tools/node)");
+        return Vec::new();
+    }
+    let flamingo = fx.join("morph-keyframes/Flamingo.glb");
+    let mut out = Vec::new();
+    for (name, tool, args) in [
+        ("meshopt.glb", "gltfpack", vec!["-cc", "-af", "0", "-i"]),
+        ("draco.glb", "gltf-transform", vec!["draco"]),
+    ] {
+        let file = dir.join(name);
+        let mut cmd = Command::new(bin.join(tool));
+        cmd.args(&args).arg(&flamingo);
+        if tool == "gltfpack" {
+            cmd.arg("-o");
+        }
+        assert!(cmd.arg(&file).output().unwrap().status.success(), "{tool}");
+        out.push(Case {
+            file,
+            command: &["tween"],
+        });
+    }
+    out
+}
+
 fn cases() -> Vec<Case> {
     let mut out = vec![
         Case {
@@ -423,7 +454,11 @@ fn mutated_inputs_exit_cleanly_under_a_memory_limit() {
     let mut rng = Rng(seed);
     let mut failures = Vec::new();
     let mut exits = [0usize; 2];
-    for case in cases() {
+    let compressed = tempfile::tempdir().unwrap();
+    for case in cases()
+        .into_iter()
+        .chain(compressed_cases(compressed.path()))
+    {
         let original = std::fs::read(&case.file).unwrap();
         let glb = original.starts_with(b"glTF");
         let ext = if glb { "glb" } else { "gltf" };

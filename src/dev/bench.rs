@@ -332,6 +332,8 @@ pub struct EndToEnd {
     pub frames_mib: f64,
     pub keys: usize,
     pub tweens: usize,
+    /// The `tween` options given besides `--tweens`.
+    pub args: Vec<String>,
     pub input_mib: f64,
     pub output_mib: f64,
     pub wall_s: f64,
@@ -339,9 +341,14 @@ pub struct EndToEnd {
 }
 
 /// Write a tube of `triangles` with three keys (straight, bent 90, bent 150 and twisted 60) to
-/// a temporary .glb, run `inbetween tween --tweens N` on it in a child process writing
+/// a temporary .glb, run `inbetween tween --tweens N EXTRA...` on it in a child process writing
 /// `tween.<format>`, and time it.
-pub fn end_to_end(triangles: usize, tweens: usize, format: &str) -> Result<EndToEnd> {
+pub fn end_to_end(
+    triangles: usize,
+    tweens: usize,
+    format: &str,
+    extra: &[String],
+) -> Result<EndToEnd> {
     let (segments, rings) = tube_for(triangles);
     let s = synth::tube(rings, segments, 6.0, 1.0, 1.0);
     let k1 = synth::bend(&s.positions, 3.0, 90f64.to_radians(), 0.8);
@@ -370,6 +377,7 @@ pub fn end_to_end(triangles: usize, tweens: usize, format: &str) -> Result<EndTo
             "--tweens",
             &tweens.to_string(),
         ])
+        .args(extra)
         .output()?;
     let wall_s = start.elapsed().as_secs_f64();
     anyhow::ensure!(
@@ -389,6 +397,7 @@ pub fn end_to_end(triangles: usize, tweens: usize, format: &str) -> Result<EndTo
         frames_mib: (vertices * frames * 12) as f64 / 1048576.0,
         keys: 3,
         tweens,
+        args: extra.to_vec(),
         input_mib: mib(&input),
         output_mib: mib(&output),
         wall_s,

@@ -32,12 +32,62 @@ impl BinBuilder {
     }
 }
 
+/// How a VEC3 array of a morph target is stored.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Storage {
+    /// f32; with meshopt, through the EXPONENTIAL filter at these mantissa bits.
+    Float { exp_bits: Option<i32> },
+    /// Normalized i16 (values in [-1, 1]), 8-byte elements (`KHR_mesh_quantization`).
+    Short,
+    /// Normalized i8, 4-byte elements (`KHR_mesh_quantization`).
+    Byte,
+}
+
+impl Storage {
+    /// A value as a reader decodes it once stored.
+    pub fn stored(self, x: f32) -> f32 {
+        match self {
+            Storage::Float { .. } => x,
+            Storage::Short => (x.clamp(-1.0, 1.0) * 32767.0).round() / 32767.0,
+            Storage::Byte => (x.clamp(-1.0, 1.0) * 127.0).round() / 127.0,
+        }
+    }
+
+    /// (componentType, bytes of a VEC3 element in a vertex view, bytes tightly packed).
+    fn layout(self) -> (u32, usize, usize) {
+        match self {
+            Storage::Float { .. } => (5126, 12, 12),
+            Storage::Short => (5122, 8, 6),
+            Storage::Byte => (5120, 4, 3),
+        }
+    }
+
+    /// The bytes of VEC3 values, `stride` bytes an element.
+    fn bytes(self, values: &[f32], stride: usize) -> Vec<u8> {
+        let mut out = Vec::with_capacity(values.len() / 3 * stride);
+        for v in values.chunks_exact(3) {
+            let start = out.len();
+            for &x in v {
+                match self {
+                    Storage::Float { .. } => out.extend(x.to_le_bytes()),
+                    Storage::Short => out.extend(((self.stored(x) * 32767.0) as i16).to_le_bytes()),
+                    Storage::Byte => out.push((self.stored(x) * 127.0) as i8 as u8),
+                }
+            }
+            out.resize(start + stride, 0);
+        }
+        out
+    }
+}
+
 /// The output document under construction.
 pub struct Output {
     pub json: Value,
     pub bin: BinBuilder,
     /// External images of a `.gltf` output: (their bytes, the copy beside the output).
     pub(crate) copies: Vec<(Vec<u8>, PathBuf)>,
+    /// Compress the buffer views with `EXT_meshopt_compression` when written.
+    pub meshopt: bool,
 }
 
 impl Output {
@@ -47,6 +97,7 @@ impl Output {
             json,
             bin: BinBuilder::new(),
             copies: Vec::new(),
+            meshopt: false,
         }
     }
 
@@ -78,6 +129,118 @@ impl Output {
             acc["max"] = json!(hi);
         }
         self.push_accessor(acc)
+    }
+
+    /// Add a VEC3 morph-target accessor of `values` stored as `storage`: as a sparse accessor
+    /// (only the vertices whose stored value is not zero) when `sparse`; min/max of the
+    /// stored values when `bounds` (POSITION). Integer storage declares KHR_mesh_quantization.
+    pub fn push_morph(
+        &mut self,
+        values: &[f32],
+        storage: Storage,
+        sparse: bool,
+        bounds: bool,
+    ) -> usize {
+        let count = values.len() / 3;
+        let (ty, stride, packed) = storage.layout();
+        let normalized = !matches!(storage, Storage::Float { .. });
+        let mut acc = json!({ "componentType": ty, "count": count, "type": "VEC3" });
+        if normalized {
+            acc["normalized"] = json!(true);
+            self.require("KHR_mesh_quantization");
+        }
+        if sparse {
+            let rows: Vec<usize> = (0..count)
+                .filter(|&v| {
+                    values[3 * v..3 * v + 3]
+                        .iter()
+                        .any(|&x| storage.stored(x) != 0.0)
+                })
+                .collect();
+            let index_bytes: Vec<u8> = if count <= 65_536 {
+                rows.iter()
+                    .flat_map(|&r| (r as u16).to_le_bytes())
+                    .collect()
+            } else {
+                rows.iter()
+                    .flat_map(|&r| (r as u32).to_le_bytes())
+                    .collect()
+            };
+            let picked: Vec<f32> = rows
+                .iter()
+                .flat_map(|&r| values[3 * r..3 * r + 3].to_vec())
+                .collect();
+            let indices = self.bin.push_view(&index_bytes, None);
+            let data = self.bin.push_view(&storage.bytes(&picked, packed), None);
+            if let (Storage::Float { exp_bits: Some(b) }, false) = (storage, picked.is_empty()) {
+                self.bin.views[data][super::encode::FILTER_MARK] = json!(b);
+            }
+            if !rows.is_empty() {
+                acc["sparse"] = json!({
+                    "count": rows.len(),
+                    "indices": { "bufferView": indices, "componentType": if count <= 65_536 { 5123 } else { 5125 } },
+                    "values": { "bufferView": data },
+                });
+            }
+        } else {
+            let view = self
+                .bin
+                .push_view(&storage.bytes(values, stride), Some(34962));
+            if stride != packed {
+                self.bin.views[view]["byteStride"] = json!(stride);
+            }
+            if let Storage::Float { exp_bits: Some(b) } = storage {
+                self.bin.views[view][super::encode::FILTER_MARK] = json!(b);
+            }
+            acc["bufferView"] = json!(view);
+        }
+        if bounds && count > 0 {
+            let scale = match storage {
+                Storage::Float { .. } => 1.0,
+                Storage::Short => 32767.0,
+                Storage::Byte => 127.0,
+            };
+            let lo: Vec<f32> = (0..3)
+                .map(|c| {
+                    values
+                        .iter()
+                        .skip(c)
+                        .step_by(3)
+                        .map(|&x| storage.stored(x) * scale)
+                        .fold(f32::INFINITY, f32::min)
+                })
+                .collect();
+            let hi: Vec<f32> = (0..3)
+                .map(|c| {
+                    values
+                        .iter()
+                        .skip(c)
+                        .step_by(3)
+                        .map(|&x| storage.stored(x) * scale)
+                        .fold(f32::NEG_INFINITY, f32::max)
+                })
+                .collect();
+            acc["min"] = json!(lo);
+            acc["max"] = json!(hi);
+        }
+        self.push_accessor(acc)
+    }
+
+    /// Declare `name` in extensionsUsed and extensionsRequired.
+    pub fn require(&mut self, name: &str) {
+        for key in ["extensionsUsed", "extensionsRequired"] {
+            let list = self
+                .json
+                .as_object_mut()
+                .expect("a glTF object")
+                .entry(key)
+                .or_insert_with(|| json!([]));
+            if let Some(list) = list.as_array_mut() {
+                if !list.iter().any(|e| e == name) {
+                    list.push(json!(name));
+                }
+            }
+        }
     }
 
     /// Append an accessor to the document and return its index.

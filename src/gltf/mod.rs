@@ -4,20 +4,23 @@
 //! container, buffers; [`uri`] says what external files it may read) -> [`decode`] (meshopt
 //! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles) ... the
 //! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`]) ->
-//! [`compact`] (channels and accessors nothing uses any more dropped) -> [`write`] (`.glb` or
-//! `.gltf` with its `.bin` and images, staged as one all-or-nothing set of files).
+//! [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`] (meshopt
+//! compression, when asked for) -> [`write`] (`.glb` or `.gltf` with its `.bin` and images,
+//! staged as one all-or-nothing set of files).
 
 mod accessor;
 mod build;
 mod compact;
 mod decode;
+mod encode;
 mod read;
 mod uri;
 mod write;
 
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
-pub use build::{BinBuilder, Output};
+pub use build::{BinBuilder, Output, Storage};
 pub(crate) use compact::{compact, drop_channels};
+pub use encode::{exp_roundtrip, FILTER_GROUP, FILTER_MARK};
 pub use read::{arr, at, Document};
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

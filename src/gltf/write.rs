@@ -7,6 +7,7 @@
 //! * Files are staged in an [`Outputs`] and renamed into place together.
 
 use super::build::{BinBuilder, Output};
+use super::encode;
 use super::read::{arr, Document};
 use super::uri::{percent_decode, reference, Reference};
 use crate::output::{folder_of, Format, Outputs};
@@ -56,7 +57,12 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         bin.views[idx] = view;
     }
     embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
-    Ok(Output { json, bin, copies })
+    Ok(Output {
+        json,
+        bin,
+        copies,
+        meshopt: false,
+    })
 }
 
 /// Images referenced by file: embedded in a `.glb`, or (read, checked and) copied to the same
@@ -167,6 +173,12 @@ pub fn stage(
     path: &Path,
     files: &mut Outputs,
 ) -> Result<u64> {
+    let fallback = if out.meshopt {
+        encode::meshopt(&mut out)
+    } else {
+        0
+    };
+    encode::clear_marks(&mut out);
     let views = std::mem::take(&mut out.bin.views);
     let json = out.json.as_object_mut().unwrap();
     if views.is_empty() {
@@ -192,7 +204,23 @@ pub fn stage(
         if let Some(name) = &bin_name {
             b["uri"] = json!(encode_uri(name));
         }
-        json.insert("buffers".into(), json!([b]));
+        let mut buffers = vec![b];
+        // The views compressed by meshopt point into a buffer that holds no data.
+        if fallback > 0 {
+            buffers.push(json!({
+                "byteLength": fallback,
+                "extensions": { "EXT_meshopt_compression": { "fallback": true } }
+            }));
+            for key in ["extensionsUsed", "extensionsRequired"] {
+                let list = json.entry(key).or_insert_with(|| json!([]));
+                if let Some(list) = list.as_array_mut() {
+                    if !list.iter().any(|e| e == "EXT_meshopt_compression") {
+                        list.push(json!("EXT_meshopt_compression"));
+                    }
+                }
+            }
+        }
+        json.insert("buffers".into(), json!(buffers));
     }
     let mut bytes = 0;
     match container {

@@ -1,11 +1,13 @@
 //! The `tween` command from file to file: read, keyframes, frames, write (glTF morph animation
 //! or a USD point cache), summary. Every file of the run is written in one all-or-nothing step.
 
+use super::compact::CompactFigures;
+use super::compact::CompactOptions;
 use super::frames::{collect_mesh, tween_mesh, MeshStats, PrimitiveDelta};
 use super::keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh};
-use super::morph_targets::{apply_frames, MostTargets};
+use super::morph_targets::{apply_frames, Applied, MostTargets};
 use super::options::{Layout, Method, Timing, TweenOptions};
-use super::report::{MeshReport, Report};
+use super::report::{CompactMesh, CompactReport, MeshReport, Report};
 use super::schedule::{close_loop, frame_estimate, plan, MAX_FRAMES};
 use super::timegrid::timeline;
 use crate::gltf::{self, Access, Container, Document};
@@ -36,6 +38,8 @@ pub struct TweenJob {
     pub report: Option<PathBuf>,
     /// How a glTF output carries the frames.
     pub layout: Layout,
+    /// Compact a glTF output (`--compact` or its parts).
+    pub compact: Option<CompactOptions>,
     /// Where external references of a `.gltf` input may lead besides its own folder.
     pub access: Access,
 }
@@ -52,7 +56,13 @@ pub struct Summary {
     pub output_bytes: u64,
     /// The primitive with the most morph targets in a glTF output (mesh, primitive, count).
     pub most_targets: MostTargets,
+    /// The figures of each mesh compacted (`--compact` and its parts).
+    pub compacted: Vec<(String, CompactFigures)>,
 }
+
+/// Morph targets some engines blend at once (what glTF asks every client to support, and
+/// three.js on WebGL1): a compacted mesh playing more is warned of.
+pub const ACTIVE_TARGETS: usize = 8;
 
 /// Output growth over the input above which the summary warns.
 pub const GROWTH_WARNING: f64 = 10.0;
@@ -101,6 +111,23 @@ impl Summary {
             solve,
             self.peak_rss_mib,
         );
+        for (mesh, c) in &self.compacted {
+            out += &format!(
+                "\n{mesh:?} compacted: {} basis target{}{}, deviation from the dense frames {:.2e} RMS, {:.2e} max (of the diagonal){}",
+                c.basis,
+                if c.basis == 1 { "" } else { "s" },
+                if c.authored > 0 { format!(" beside {} authored", c.authored) } else { String::new() },
+                c.rms_deviation,
+                c.max_deviation,
+                if c.normal_rms_deviation > 0.0 { format!(", normals {:.2e} RMS", c.normal_rms_deviation) } else { String::new() },
+            );
+            if c.basis + c.authored > ACTIVE_TARGETS {
+                out += &format!(
+                    "\nwarning: {mesh:?} plays {} targets at once; some engines blend at most {ACTIVE_TARGETS} (the glTF minimum, three.js on WebGL1): --basis N caps the basis",
+                    c.basis + c.authored
+                );
+            }
+        }
         if growth > GROWTH_WARNING {
             out += &format!(
                 "\nwarning: the output is {growth:.1}x the size of the input: --rate, --tweens or --fps set how many frames are written"
@@ -129,7 +156,7 @@ struct Run<'a> {
     stats: Vec<MeshStats>,
     reports: Vec<MeshReport>,
     output_bytes: u64,
-    most_targets: MostTargets,
+    applied: Applied,
 }
 
 impl Run<'_> {
@@ -138,10 +165,25 @@ impl Run<'_> {
         let Some(path) = &self.job.report else {
             return Ok(());
         };
+        let compact = self
+            .opts
+            .compact
+            .filter(|_| !self.applied.compacted.is_empty())
+            .map(|c| CompactReport {
+                output_bytes: self.output_bytes,
+                tolerance: c.tolerance,
+                meshes: (self.applied.compacted.iter())
+                    .map(|(mesh, figures)| CompactMesh {
+                        mesh: mesh.clone(),
+                        figures: figures.clone(),
+                    })
+                    .collect(),
+            });
         let report = Report {
             input: self.job.input.display().to_string(),
             output: self.job.output.display().to_string(),
             meshes: std::mem::take(&mut self.reports),
+            compact,
         };
         files.write(path, &serde_json::to_vec_pretty(&report)?)?;
         Ok(())
@@ -156,12 +198,13 @@ impl Run<'_> {
         }
         self.progress.finish();
         let mut out = gltf::begin(&self.doc, container, &self.job.output)?;
-        self.most_targets = apply_frames(
+        self.applied = apply_frames(
             &mut out,
             &self.doc,
             &results,
             &self.meshes,
             self.opts.layout,
+            self.opts.compact.as_ref(),
         )?;
         for r in results {
             self.stats.push(r.stats);
@@ -304,6 +347,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         wrap: job.looping != Some(false),
         extend: job.extend,
         layout: job.layout,
+        compact: job.compact,
     };
     check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
     let total: usize = meshes
@@ -319,7 +363,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         stats: Vec::new(),
         reports: Vec::new(),
         output_bytes: 0,
-        most_targets: None,
+        applied: Applied::default(),
     };
     let mut files = Outputs::new();
     match Container::of(format) {
@@ -334,6 +378,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         peak_rss_mib: peak_rss_mib(),
         input_bytes: run.doc.input_bytes,
         output_bytes: run.output_bytes,
-        most_targets: run.most_targets,
+        most_targets: run.applied.most_targets,
+        compacted: run.applied.compacted,
     })
 }

@@ -8,6 +8,7 @@
 //! [`morph_targets`] (glTF morph animation) or the USD writer; [`job`] runs it from file to
 //! file, with [`options`] holding what the user asked for.
 
+mod compact;
 mod frames;
 mod gradient;
 mod job;
@@ -24,6 +25,7 @@ mod spline;
 mod timegrid;
 mod weld;
 
+pub use compact::{Basis, CompactFigures, CompactOptions, DEFAULT_TOLERANCE};
 pub use frames::{key_poses, track_frames_welded};
 pub use job::{run_tween, Summary, TweenJob};
 pub use keys::{

@@ -14,11 +14,12 @@
 //! others have, it refers to one shared accessor of zeros. Accessors the new targets and
 //! samplers replaced are dropped when nothing else refers to them.
 
+use super::compact::{compact, sparse_pays, CompactFigures, CompactOptions, Compacted, Stored};
 use super::frames::{MeshFrames, PrimitiveFrames, TrackFrames};
 use super::keys::{MorphMesh, Primitive, TrackOrigin};
 use super::options::Layout;
 use super::schedule::FrameAt;
-use crate::gltf::{arr, compact, drop_channels, Document, Output};
+use crate::gltf::{arr, compact as drop_unused, drop_channels, Document, Output, FILTER_GROUP};
 use anyhow::Result;
 use glam::DVec3;
 use serde_json::{json, Map, Value};
@@ -33,11 +34,13 @@ struct Edits {
     channels: Vec<Value>,
 }
 
-/// One processed mesh as it is written: its frames, what was read of it, and the layout.
+/// One processed mesh as it is written: its frames, what was read of it, the layout, and its
+/// compacted form (`--compact` and its parts).
 struct Written<'a> {
     frames: &'a MeshFrames,
     mesh: &'a MorphMesh,
     layout: Layout,
+    compact: Option<Compacted>,
 }
 
 /// Where a frame's pose comes from in the output.
@@ -48,6 +51,9 @@ enum Played {
     /// Its own target (index among the new targets), with the authored weights blended at
     /// `t` between keys a and b (rig layout).
     Target(usize),
+    /// The basis targets, at the weights of frame g of the mesh (with the authored weights
+    /// blended as for `Target`, rig layout).
+    Basis(usize),
 }
 
 impl Written<'_> {
@@ -70,8 +76,10 @@ impl Written<'_> {
                 track
                     .frames
                     .iter()
-                    .map(|f| match (self.layout, key_of(f)) {
-                        (Layout::Rig, Some(k)) => Played::Key(k),
+                    .enumerate()
+                    .map(|(i, f)| match (self.layout, key_of(f), &self.compact) {
+                        (Layout::Rig, Some(k), _) => Played::Key(k),
+                        (_, _, Some(_)) => Played::Basis(track.first + i),
                         _ => {
                             next += 1;
                             Played::Target(next - 1)
@@ -80,7 +88,17 @@ impl Written<'_> {
                     .collect()
             })
             .collect();
-        (plays, next)
+        let new = self.compact.as_ref().map_or(next, |c| c.targets.len());
+        (plays, new)
+    }
+
+    /// The authored weights of every frame of the mesh, in order (empty in the frames layout).
+    fn authored_rows(&self) -> Vec<Vec<f64>> {
+        self.frames
+            .tracks
+            .iter()
+            .flat_map(|t| t.frames.iter().map(move |f| self.authored(t, f)))
+            .collect()
     }
 
     /// The authored weights a frame of `track` is blended from (linear between its keys,
@@ -112,6 +130,13 @@ impl Written<'_> {
                     }
                     w[self.kept() + i] = 1.0;
                 }
+                Played::Basis(g) => {
+                    let c = self.compact.as_ref().expect("compacted");
+                    for (o, x) in w.iter_mut().zip(&c.authored_weights[g]) {
+                        *o = *x as f32;
+                    }
+                    w[self.kept()..].copy_from_slice(&c.weights[g]);
+                }
             }
             out.extend(w);
         }
@@ -133,17 +158,25 @@ fn key_of(f: &FrameAt) -> Option<usize> {
 /// The most morph targets one primitive got: (mesh name, primitive index, targets).
 pub type MostTargets = Option<(String, usize, usize)>;
 
+/// What writing the frames did: the primitive with the most targets, and each compacted
+/// mesh's figures.
+#[derive(Clone, Debug, Default)]
+pub struct Applied {
+    pub most_targets: MostTargets,
+    pub compacted: Vec<(String, CompactFigures)>,
+}
+
 /// Write the frames of each processed mesh (`frames[i]` computed from `meshes[i]`) into `out`
-/// as morph targets and weights animation, in `layout`; returns the primitive with the most
-/// targets.
+/// as morph targets and weights animation, in `layout`, compacted as `compact` asks.
 pub fn apply_frames(
     out: &mut Output,
     doc: &Document,
     frames: &[MeshFrames],
     meshes: &[MorphMesh],
     layout: Layout,
-) -> Result<MostTargets> {
-    let mut most: MostTargets = None;
+    compact_opts: Option<&CompactOptions>,
+) -> Result<Applied> {
+    let mut applied = Applied::default();
     // glTF key times cannot be negative: a motion extended before 0 s shifts every written
     // timeline by the same amount.
     let earliest = frames
@@ -156,16 +189,32 @@ pub fn apply_frames(
     let mut edits = Edits::default();
     let mut dropped: Vec<(usize, usize)> = Vec::new();
     for (m, mesh) in frames.iter().zip(meshes) {
-        let w = Written {
+        let mut w = Written {
             frames: m,
             mesh,
             layout,
+            compact: None,
         };
+        if let Some(opts) = compact_opts {
+            let (plays, _) = w.plays();
+            let own: Vec<usize> = plays
+                .iter()
+                .flatten()
+                .enumerate()
+                .filter(|(_, p)| matches!(p, Played::Target(_)))
+                .map(|(g, _)| g)
+                .collect();
+            let c = compact(m, mesh, w.authored_rows(), own, opts)?;
+            applied
+                .compacted
+                .push((mesh.name.clone(), c.figures.clone()));
+            w.compact = Some(c);
+        }
         let (plays, new) = w.plays();
         let count = w.kept() + new;
-        if most.as_ref().is_none_or(|m| m.2 < count) {
+        if applied.most_targets.as_ref().is_none_or(|m| m.2 < count) {
             let first = m.primitives.first().map_or(0, |p| p.index);
-            most = Some((mesh.name.clone(), first, count));
+            applied.most_targets = Some((mesh.name.clone(), first, count));
         }
         set_targets(out, &w, &plays, &mut edits.replaced);
         name_targets(out, &w, &plays, new, shift);
@@ -188,8 +237,9 @@ pub fn apply_frames(
             }),
         );
     }
-    compact(out, &edits.replaced);
-    Ok(most)
+    out.meshopt = compact_opts.is_some_and(|o| o.meshopt);
+    drop_unused(out, &edits.replaced);
+    Ok(applied)
 }
 
 /// The frame's value of one attribute as the new target stores it: its delta from the base,
@@ -218,6 +268,32 @@ fn new_targets(
     plays: &[Vec<Played>],
 ) -> Vec<Map<String, Value>> {
     let mut targets = Vec::new();
+    if let Some(c) = &w.compact {
+        let prim = w
+            .frames
+            .primitives
+            .iter()
+            .position(|x| x.index == p.index)
+            .unwrap_or(0);
+        for t in &c.targets {
+            let mut m = Map::new();
+            let mut put = |name: &str, s: &Stored, bounds: bool| {
+                m.insert(
+                    name.into(),
+                    json!(out.push_morph(&s.values, s.storage, s.sparse, bounds)),
+                );
+            };
+            put("POSITION", &t.position[prim], true);
+            if let Some(n) = &t.normal {
+                put("NORMAL", &n[prim], false);
+            }
+            if let Some(tg) = &t.tangent {
+                put("TANGENT", &tg[prim], false);
+            }
+            targets.push(m);
+        }
+        return targets;
+    }
     let m = w.frames;
     for (track, plays) in m.tracks.iter().zip(plays) {
         for (i, (f, play)) in track.frames.iter().zip(plays).enumerate() {
@@ -282,7 +358,7 @@ fn set_targets(
             .filter_map(|t| t.as_object().cloned())
             .collect();
         let mut targets: Vec<Map<String, Value>> = match w.layout {
-            Layout::Rig => old,
+            Layout::Rig => reencode_authored(out, w, read, old, replaced),
             Layout::Frames => {
                 for a in old
                     .iter()
@@ -313,6 +389,64 @@ fn set_targets(
         let targets: Vec<Value> = targets.into_iter().map(Value::Object).collect();
         out.json["meshes"][m.mesh]["primitives"][p.index]["targets"] = Value::Array(targets);
     }
+}
+
+/// The authored targets of a primitive, stored again as the compaction chose (through the
+/// EXPONENTIAL filter, and sparse where that pays) when they are plain float accessors; as
+/// they are otherwise.
+fn reencode_authored(
+    out: &mut Output,
+    w: &Written,
+    read: &Primitive,
+    old: Vec<Map<String, Value>>,
+    replaced: &mut BTreeSet<usize>,
+) -> Vec<Map<String, Value>> {
+    let Some((storage, sparse)) = w
+        .compact
+        .as_ref()
+        .and_then(|c| Some((c.authored?, c.sparse)))
+    else {
+        return old;
+    };
+    let plain = |json: &Value, a: u64| {
+        let acc = &json["accessors"][a as usize];
+        acc["componentType"] == 5126 && acc["bufferView"].is_u64() && acc.get("sparse").is_none()
+    };
+    // Attribute by attribute, so that each attribute's targets share one filtered view (the
+    // compaction measured them so).
+    // The dense ones first, then the sparse ones, so that nothing comes between the dense ones.
+    let mut targets = old;
+    for ((name, bounds), sparse_pass) in [("POSITION", true), ("NORMAL", false), ("TANGENT", false)]
+        .into_iter()
+        .flat_map(|a| [(a, false), (a, true)])
+    {
+        for (i, t) in targets.iter_mut().enumerate() {
+            let values = match name {
+                "POSITION" => Some(&read.target_pos[i]),
+                "NORMAL" => read.target_nrm[i].as_ref(),
+                _ => read.target_tan[i].as_ref(),
+            };
+            let (Some(values), Some(a)) = (values, t.get(name).and_then(Value::as_u64)) else {
+                continue;
+            };
+            if !plain(&out.json, a) {
+                continue;
+            }
+            let flat: Vec<f32> = values.iter().flat_map(|d| d.as_vec3().to_array()).collect();
+            let sparse = sparse && sparse_pays(&flat, storage, out.meshopt);
+            if sparse != sparse_pass {
+                continue;
+            }
+            replaced.insert(a as usize);
+            let new = out.push_morph(&flat, storage, sparse, bounds);
+            if let Some(view) = out.json["accessors"][new]["bufferView"].as_u64() {
+                out.bin.views[view as usize][FILTER_GROUP] =
+                    json!(format!("authored {} {} {name}", w.mesh.mesh, read.index));
+            }
+            t.insert(name.into(), json!(new));
+        }
+    }
+    targets
 }
 
 /// The mesh's default weights (and its nodes' overrides) padded for the new targets (frame 0

@@ -1,6 +1,8 @@
 //! What a tween is asked to do: the method, where frames go in time, and the other options,
 //! each default written once here.
 
+use super::compact::CompactOptions;
+
 /// Interpolation method (`--method`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Method {
@@ -74,6 +76,8 @@ pub struct TweenOptions {
     pub extend: [f64; 2],
     /// How a glTF output carries the frames.
     pub layout: Layout,
+    /// Compact a glTF output (`--compact` or its parts).
+    pub compact: Option<CompactOptions>,
 }
 
 impl Default for TweenOptions {
@@ -93,6 +97,7 @@ impl TweenOptions {
             wrap: true,
             extend: [0.0, 0.0],
             layout: Layout::default(),
+            compact: None,
         }
     }
 }

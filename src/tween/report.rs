@@ -45,6 +45,24 @@ pub struct Report {
     pub input: String,
     pub output: String,
     pub meshes: Vec<MeshReport>,
+    /// What `--compact` (or its parts) made of the output; absent for a dense output.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compact: Option<CompactReport>,
+}
+
+/// The compacted output: its size, the tolerance asked for, and each mesh's figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompactReport {
+    pub output_bytes: u64,
+    pub tolerance: f64,
+    pub meshes: Vec<CompactMesh>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CompactMesh {
+    pub mesh: String,
+    #[serde(flatten)]
+    pub figures: super::compact::CompactFigures,
 }
 
 /// Per-mesh data the figures need, computed once.

@@ -472,3 +472,67 @@ pub fn doc_poses(
         .collect();
     (times, poses)
 }
+
+/// World matrix of the first node that instances mesh 0 (`inbetween`'s reader: the gltf crate
+/// refuses KHR_mesh_quantization).
+pub fn mesh_world(doc: &inbetween::gltf::Document) -> glam::DMat4 {
+    let nodes = doc.json["nodes"].as_array().cloned().unwrap_or_default();
+    let local = |n: &serde_json::Value| -> glam::DMat4 {
+        let f = |k: &str| -> Option<Vec<f64>> {
+            n[k].as_array()
+                .map(|a| a.iter().filter_map(|x| x.as_f64()).collect())
+        };
+        if let Some(m) = f("matrix").filter(|m| m.len() == 16) {
+            return glam::DMat4::from_cols_slice(&m);
+        }
+        let t = f("translation").map_or(glam::DVec3::ZERO, |v| glam::DVec3::new(v[0], v[1], v[2]));
+        let r = f("rotation").map_or(glam::DQuat::IDENTITY, |v| {
+            glam::DQuat::from_xyzw(v[0], v[1], v[2], v[3])
+        });
+        let s = f("scale").map_or(glam::DVec3::ONE, |v| glam::DVec3::new(v[0], v[1], v[2]));
+        glam::DMat4::from_scale_rotation_translation(s, r, t)
+    };
+    let parent = |i: usize| {
+        nodes.iter().position(|n| {
+            n["children"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|x| x.as_u64() == Some(i as u64)))
+        })
+    };
+    let Some(mut i) = nodes.iter().position(|n| n["mesh"].as_u64() == Some(0)) else {
+        return glam::DMat4::IDENTITY;
+    };
+    let mut world = local(&nodes[i]);
+    while let Some(p) = parent(i) {
+        world = local(&nodes[p]) * world;
+        i = p;
+    }
+    world
+}
+
+/// Every frame's world positions of mesh 0 primitive `prim` as its `channel`-th weights channel
+/// plays it, read with inbetween's own reader (quantized attributes decoded).
+pub fn world_frames(path: &Path, prim: usize, channel: usize) -> (Vec<f64>, Vec<Vec<glam::DVec3>>) {
+    let doc = inbetween::gltf::Document::open(path).unwrap();
+    let world = mesh_world(&doc);
+    let (times, poses) = doc_poses(&doc, prim, mesh0_samplers(&doc)[channel]);
+    let frames = poses
+        .iter()
+        .map(|f| f.iter().map(|p| world.transform_point3(*p)).collect())
+        .collect();
+    (times, frames)
+}
+
+/// For each vertex of `a`, the vertex of `b` nearest to it.
+pub fn matching(a: &[glam::DVec3], b: &[glam::DVec3]) -> Vec<usize> {
+    a.iter()
+        .map(|p| {
+            (0..b.len())
+                .min_by(|&i, &j| {
+                    p.distance_squared(b[i])
+                        .total_cmp(&p.distance_squared(b[j]))
+                })
+                .unwrap()
+        })
+        .collect()
+}

@@ -1,0 +1,393 @@
+//! Encode stage (on write, with `--meshopt`/`--compact`): every buffer view that holds vertex
+//! attributes, morph targets, indices or animation data is compressed with
+//! `EXT_meshopt_compression` by meshoptimizer's own encoders (the `meshopt` crate): vertex
+//! codec version 0 (what every EXT decoder reads), TRIANGLES for triangle-list indices,
+//! INDICES for other index data, and a view the writer marked for it is first put through the
+//! EXPONENTIAL filter (floats with fewer mantissa bits: lossy, within the tolerance the marker
+//! was chosen for). Compressed views point into a fallback buffer without data (so the
+//! extension is required, as the spec allows); the compressed bytes sit in the binary buffer.
+//! Views of images, or shared by accessors that disagree on their layout, stay as they are.
+
+use super::build::Output;
+use super::read::arr;
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+
+/// The private key a writer puts on a buffer view of f32 values to have it encoded with the
+/// EXPONENTIAL filter at this many mantissa bits; removed from every view on write.
+pub const FILTER_MARK: &str = "inbetweenExpBits";
+/// Views marked for the EXPONENTIAL filter that carry the same group name (and bits) are merged
+/// into one view: their exponents are then shared, as the writer of the mark measured them.
+/// Removed from every view on write.
+pub const FILTER_GROUP: &str = "inbetweenExpGroup";
+
+/// How a buffer view is read, as far as the accessors that use it say.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Use {
+    /// Vertex, target, sparse or animation data: elements of `stride` bytes.
+    Attributes { stride: usize },
+    /// Indices of `stride` bytes; `triangles` when they form a triangle list read whole.
+    Indices { stride: usize, triangles: bool },
+    /// Read in ways that cannot be compressed (mixed layouts, images, unknown).
+    Other,
+}
+
+fn component_size(ty: u64) -> usize {
+    match ty {
+        5120 | 5121 => 1,
+        5122 | 5123 => 2,
+        _ => 4,
+    }
+}
+
+fn components(ty: &str) -> usize {
+    match ty {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" | "MAT2" => 4,
+        "MAT3" => 9,
+        "MAT4" => 16,
+        _ => 0,
+    }
+}
+
+/// How each of `views` (the views being written) is used by the accessors of `json`.
+fn uses(json: &Value, views: &[Value]) -> BTreeMap<usize, Use> {
+    let mut out: BTreeMap<usize, Use> = BTreeMap::new();
+    let mut meet = |view: Option<u64>, u: Use| {
+        if let Some(v) = view {
+            let e = out.entry(v as usize).or_insert(u);
+            if *e != u {
+                *e = Use::Other;
+            }
+        }
+    };
+    let index_accessors: BTreeMap<u64, bool> = arr(json, "meshes")
+        .iter()
+        .flat_map(|m| arr(m, "primitives"))
+        .filter_map(|p| Some((p["indices"].as_u64()?, p["mode"].as_u64().unwrap_or(4) == 4)))
+        .collect();
+    for (i, a) in arr(json, "accessors").iter().enumerate() {
+        let elem = component_size(a["componentType"].as_u64().unwrap_or(0))
+            * components(a["type"].as_str().unwrap_or(""));
+        if let Some(v) = a["bufferView"].as_u64() {
+            let Some(view) = views.get(v as usize) else {
+                continue;
+            };
+            let stride = view["byteStride"].as_u64().map_or(elem, |s| s as usize);
+            let whole = a["byteOffset"].as_u64().unwrap_or(0) == 0
+                && view["byteLength"].as_u64() == a["count"].as_u64().map(|c| c * stride as u64);
+            let u = match index_accessors.get(&(i as u64)) {
+                Some(&tri) => Use::Indices {
+                    stride,
+                    triangles: tri && whole && a["count"].as_u64().unwrap_or(1) % 3 == 0,
+                },
+                None => Use::Attributes { stride },
+            };
+            meet(Some(v), if elem == 0 { Use::Other } else { u });
+        }
+        let sparse = &a["sparse"];
+        if sparse.is_object() {
+            let it = component_size(sparse["indices"]["componentType"].as_u64().unwrap_or(0));
+            meet(
+                sparse["indices"]["bufferView"].as_u64(),
+                Use::Attributes { stride: it },
+            );
+            meet(
+                sparse["values"]["bufferView"].as_u64(),
+                Use::Attributes { stride: elem },
+            );
+        }
+    }
+    for img in arr(json, "images") {
+        meet(img["bufferView"].as_u64(), Use::Other);
+    }
+    out
+}
+
+/// The compressed form of view data `data` used as `u`, with its extension object (less the
+/// buffer offset and length, which the caller sets), if it can be compressed.
+fn compress(data: &[u8], u: Use, exp_bits: Option<i32>) -> Option<(Vec<u8>, Value)> {
+    match u {
+        Use::Attributes { stride } => {
+            if stride == 0
+                || !stride.is_multiple_of(4)
+                || stride > 256
+                || !data.len().is_multiple_of(stride)
+            {
+                return None;
+            }
+            let count = data.len() / stride;
+            let mut data = data.to_vec();
+            let filter = match exp_bits {
+                Some(bits) => {
+                    let floats: Vec<f32> = data
+                        .chunks_exact(4)
+                        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                        .collect();
+                    let mut encoded = vec![0u32; floats.len()];
+                    // SAFETY: both arrays hold count * stride / 4 values of 4 bytes; the
+                    // encoder reads `floats` and writes `encoded`, one vector of stride bytes
+                    // per element.
+                    unsafe {
+                        meshopt::ffi::meshopt_encodeFilterExp(
+                            encoded.as_mut_ptr().cast(),
+                            count,
+                            stride,
+                            bits,
+                            floats.as_ptr(),
+                            meshopt::EncodeExpMode::SharedComponent
+                                as meshopt::ffi::meshopt_EncodeExpMode,
+                        );
+                    }
+                    data = encoded.iter().flat_map(|v| v.to_le_bytes()).collect();
+                    "EXPONENTIAL"
+                }
+                None => "NONE",
+            };
+            let bound = unsafe { meshopt::ffi::meshopt_encodeVertexBufferBound(count, stride) };
+            let mut out = vec![0u8; bound];
+            // SAFETY: `out` holds the bound the encoder asks for; `data` holds count * stride
+            // bytes.
+            let size = unsafe {
+                meshopt::ffi::meshopt_encodeVertexBufferLevel(
+                    out.as_mut_ptr(),
+                    out.len(),
+                    data.as_ptr().cast(),
+                    count,
+                    stride,
+                    2,
+                    0,
+                )
+            };
+            if size == 0 {
+                return None;
+            }
+            out.truncate(size);
+            let mut ext = json!({ "byteStride": stride, "count": count, "mode": "ATTRIBUTES" });
+            if filter != "NONE" {
+                ext["filter"] = json!(filter);
+            }
+            Some((out, ext))
+        }
+        Use::Indices { stride, triangles } => {
+            if (stride != 2 && stride != 4) || !data.len().is_multiple_of(stride) {
+                return None;
+            }
+            let indices: Vec<u32> = data
+                .chunks_exact(stride)
+                .map(|c| match stride {
+                    2 => u16::from_le_bytes([c[0], c[1]]) as u32,
+                    _ => u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                })
+                .collect();
+            let vertices = indices.iter().max().map_or(0, |m| *m as usize + 1);
+            let (encoded, mode) = if triangles {
+                (
+                    meshopt::encode_index_buffer(&indices, vertices).ok()?,
+                    "TRIANGLES",
+                )
+            } else {
+                (
+                    meshopt::encode_index_sequence(&indices, vertices).ok()?,
+                    "INDICES",
+                )
+            };
+            Some((
+                encoded,
+                json!({ "byteStride": stride, "count": indices.len(), "mode": mode }),
+            ))
+        }
+        Use::Other => None,
+    }
+}
+
+/// Merge runs of views that hold vertex data of one layout (same stride, target and filter
+/// mark, each read only by plain accessors, e.g. the morph targets of a primitive) into one
+/// view each, the accessors pointed into it: one meshopt stream instead of many (less JSON,
+/// better compression).
+fn coalesce(out: &mut Output) {
+    let uses = uses(&out.json, &out.bin.views);
+    let views = std::mem::take(&mut out.bin.views);
+    // Accessors reading each view directly (sparse views are never merged).
+    let mut readers: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    let mut sparse_views = std::collections::BTreeSet::new();
+    for (i, a) in arr(&out.json, "accessors").iter().enumerate() {
+        if let Some(v) = a["bufferView"].as_u64() {
+            readers.entry(v as usize).or_default().push(i);
+        }
+        for k in ["indices", "values"] {
+            if let Some(v) = a["sparse"][k]["bufferView"].as_u64() {
+                sparse_views.insert(v as usize);
+            }
+        }
+    }
+    type Key = (usize, Option<u64>, Option<i64>, Option<String>);
+    let key = |i: usize, v: &Value| -> Option<Key> {
+        match uses.get(&i) {
+            // Only vertex views (target ARRAY_BUFFER) may carry a byteStride.
+            Some(Use::Attributes { stride })
+                if !sparse_views.contains(&i)
+                    && readers.contains_key(&i)
+                    && v["target"].as_u64() == Some(34962)
+                    && stride.is_multiple_of(4)
+                    // The EXPONENTIAL filter shares one exponent per component over a view:
+                    // merged, a small target would lose the precision it was marked for, unless
+                    // its writer grouped it with the others knowingly.
+                    && (v.get(FILTER_MARK).is_none() || v.get(FILTER_GROUP).is_some()) =>
+            {
+                Some((
+                    *stride,
+                    v["target"].as_u64(),
+                    v.get(FILTER_MARK).and_then(Value::as_i64),
+                    v.get(FILTER_GROUP)
+                        .and_then(Value::as_str)
+                        .map(str::to_owned),
+                ))
+            }
+            _ => None,
+        }
+    };
+    let mut merged: Vec<Value> = Vec::with_capacity(views.len());
+    let mut remap = vec![(0usize, 0usize); views.len()]; // (new view, byte offset in it)
+    let mut bytes = Vec::with_capacity(out.bin.bytes.len());
+    let mut open: Option<(Key, usize)> = None; // (key, view)
+    for (i, v) in views.iter().enumerate() {
+        let start = v["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let len = v["byteLength"].as_u64().unwrap_or(0) as usize;
+        let k = key(i, v);
+        match (&k, &open) {
+            (Some(k), Some((ok, at))) if ok == k => {
+                let at = *at;
+                let view = &mut merged[at];
+                let offset = view["byteLength"].as_u64().unwrap_or(0) as usize;
+                view["byteLength"] = json!(offset + len);
+                remap[i] = (at, offset);
+            }
+            _ => {
+                while !bytes.len().is_multiple_of(4) {
+                    bytes.push(0);
+                }
+                let mut nv = v.clone();
+                nv["byteOffset"] = json!(bytes.len());
+                if let Some((stride, ..)) = &k {
+                    nv["byteStride"] = json!(stride);
+                }
+                merged.push(nv);
+                remap[i] = (merged.len() - 1, 0);
+                open = k.map(|k| (k, merged.len() - 1));
+            }
+        }
+        bytes.extend_from_slice(&out.bin.bytes[start..start + len]);
+    }
+    let fix = |v: &mut Value, off: Option<&mut Value>| {
+        if let Some(i) = v.as_u64() {
+            let (to, shift) = remap[i as usize];
+            *v = json!(to);
+            if let Some(o) = off {
+                *o = json!(o.as_u64().unwrap_or(0) as usize + shift);
+            }
+        }
+    };
+    let accessors = out.json.get_mut("accessors").and_then(Value::as_array_mut);
+    for a in accessors.into_iter().flatten() {
+        if a.get("bufferView").is_some() {
+            let mut offset = a.get("byteOffset").cloned().unwrap_or(json!(0));
+            fix(&mut a["bufferView"], Some(&mut offset));
+            if offset != json!(0) {
+                a["byteOffset"] = offset;
+            }
+        }
+        for k in ["indices", "values"] {
+            if let Some(v) = a.pointer_mut(&format!("/sparse/{k}/bufferView")) {
+                fix(v, None);
+            }
+        }
+    }
+    let images = out.json.get_mut("images").and_then(Value::as_array_mut);
+    for img in images.into_iter().flatten() {
+        if let Some(v) = img.get_mut("bufferView") {
+            fix(v, None);
+        }
+    }
+    out.bin.views = merged;
+    out.bin.bytes = bytes;
+}
+
+/// Compress every view of `out` that can be, in place (runs of views of one vertex layout
+/// merged first): the binary buffer is rebuilt with the compressed streams and the views left
+/// raw; returns the size of the fallback buffer (0 when nothing was compressed).
+pub fn meshopt(out: &mut Output) -> usize {
+    coalesce(out);
+    let uses = uses(&out.json, &out.bin.views);
+    let mut bytes = Vec::with_capacity(out.bin.bytes.len() / 2);
+    let mut fallback = 0usize;
+    for (i, view) in out.bin.views.iter_mut().enumerate() {
+        let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let len = view["byteLength"].as_u64().unwrap_or(0) as usize;
+        let data = &out.bin.bytes[start..start + len];
+        let bits = view
+            .get(FILTER_MARK)
+            .and_then(Value::as_i64)
+            .map(|b| b as i32);
+        let u = uses.get(&i).copied().unwrap_or(Use::Other);
+        while !bytes.len().is_multiple_of(4) {
+            bytes.push(0);
+        }
+        match compress(data, u, bits).filter(|(c, _)| c.len() < len) {
+            Some((compressed, mut ext)) => {
+                ext["buffer"] = json!(0);
+                ext["byteOffset"] = json!(bytes.len());
+                ext["byteLength"] = json!(compressed.len());
+                bytes.extend_from_slice(&compressed);
+                while !fallback.is_multiple_of(4) {
+                    fallback += 1;
+                }
+                view["buffer"] = json!(1);
+                view["byteOffset"] = json!(fallback);
+                view["extensions"] = json!({ "EXT_meshopt_compression": ext });
+                fallback += len;
+            }
+            None => {
+                view["byteOffset"] = json!(bytes.len());
+                bytes.extend_from_slice(data);
+            }
+        }
+    }
+    out.bin.bytes = bytes;
+    fallback
+}
+
+/// Remove the writer's private marks from every view.
+pub fn clear_marks(out: &mut Output) {
+    for view in &mut out.bin.views {
+        if let Some(o) = view.as_object_mut() {
+            o.remove(FILTER_MARK);
+            o.remove(FILTER_GROUP);
+        }
+    }
+}
+
+/// `values` (vectors of `components` f32) as a reader decodes them after the EXPONENTIAL filter
+/// at `bits` mantissa bits, as [`meshopt`] encodes a marked view (one exponent per component
+/// over the whole view).
+pub fn exp_roundtrip(values: &[f32], components: usize, bits: i32) -> Vec<f32> {
+    let stride = 4 * components;
+    let count = values.len() / components.max(1);
+    let mut encoded = vec![0u32; values.len()];
+    // SAFETY: `encoded` and `values` both hold count * components values; the filter reads
+    // one and writes the other, then decodes in place, stride bytes per element.
+    unsafe {
+        meshopt::ffi::meshopt_encodeFilterExp(
+            encoded.as_mut_ptr().cast(),
+            count,
+            stride,
+            bits,
+            values.as_ptr(),
+            meshopt::EncodeExpMode::SharedComponent as meshopt::ffi::meshopt_EncodeExpMode,
+        );
+        meshopt::ffi::meshopt_decodeFilterExp(encoded.as_mut_ptr().cast(), count, stride);
+    }
+    encoded.iter().map(|&b| f32::from_bits(b)).collect()
+}

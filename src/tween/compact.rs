@@ -1,0 +1,916 @@
+//! Compact stage (`--compact`, `--basis`, `--quantize`, `--meshopt`, `--sparse`): the frames of
+//! a mesh as few, small morph targets, every frame within a tolerance of the dense frames.
+//!
+//! * **Basis** (truncated SVD): the frames' deltas (in the rig layout, what is left of them
+//!   once the authored targets are blended in, so the authored targets count towards the
+//!   basis and the keys stay exact) become K basis targets and K weights per frame. The Gram
+//!   matrix of the frames (frames x frames) is built in column chunks from the frames as they
+//!   are held (f32), its eigenvectors give the weights and one more pass the basis: the frames
+//!   are never copied whole. K is the smallest whose truncation leaves every frame within
+//!   [`TRUNCATION_SHARE`] of the tolerance, then grown until the encoded result is within it.
+//! * **Quantized** basis targets: normalized SHORT (or BYTE where the error allows) with each
+//!   target's scale carried by its weights (`KHR_mesh_quantization`); NORMAL and TANGENT
+//!   deltas alike. Authored targets keep their meaning (a rig drives them at weight 1): they
+//!   stay float, and with meshopt go through its EXPONENTIAL filter at the fewest mantissa bits
+//!   the tolerance allows.
+//! * **Sparse** accessors for targets whose encoded values are zero on enough vertices.
+//! * **Meshopt** compression of every view on write (`gltf::encode`).
+//!
+//! Tolerances (relative to the bounding-box diagonal of the mesh's base): positions within
+//! `tolerance` RMS per frame and no vertex farther than [`MAX_FACTOR`] x `tolerance`; normals and tangents
+//! (unit vectors, so absolute) within [`NORMAL_FACTOR`] x `tolerance` RMS per frame. The
+//! deviation is measured on the values as a reader decodes them.
+
+use super::frames::{MeshFrames, PrimitiveFrames};
+use super::keys::MorphMesh;
+use crate::gltf::{exp_roundtrip, Storage};
+use anyhow::{bail, Result};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par, Side};
+use glam::DVec3;
+use serde::Serialize;
+
+/// What `--compact` and its parts ask for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CompactOptions {
+    /// RMS position deviation per frame allowed, relative to the bounding-box diagonal.
+    pub tolerance: f64,
+    pub basis: Basis,
+    pub quantize: bool,
+    pub meshopt: bool,
+    pub sparse: bool,
+}
+
+/// Default `--tolerance`: 1e-4 of the diagonal (0.1 mm on a 1 m character).
+pub const DEFAULT_TOLERANCE: f64 = 1e-4;
+
+/// Normals and tangents are unit vectors: their RMS deviation per frame may be this many times
+/// the position tolerance (1e-2 at the default: 0.6 degrees).
+pub const NORMAL_FACTOR: f64 = 100.0;
+
+/// No vertex of a frame may deviate more than this many times the tolerance (3e-4 of the
+/// diagonal at the default; the issue allowed 10x, but a vertex 1e-3 off shows on a close-up).
+pub const MAX_FACTOR: f64 = 3.0;
+
+/// Share of the tolerance the basis truncation may take ...
+pub const TRUNCATION_SHARE: f64 = 0.7;
+/// ... and the rounding of the stored values (quantization, the exponential filter); the
+/// measured deviation of the decoded frames has the last word.
+pub const QUANT_SHARE: f64 = 1.5;
+
+/// Most frames a basis is looked for over (the Gram matrix is frames x frames).
+pub const MAX_BASIS_FRAMES: usize = 8192;
+
+/// How many basis targets (`--basis`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Basis {
+    /// No basis: the layout's own targets, encoded as asked.
+    Off,
+    /// As few as the tolerance allows.
+    Auto,
+    /// At most this many.
+    Count(usize),
+}
+
+impl CompactOptions {
+    /// Everything on, at the default tolerance: what `--compact` means.
+    pub fn all() -> CompactOptions {
+        CompactOptions {
+            tolerance: DEFAULT_TOLERANCE,
+            basis: Basis::Auto,
+            quantize: true,
+            meshopt: true,
+            sparse: true,
+        }
+    }
+}
+
+/// One attribute of one primitive of a target: the values to store (already divided by the
+/// target's scale) and how.
+#[derive(Clone, Debug)]
+pub struct Stored {
+    pub values: Vec<f32>,
+    pub storage: Storage,
+    /// As a sparse accessor (only the vertices not all zero).
+    pub sparse: bool,
+}
+
+/// A new target: for each processed primitive, POSITION and the NORMAL and TANGENT deltas the
+/// frames carry.
+#[derive(Clone, Debug)]
+pub struct NewTarget {
+    pub position: Vec<Stored>,
+    pub normal: Option<Vec<Stored>>,
+    pub tangent: Option<Vec<Stored>>,
+}
+
+/// The compacted frames of one mesh.
+pub struct Compacted {
+    /// The basis targets (scaled for storage).
+    pub targets: Vec<NewTarget>,
+    /// For each frame, the weights of the basis targets (scales folded in).
+    pub weights: Vec<Vec<f32>>,
+    /// For each frame, the weights of the authored targets (rig layout; empty rows otherwise):
+    /// the keys' own, between keys the least-squares fit of the frame.
+    pub authored_weights: Vec<Vec<f64>>,
+    /// How the authored targets are stored (rig layout; `None`: as they are in the input).
+    pub authored: Option<Storage>,
+    /// Store sparse accessors where they pay.
+    pub sparse: bool,
+    pub figures: CompactFigures,
+}
+
+/// What `--report` and the summary say of a compacted mesh.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct CompactFigures {
+    /// Basis targets.
+    pub basis: usize,
+    /// Authored targets kept beside them.
+    pub authored: usize,
+    /// Deviation from the dense frames, relative to the bounding-box diagonal: the worst
+    /// per-frame RMS, and the worst vertex.
+    pub rms_deviation: f64,
+    pub max_deviation: f64,
+    /// Worst per-frame RMS deviation of the normals (absolute), when the frames carry them.
+    pub normal_rms_deviation: f64,
+    /// Targets stored as SHORT, BYTE, float, and sparse.
+    pub short_targets: usize,
+    pub byte_targets: usize,
+    pub sparse_accessors: usize,
+}
+
+/// The three attributes a target may carry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Attr {
+    Position,
+    Normal,
+    Tangent,
+}
+
+/// One column block of the frames matrix: an attribute of a primitive.
+struct Block {
+    prim: usize,
+    attr: Attr,
+    vertices: usize,
+    /// Columns scaled by this (normals and tangents weighed against positions).
+    weight: f64,
+}
+
+/// The frames of a mesh as rows: each frame's deltas less the authored blend (rig layout).
+struct Rows<'a> {
+    frames: &'a MeshFrames,
+    mesh: &'a MorphMesh,
+    /// Authored weights of each frame (empty rows in the frames layout).
+    authored: Vec<Vec<f64>>,
+    blocks: Vec<Block>,
+}
+
+impl Rows<'_> {
+    fn count(&self) -> usize {
+        self.authored.len()
+    }
+
+    fn frame_values(p: &PrimitiveFrames, attr: Attr, f: usize) -> Option<&[[f32; 3]]> {
+        match attr {
+            Attr::Position => Some(&p.positions[f]),
+            Attr::Normal => p.normals.as_ref().map(|n| &n[f][..]),
+            Attr::Tangent => p.tangents.as_ref().map(|t| &t[f][..]),
+        }
+    }
+
+    fn authored_values(&self, prim: usize, attr: Attr, i: usize) -> Option<&Vec<DVec3>> {
+        let p = &self.mesh.primitives[prim];
+        match attr {
+            Attr::Position => Some(&p.target_pos[i]),
+            Attr::Normal => p.target_nrm[i].as_ref(),
+            Attr::Tangent => p.target_tan[i].as_ref(),
+        }
+    }
+
+    /// Row `f` of block `b` over vertices `v0..v1` (3 columns each), weighted, into `out`.
+    fn fill(&self, b: &Block, f: usize, v0: usize, v1: usize, out: &mut [f64]) {
+        let p = &self.frames.primitives[b.prim];
+        let values = Self::frame_values(p, b.attr, f).expect("block of a present attribute");
+        for (o, d) in out.chunks_exact_mut(3).zip(&values[v0..v1]) {
+            o.copy_from_slice(&[d[0] as f64, d[1] as f64, d[2] as f64]);
+        }
+        for (i, &w) in self.authored[f].iter().enumerate() {
+            if w == 0.0 {
+                continue;
+            }
+            if let Some(a) = self.authored_values(b.prim, b.attr, i) {
+                for (o, d) in out.chunks_exact_mut(3).zip(&a[v0..v1]) {
+                    o[0] -= w * d.x;
+                    o[1] -= w * d.y;
+                    o[2] -= w * d.z;
+                }
+            }
+        }
+        if b.weight != 1.0 {
+            out.iter_mut().for_each(|x| *x *= b.weight);
+        }
+    }
+
+    /// Visit the matrix in column chunks: `visit(block index, first vertex, chunk)` with the
+    /// chunk as a frames x columns matrix.
+    fn chunks(&self, visit: &mut dyn FnMut(usize, usize, &Mat<f64>)) {
+        const VERTICES: usize = 1024;
+        let frames = self.count();
+        for (bi, b) in self.blocks.iter().enumerate() {
+            for v0 in (0..b.vertices).step_by(VERTICES) {
+                let v1 = (v0 + VERTICES).min(b.vertices);
+                let cols = 3 * (v1 - v0);
+                let mut m = Mat::<f64>::zeros(frames, cols);
+                let mut row = vec![0.0; cols];
+                for f in 0..frames {
+                    self.fill(b, f, v0, v1, &mut row);
+                    for (c, x) in row.iter().enumerate() {
+                        m[(f, c)] = *x;
+                    }
+                }
+                visit(bi, v0, &m);
+            }
+        }
+    }
+}
+
+/// Where the targets come from: the frames' singular directions (`u` F x r, `sigma` the
+/// singular values, descending), or the frames themselves (`--basis off`: each listed frame
+/// its own target at weight 1).
+enum Factors {
+    Svd { u: Mat<f64>, sigma: Vec<f64> },
+    Own(Vec<usize>),
+}
+
+impl Factors {
+    /// Targets available.
+    fn rank(&self) -> usize {
+        match self {
+            Factors::Svd { sigma, .. } => sigma.len(),
+            Factors::Own(frames) => frames.len(),
+        }
+    }
+
+    /// Weight of target `k` in frame `f`.
+    fn weight(&self, f: usize, k: usize) -> f64 {
+        match self {
+            Factors::Svd { u, sigma } => u[(f, k)] * sigma[k],
+            Factors::Own(frames) => (frames[k] == f) as u8 as f64,
+        }
+    }
+}
+
+/// Eigen-decomposition of the frames' Gram matrix: singular values (descending) and left
+/// singular vectors.
+fn factor(rows: &Rows) -> Result<Factors> {
+    let n = rows.count();
+    let mut gram = Mat::<f64>::zeros(n, n);
+    rows.chunks(&mut |_, _, m| {
+        matmul(
+            gram.as_mut(),
+            Accum::Add,
+            m.as_ref(),
+            m.transpose(),
+            1.0,
+            Par::rayon(0),
+        );
+    });
+    let eig = gram
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| anyhow::anyhow!("the frames' decomposition failed ({e:?})"))?;
+    let s = eig.S().column_vector();
+    let order: Vec<usize> = (0..n).rev().collect();
+    let top = s[order[0]].max(0.0);
+    let sigma: Vec<f64> = order
+        .iter()
+        .map(|&i| s[i].max(0.0).sqrt())
+        .take_while(|&x| x > 1e-12 * top.sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    let u = Mat::from_fn(n, sigma.len(), |r, c| eig.U()[(r, order[c])]);
+    Ok(Factors::Svd { u, sigma })
+}
+
+/// The smallest K whose truncation leaves every frame's (weighted) residual within `budget`
+/// (squared norm per frame), from the Gram diagonal and the weights.
+fn smallest_k(f: &Factors, norms2: &[f64], budget2: f64) -> usize {
+    let mut resid = norms2.to_vec();
+    for k in 0..=f.rank() {
+        if resid.iter().all(|r| *r <= budget2) {
+            return k;
+        }
+        if k == f.rank() {
+            break;
+        }
+        for (row, r) in resid.iter_mut().enumerate() {
+            let w = f.weight(row, k);
+            *r -= w * w;
+        }
+    }
+    f.rank()
+}
+
+/// Compact the frames of one mesh (`frames` computed from `mesh`), keeping the authored targets
+/// when `authored` gives each frame's authored weights (rig layout); `own` lists the frames
+/// that have targets of their own without a basis (the frames between keys in the rig layout).
+pub fn compact(
+    frames: &MeshFrames,
+    mesh: &MorphMesh,
+    authored: Vec<Vec<f64>>,
+    own: Vec<usize>,
+    opts: &CompactOptions,
+) -> Result<Compacted> {
+    let rig = authored.iter().any(|w| !w.is_empty());
+    let count = authored.len();
+    if opts.basis != Basis::Off && count > MAX_BASIS_FRAMES {
+        bail!(
+            "mesh {:?}: {count} frames are more than a basis is looked for over ({MAX_BASIS_FRAMES}); use fewer frames or --basis off",
+            mesh.name
+        );
+    }
+    let diag = {
+        let all: Vec<DVec3> = mesh
+            .primitives
+            .iter()
+            .flat_map(|p| p.base.iter().copied())
+            .collect();
+        super::weld::bbox_diagonal(&all).max(f64::MIN_POSITIVE)
+    };
+    let tol = opts.tolerance * diag;
+    let ntol = (NORMAL_FACTOR * opts.tolerance).min(0.5);
+    let mut blocks = Vec::new();
+    for (pi, p) in frames.primitives.iter().enumerate() {
+        let vertices = mesh.primitives[pi].base.len();
+        blocks.push(Block {
+            prim: pi,
+            attr: Attr::Position,
+            vertices,
+            weight: 1.0,
+        });
+        if p.normals.is_some() {
+            blocks.push(Block {
+                prim: pi,
+                attr: Attr::Normal,
+                vertices,
+                weight: tol / ntol,
+            });
+        }
+        if p.tangents.is_some() {
+            blocks.push(Block {
+                prim: pi,
+                attr: Attr::Tangent,
+                vertices,
+                weight: tol / ntol,
+            });
+        }
+    }
+    let vertices: usize = mesh.primitives.iter().map(|p| p.base.len()).sum();
+    let mut rows = Rows {
+        frames,
+        mesh,
+        authored,
+        blocks,
+    };
+    // Frames between keys: the authored targets at the weights that come nearest the frame (least
+    // squares), so the basis carries only what the rig cannot (keys keep their own weights).
+    if rig && opts.basis != Basis::Off {
+        fit_authored(&mut rows, &own)?;
+    }
+    let plan = Plan {
+        rows: &rows,
+        opts,
+        tol,
+        ntol,
+        vertices,
+        rig,
+    };
+    plan.run(own)
+}
+
+/// Replace the authored weights of frames `own` by the least-squares fit of the frames to the
+/// authored targets (positions and weighted normals and tangents, as the basis sees them).
+fn fit_authored(rows: &mut Rows, own: &[usize]) -> Result<()> {
+    let t = rows.mesh.target_count;
+    if t == 0 || own.is_empty() {
+        return Ok(());
+    }
+    let mut ata = Mat::<f64>::zeros(t, t);
+    let mut atd = Mat::<f64>::zeros(t, own.len());
+    for b in &rows.blocks {
+        let w2 = b.weight * b.weight;
+        let targets: Vec<Option<&Vec<DVec3>>> = (0..t)
+            .map(|i| rows.authored_values(b.prim, b.attr, i))
+            .collect();
+        for i in 0..t {
+            let Some(ai) = targets[i] else { continue };
+            for j in i..t {
+                if let Some(aj) = targets[j] {
+                    let dot: f64 = ai.iter().zip(aj.iter()).map(|(x, y)| x.dot(*y)).sum();
+                    ata[(i, j)] += w2 * dot;
+                    ata[(j, i)] = ata[(i, j)];
+                }
+            }
+            let p = &rows.frames.primitives[b.prim];
+            for (col, &f) in own.iter().enumerate() {
+                let values =
+                    Rows::frame_values(p, b.attr, f).expect("block of a present attribute");
+                let dot: f64 = ai
+                    .iter()
+                    .zip(values)
+                    .map(|(x, d)| x.dot(DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64)))
+                    .sum();
+                atd[(i, col)] += w2 * dot;
+            }
+        }
+    }
+    // Pseudo-inverse through the eigen-decomposition: targets that coincide share the weight.
+    let eig = ata
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| anyhow::anyhow!("the authored targets' fit failed ({e:?})"))?;
+    let s = eig.S().column_vector();
+    let top = (0..t).map(|i| s[i]).fold(0.0f64, f64::max);
+    let u = eig.U();
+    for (col, &f) in own.iter().enumerate() {
+        let mut w = vec![0.0; t];
+        for k in 0..t {
+            if s[k] <= 1e-12 * top {
+                continue;
+            }
+            let proj: f64 = (0..t).map(|i| u[(i, k)] * atd[(i, col)]).sum::<f64>() / s[k];
+            for (i, wi) in w.iter_mut().enumerate() {
+                *wi += u[(i, k)] * proj;
+            }
+        }
+        rows.authored[f] = w;
+    }
+    Ok(())
+}
+
+/// A compaction under way: the rows and the tolerances in scene units.
+struct Plan<'a> {
+    rows: &'a Rows<'a>,
+    opts: &'a CompactOptions,
+    tol: f64,
+    ntol: f64,
+    vertices: usize,
+    rig: bool,
+}
+
+impl Plan<'_> {
+    fn run(&self, own: Vec<usize>) -> Result<Compacted> {
+        let rows = self.rows;
+        let n = rows.count();
+        let factors = match self.opts.basis {
+            Basis::Off => Some(Factors::Own(own)),
+            _ => Some(factor(rows)?),
+        };
+        let mut k = match (&factors, self.opts.basis) {
+            (Some(f), Basis::Off) => f.rank(),
+            (Some(f), Basis::Auto) => {
+                let mut norms2 = vec![0.0; n];
+                rows.chunks(&mut |_, _, m| {
+                    for (f, r) in norms2.iter_mut().enumerate() {
+                        *r += m.row(f).iter().map(|x| x * x).sum::<f64>();
+                    }
+                });
+                let blocks = rows.blocks.len() as f64 / rows.frames.primitives.len().max(1) as f64;
+                let budget = TRUNCATION_SHARE * self.tol;
+                smallest_k(f, &norms2, budget * budget * self.vertices as f64 * blocks)
+            }
+            (Some(f), Basis::Count(k)) => k.min(f.rank()),
+            _ => 0,
+        };
+        let exp_bits = self.opts.meshopt.then_some(0);
+        let mut quantize = self.opts.quantize;
+        loop {
+            let out = self.encode(factors.as_ref(), k, quantize, exp_bits)?;
+            let f = &out.figures;
+            let fits = f.rms_deviation <= self.opts.tolerance
+                && f.max_deviation <= MAX_FACTOR * self.opts.tolerance
+                && f.normal_rms_deviation <= self.ntol;
+            let more = factors.as_ref().is_some_and(|fs| {
+                k < fs.rank() && !matches!(self.opts.basis, Basis::Count(c) if k >= c)
+            });
+            if fits || (!more && !quantize) {
+                return Ok(out);
+            }
+            if more {
+                k += 1;
+            } else {
+                quantize = false;
+            }
+        }
+    }
+
+    /// Mantissa bits of the exponential filter for the authored targets: their rounding at
+    /// the largest authored weight within the steps `q_pos` (positions) and `q_nrm` (normals
+    /// and tangents).
+    fn authored_bits(&self, q_pos: f64, q_nrm: f64) -> i32 {
+        let rows = self.rows;
+        let weight = rows
+            .authored
+            .iter()
+            .flatten()
+            .fold(1.0f64, |m, w| m.max(w.abs()));
+        let largest = |list: Vec<&Vec<DVec3>>| {
+            list.iter()
+                .flat_map(|v| v.iter())
+                .fold(0.0f64, |m, d| m.max(d.abs().max_element()))
+        };
+        let mesh = rows.mesh;
+        let lp = largest(
+            mesh.primitives
+                .iter()
+                .flat_map(|p| p.target_pos.iter())
+                .collect(),
+        );
+        let ln = largest(
+            mesh.primitives
+                .iter()
+                .flat_map(|p| p.target_nrm.iter().chain(&p.target_tan).flatten())
+                .collect(),
+        );
+        let bits = |l: f64, step: f64| ((l * weight / step).log2().ceil() as i32 + 1).clamp(4, 24);
+        bits(lp, q_pos).max(if ln > 0.0 { bits(ln, q_nrm) } else { 4 })
+    }
+
+    /// The basis of the first `k` directions, encoded, and its measured deviation.
+    fn encode(
+        &self,
+        factors: Option<&Factors>,
+        k: usize,
+        quantize: bool,
+        exp_bits: Option<i32>,
+    ) -> Result<Compacted> {
+        let rows = self.rows;
+        let n = rows.count();
+        // Basis rows: (1 / sigma) U^T R, per block, unweighted (normals back in their units).
+        let mut basis: Vec<Vec<Vec<f32>>> = vec![
+            rows.blocks
+                .iter()
+                .map(|b| vec![0.0f32; 3 * b.vertices])
+                .collect();
+            k
+        ];
+        if let (Some(Factors::Own(frames)), true) = (factors, k > 0) {
+            for (bi, b) in rows.blocks.iter().enumerate() {
+                let mut row = vec![0.0; 3 * b.vertices];
+                for (target, &f) in basis.iter_mut().zip(frames) {
+                    rows.fill(b, f, 0, b.vertices, &mut row);
+                    for (o, x) in target[bi].iter_mut().zip(&row) {
+                        *o = (x / b.weight) as f32;
+                    }
+                }
+            }
+        }
+        if let (Some(Factors::Svd { u, sigma }), true) = (factors, k > 0) {
+            let mut uk = Mat::<f64>::zeros(k, n);
+            for c in 0..k {
+                for r in 0..n {
+                    uk[(c, r)] = u[(r, c)] / sigma[c];
+                }
+            }
+            rows.chunks(&mut |bi, v0, m| {
+                let mut part = Mat::<f64>::zeros(k, m.ncols());
+                matmul(
+                    part.as_mut(),
+                    Accum::Replace,
+                    uk.as_ref(),
+                    m.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                let w = rows.blocks[bi].weight;
+                for (c, target) in basis.iter_mut().enumerate() {
+                    for j in 0..m.ncols() {
+                        target[bi][3 * v0 + j] = (part[(c, j)] / w) as f32;
+                    }
+                }
+            });
+        }
+        // Weights W = U sigma; keys of the rig (no residual) exactly zero.
+        let mut weights: Vec<Vec<f64>> = (0..n)
+            .map(|r| {
+                (0..k)
+                    .map(|c| factors.map_or(0.0, |fs| fs.weight(r, c)))
+                    .collect()
+            })
+            .collect();
+        // Each target scaled to its largest value, quantized or filtered.
+        let mut targets = Vec::with_capacity(k);
+        let mut figures = CompactFigures {
+            basis: k,
+            authored: if self.rig { rows.mesh.target_count } else { 0 },
+            ..Default::default()
+        };
+        // Each target rounded to the step its largest weight allows: the roundings of all the
+        // targets together stay within QUANT_SHARE of the tolerance (RMS per frame).
+        let total = (k + figures.authored).max(1) as f64;
+        let q_pos = 2.0 * QUANT_SHARE * self.tol / total.sqrt();
+        let q_nrm = 2.0 * QUANT_SHARE * self.ntol / total.sqrt();
+        for (c, t) in basis.into_iter().enumerate() {
+            let largest_weight = weights.iter().map(|w| w[c].abs()).fold(0.0, f64::max);
+            let (step_p, step_n) = (
+                q_pos / largest_weight.max(f64::MIN_POSITIVE),
+                q_nrm / largest_weight.max(f64::MIN_POSITIVE),
+            );
+            let (target, scale) = self.target(
+                t,
+                step_p,
+                step_n,
+                quantize,
+                exp_bits.is_some(),
+                &mut figures,
+            );
+            for w in &mut weights {
+                w[c] *= scale;
+            }
+            targets.push(target);
+        }
+        let authored = exp_bits.filter(|_| self.rig).map(|_| Storage::Float {
+            exp_bits: Some(self.authored_bits(q_pos, q_nrm)),
+        });
+        let weights: Vec<Vec<f32>> = weights
+            .iter()
+            .map(|w| w.iter().map(|&x| x as f32).collect())
+            .collect();
+        self.measure(&targets, &weights, authored, &mut figures);
+        Ok(Compacted {
+            targets,
+            weights,
+            authored_weights: rows.authored.clone(),
+            authored,
+            sparse: self.opts.sparse,
+            figures,
+        })
+    }
+
+    /// One basis target from its blocks' values: positions rounded to `step_p` (normals and
+    /// tangents to `step_n`) as normalized integers when `quantize` (the target's scale, which
+    /// its weights carry, is returned), else floats (through the exponential filter at the
+    /// bits the steps allow when `filter`).
+    fn target(
+        &self,
+        blocks: Vec<Vec<f32>>,
+        step_p: f64,
+        step_n: f64,
+        quantize: bool,
+        filter: bool,
+        figures: &mut CompactFigures,
+    ) -> (NewTarget, f64) {
+        let largest = |attr: Attr| -> f64 {
+            self.rows
+                .blocks
+                .iter()
+                .zip(&blocks)
+                .filter(|(b, _)| (b.attr == Attr::Position) == (attr == Attr::Position))
+                .flat_map(|(_, v)| v.iter())
+                .fold(0.0f64, |m, x| m.max(x.abs() as f64))
+        };
+        let (lp, ln) = (largest(Attr::Position), largest(Attr::Normal));
+        let bits = |l: f64, step: f64| ((l / step).log2().ceil() as i32 + 1).clamp(4, 24);
+        // Positions set the integer step; the scale turns it into normalized values.
+        let (pos_storage, scale) = if !quantize {
+            (
+                Storage::Float {
+                    exp_bits: filter.then(|| bits(lp, step_p)),
+                },
+                1.0,
+            )
+        } else if lp / step_p <= 127.0 {
+            (Storage::Byte, step_p * 127.0)
+        } else if lp / step_p <= 32767.0 {
+            (Storage::Short, step_p * 32767.0)
+        } else {
+            (Storage::Short, lp.max(f64::MIN_POSITIVE))
+        };
+        let scale = scale.max(f64::MIN_POSITIVE);
+        // Normals and tangents share the weight: an integer whose step is fine enough, else
+        // floats.
+        let nrm_storage = if !quantize {
+            Storage::Float {
+                exp_bits: filter.then(|| bits(ln, step_n)),
+            }
+        } else if scale / 127.0 <= step_n && ln <= scale {
+            Storage::Byte
+        } else if scale / 32767.0 <= step_n && ln <= scale {
+            Storage::Short
+        } else {
+            Storage::Float {
+                exp_bits: filter.then(|| bits(ln / scale, step_n / scale)),
+            }
+        };
+        match pos_storage {
+            Storage::Byte => figures.byte_targets += 1,
+            Storage::Short => figures.short_targets += 1,
+            Storage::Float { .. } => {}
+        }
+        let prims = self.rows.frames.primitives.len();
+        let mut position = Vec::with_capacity(prims);
+        let mut normal: Option<Vec<Stored>> = None;
+        let mut tangent: Option<Vec<Stored>> = None;
+        for (b, values) in self.rows.blocks.iter().zip(blocks) {
+            let storage = if b.attr == Attr::Position {
+                pos_storage
+            } else {
+                nrm_storage
+            };
+            let values: Vec<f32> = values.iter().map(|x| (*x as f64 / scale) as f32).collect();
+            let sparse = self.opts.sparse && sparse_pays(&values, storage, self.opts.meshopt);
+            figures.sparse_accessors += sparse as usize;
+            let s = Stored {
+                values,
+                storage,
+                sparse,
+            };
+            match b.attr {
+                Attr::Position => position.push(s),
+                Attr::Normal => normal.get_or_insert_with(Vec::new).push(s),
+                Attr::Tangent => tangent.get_or_insert_with(Vec::new).push(s),
+            }
+        }
+        (
+            NewTarget {
+                position,
+                normal,
+                tangent,
+            },
+            scale,
+        )
+    }
+
+    /// The deviation of the frames as a reader decodes them from the dense frames.
+    fn measure(
+        &self,
+        targets: &[NewTarget],
+        weights: &[Vec<f32>],
+        authored: Option<Storage>,
+        figures: &mut CompactFigures,
+    ) {
+        let rows = self.rows;
+        let decoded: Vec<Vec<Vec<f32>>> = targets
+            .iter()
+            .map(|t| {
+                rows.blocks
+                    .iter()
+                    .enumerate()
+                    .map(|(bi, b)| {
+                        let list = match b.attr {
+                            Attr::Position => &t.position,
+                            Attr::Normal => t.normal.as_ref().expect("normals"),
+                            Attr::Tangent => t.tangent.as_ref().expect("tangents"),
+                        };
+                        let prim_index = rows.blocks[..bi]
+                            .iter()
+                            .filter(|x| x.attr == b.attr)
+                            .count();
+                        decode(&list[prim_index])
+                    })
+                    .collect()
+            })
+            .collect();
+        let authored_decoded = self.authored_decoded(authored);
+        let mut pos2 = vec![0.0f64; rows.count()];
+        let mut nrm2 = vec![0.0f64; rows.count()];
+        let mut nrm_n = 0usize;
+        let mut worst = 0.0f64;
+        for (bi, b) in rows.blocks.iter().enumerate() {
+            if b.attr != Attr::Position {
+                nrm_n += b.vertices;
+            }
+            let mut row = vec![0.0; 3 * b.vertices];
+            for (f, w) in weights.iter().enumerate() {
+                rows.fill(b, f, 0, b.vertices, &mut row);
+                let unweighted = 1.0 / b.weight;
+                for (v, r) in row.chunks_exact(3).enumerate() {
+                    let mut e = [r[0] * unweighted, r[1] * unweighted, r[2] * unweighted];
+                    for (c, t) in decoded.iter().enumerate() {
+                        let wc = w[c] as f64;
+                        for i in 0..3 {
+                            e[i] -= wc * t[bi][3 * v + i] as f64;
+                        }
+                    }
+                    if let Some(ad) = &authored_decoded {
+                        for (i, &wa) in rows.authored[f].iter().enumerate() {
+                            if wa != 0.0 {
+                                if let (Some(exact), Some(dec)) =
+                                    (rows.authored_values(b.prim, b.attr, i), &ad[bi][i])
+                                {
+                                    e[0] -= wa * (dec[3 * v] as f64 - exact[v].x);
+                                    e[1] -= wa * (dec[3 * v + 1] as f64 - exact[v].y);
+                                    e[2] -= wa * (dec[3 * v + 2] as f64 - exact[v].z);
+                                }
+                            }
+                        }
+                    }
+                    let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                    if b.attr == Attr::Position {
+                        pos2[f] += d2;
+                        worst = worst.max(d2);
+                    } else {
+                        nrm2[f] += d2;
+                    }
+                }
+            }
+        }
+        let rms = |sum: f64, n: usize| (sum / n.max(1) as f64).sqrt();
+        figures.rms_deviation = pos2
+            .iter()
+            .map(|s| rms(*s, self.vertices))
+            .fold(0.0, f64::max)
+            / (self.tol / self.opts.tolerance);
+        figures.max_deviation = worst.sqrt() / (self.tol / self.opts.tolerance);
+        figures.normal_rms_deviation = nrm2.iter().map(|s| rms(*s, nrm_n)).fold(0.0, f64::max);
+    }
+
+    /// The authored targets as a reader decodes them after the EXPONENTIAL filter, per block
+    /// and target (`None` when they are stored exactly).
+    fn authored_decoded(&self, authored: Option<Storage>) -> Option<Vec<Vec<Option<Vec<f32>>>>> {
+        let Some(Storage::Float {
+            exp_bits: Some(bits),
+        }) = authored
+        else {
+            return None;
+        };
+        let rows = self.rows;
+        let storage = Storage::Float {
+            exp_bits: Some(bits),
+        };
+        // As the writer stores them: the dense targets of a block share one filtered view (one
+        // exponent per component), a sparse target's values are a view of their own.
+        Some(
+            rows.blocks
+                .iter()
+                .map(|b| {
+                    let flat = |i: usize| -> Option<Vec<f32>> {
+                        let a = rows.authored_values(b.prim, b.attr, i)?;
+                        Some(a.iter().flat_map(|d| d.as_vec3().to_array()).collect())
+                    };
+                    let mut out: Vec<Option<Vec<f32>>> = vec![None; rows.mesh.target_count];
+                    let mut dense = Vec::new();
+                    for (i, slot) in out.iter_mut().enumerate() {
+                        let Some(values) = flat(i) else { continue };
+                        if self.opts.sparse && sparse_pays(&values, storage, self.opts.meshopt) {
+                            let moving: Vec<usize> = (0..b.vertices)
+                                .filter(|&v| values[3 * v..3 * v + 3].iter().any(|&x| x != 0.0))
+                                .collect();
+                            let picked: Vec<f32> = moving
+                                .iter()
+                                .flat_map(|&v| values[3 * v..3 * v + 3].to_vec())
+                                .collect();
+                            let mut decoded = vec![0.0f32; values.len()];
+                            for (&v, d) in moving
+                                .iter()
+                                .zip(exp_roundtrip(&picked, 3, bits).chunks_exact(3))
+                            {
+                                decoded[3 * v..3 * v + 3].copy_from_slice(d);
+                            }
+                            *slot = Some(decoded);
+                        } else {
+                            dense.push((i, values));
+                        }
+                    }
+                    let all: Vec<f32> = dense.iter().flat_map(|(_, v)| v.iter().copied()).collect();
+                    let decoded = exp_roundtrip(&all, 3, bits);
+                    for (chunk, (i, _)) in decoded.chunks(3 * b.vertices).zip(&dense) {
+                        out[*i] = Some(chunk.to_vec());
+                    }
+                    out
+                })
+                .collect(),
+        )
+    }
+}
+
+/// Whether a sparse accessor stores `values` (x, y, z per vertex) in fewer bytes than a dense
+/// one, counting the vertices whose stored value is not zero.
+pub fn sparse_pays(values: &[f32], storage: Storage, meshopt: bool) -> bool {
+    let elem = match storage {
+        Storage::Float { .. } => 12,
+        Storage::Short => 8,
+        Storage::Byte => 4,
+    };
+    let nonzero = values
+        .chunks_exact(3)
+        .filter(|v| v.iter().any(|x| storage.stored(*x) != 0.0))
+        .count();
+    let n = values.len() / 3;
+    let index = if n <= 65_536 { 2 } else { 4 };
+    if meshopt {
+        // meshopt's attribute codec stores a run of zero deltas in about 2 bits per byte
+        // column: a dense accessor costs its moving vertices plus about a quarter byte for
+        // each still one, while the sparse indices go uncompressed.
+        nonzero * index + 64 < (n - nonzero) / 4
+    } else {
+        nonzero * (index + elem) + 64 < n * elem
+    }
+}
+
+/// The values of `s` as a reader decodes them.
+fn decode(s: &Stored) -> Vec<f32> {
+    match s.storage {
+        Storage::Float {
+            exp_bits: Some(bits),
+        } => exp_roundtrip(&s.values, 3, bits),
+        storage => s.values.iter().map(|&x| storage.stored(x)).collect(),
+    }
+}

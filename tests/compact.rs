@@ -1,0 +1,206 @@
+//! Compact output: `--compact` (and its parts) within its tolerance of the dense frames, read
+//! back by inbetween's decoders, the gltf crate and glTF-Transform; smaller than the input and
+//! than gltfpack -cc of the dense output at no larger an error.
+
+mod common;
+
+use common::*;
+use inbetween::gltf::Document;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// (worst per-frame RMS, worst vertex) deviation of `out`'s frames from `dense`'s, relative to
+/// the bounding-box diagonal, over every weights channel of mesh 0, frames matched by time and
+/// vertices by their first frame's position (world space: gltfpack moves positions into the node).
+fn deviation(out: &Path, dense: &Path) -> (f64, f64) {
+    let channels = mesh0_samplers(&Document::open(dense).unwrap()).len();
+    let prims = Document::open(dense).unwrap().json["meshes"][0]["primitives"]
+        .as_array()
+        .unwrap()
+        .len();
+    let (mut rms, mut max, mut diag) = (0.0f64, 0.0f64, 0.0f64);
+    for prim in 0..prims {
+        for c in 0..channels {
+            let (ta, fa) = world_frames(dense, prim, c);
+            let (tb, fb) = world_frames(out, prim, c);
+            // The diagonal of the base (as the tolerance is given), in world space.
+            let world = mesh_world(&Document::open(dense).unwrap());
+            let base: Vec<glam::DVec3> = read_targets(dense, 0, prim)
+                .0
+                .iter()
+                .map(|p| world.transform_point3(glam::DVec3::from(p.map(f64::from))))
+                .collect();
+            let (lo, hi) = base
+                .iter()
+                .fold((glam::DVec3::MAX, glam::DVec3::MIN), |(l, h), p| {
+                    (l.min(*p), h.max(*p))
+                });
+            diag = diag.max((hi - lo).length());
+            let m = matching(&fa[0], &fb[0]);
+            for (t, a) in ta.iter().zip(&fa) {
+                let Some(j) = tb.iter().position(|x| (x - t).abs() < 1e-4) else {
+                    panic!("{}: no frame at {t}", out.display());
+                };
+                let b = &fb[j];
+                let d: Vec<f64> = a.iter().zip(&m).map(|(p, &i)| p.distance(b[i])).collect();
+                rms = rms.max((d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt());
+                max = max.max(d.iter().copied().fold(0.0, f64::max));
+            }
+        }
+    }
+    (rms / diag, max / diag)
+}
+
+fn gltfpack(input: &Path, output: &Path) {
+    let bin = root().join("tools/node/node_modules/.bin/gltfpack");
+    let r = Command::new(bin)
+        .args(["-i", s(input), "-o", s(output), "-cc"])
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+}
+
+fn size(p: &Path) -> u64 {
+    std::fs::metadata(p).unwrap().len()
+}
+
+/// The `compact` figures of a `--report` (the first mesh's RMS and max deviation).
+fn reported(report: &Path) -> (f64, f64) {
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap();
+    let m = &r["compact"]["meshes"][0];
+    (
+        m["rms_deviation"].as_f64().unwrap(),
+        m["max_deviation"].as_f64().unwrap(),
+    )
+}
+
+/// The output read back by the `gltf` crate (structure: its meshes' morph targets and the
+/// animations' channels; the crate does not decode meshopt) and by `gltf-transform inspect`.
+fn read_back_by_others(out: &Path) {
+    let bytes = std::fs::read(out).unwrap();
+    let g = gltf::Gltf::from_slice_without_validation(&bytes).unwrap();
+    let ours = Document::open(out).unwrap();
+    for (m, mesh) in g.meshes().enumerate() {
+        for (p, prim) in mesh.primitives().enumerate() {
+            let targets = ours.json["meshes"][m]["primitives"][p]["targets"]
+                .as_array()
+                .map_or(0, Vec::len);
+            assert_eq!(prim.morph_targets().count(), targets, "{}", out.display());
+            for t in prim.morph_targets() {
+                let a = t.positions().expect("every target moves positions");
+                assert_eq!(
+                    a.count(),
+                    prim.get(&gltf::Semantic::Positions).unwrap().count()
+                );
+            }
+        }
+    }
+    assert!(g.animations().all(|a| a.channels().count() > 0));
+    let bin = root().join("tools/node/node_modules/.bin/gltf-transform");
+    if !bin.exists() && missing_tool("gltf-transform (tools/node)") {
+        return;
+    }
+    let r = Command::new(bin)
+        .args(["inspect", s(out)])
+        .output()
+        .unwrap();
+    assert!(
+        r.status.success(),
+        "gltf-transform inspect {}: {}",
+        out.display(),
+        String::from_utf8_lossy(&r.stderr)
+    );
+}
+
+/// Flamingo, Parrot, MorphStressTest and a face rig baked at 10 samples a second (52 blend
+/// shapes): dense, `--compact`, and the dense output through `gltfpack -cc`. Every compact
+/// output validator-clean, read back by three readers, within the tolerance of the dense frames
+/// as read back (and at most what its `--report` says: our encoder and decoder agree).
+#[test]
+fn compact_table() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let face = dir.path().join("face.glb");
+    inbetween::synth::face_rig(52, 10.0, 2.0)
+        .write(&face)
+        .unwrap();
+    let inputs: Vec<(PathBuf, bool)> = vec![
+        (fx.join("morph-keyframes/Flamingo.glb"), true),
+        (fx.join("morph-keyframes/Parrot.glb"), true),
+        (
+            fx.join("morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf"),
+            false,
+        ),
+        (face, false),
+    ];
+    let tol = 1e-4;
+    let have_gltfpack = root()
+        .join("tools/node/node_modules/.bin/gltfpack")
+        .exists()
+        || !missing_tool("gltfpack (tools/node)");
+    eprintln!("file | output | bytes | RMS / diag | max / diag");
+    for (input, keyframes) in &inputs {
+        let name = input.file_stem().unwrap().to_string_lossy().to_string();
+        let input_bytes = match input.extension().and_then(|e| e.to_str()) {
+            // A .gltf counts with its buffers (its textures are the same bytes in every output).
+            Some("gltf") => walk(input.parent().unwrap()).iter().map(|p| size(p)).sum(),
+            _ => size(input),
+        };
+        let dense = dir.path().join(format!("{name}.dense.glb"));
+        tween_quietly(input, &dense, &[]);
+        let mut rows = vec![("input".to_string(), input_bytes, 0.0, 0.0)];
+        rows.push(("dense".into(), size(&dense), 0.0, 0.0));
+        let mut layouts = vec![("--compact", vec!["--compact"])];
+        if *keyframes {
+            layouts.push((
+                "--compact --layout frames",
+                vec!["--compact", "--layout", "frames"],
+            ));
+        }
+        for (label, mut args) in layouts {
+            let out = dir.path().join(format!("{name}.{}.glb", rows.len()));
+            let report = out.with_extension("json");
+            args.extend(["--report", s(&report)]);
+            tween_quietly(input, &out, &args);
+            assert_valid(&out);
+            read_back_by_others(&out);
+            let (r, m) = deviation(&out, &dense);
+            assert!(
+                r <= tol * 1.001 && m <= 3.0 * tol * 1.001,
+                "{name} {label}: {r:.2e} RMS, {m:.2e} max"
+            );
+            let (rr, rm) = reported(&report);
+            // The report never understates what a reader sees, and is near it (it is within 2%
+            // on the keyframe files; 10-13% above it on the face rig).
+            let near = |reported: f64, seen: f64| {
+                seen <= 1.02 * reported + 1e-7 && seen >= 0.85 * reported
+            };
+            assert!(
+                near(rr, r) && near(rm, m),
+                "{name} {label}: reported {rr:.3e}/{rm:.3e}, read back {r:.3e}/{m:.3e}"
+            );
+            if *keyframes {
+                // Every tween frame held in fewer bytes than the keys came in.
+                assert!(
+                    size(&out) < input_bytes,
+                    "{name} {label}: {} >= {input_bytes}",
+                    size(&out)
+                );
+            }
+            rows.push((label.into(), size(&out), r, m));
+        }
+        if have_gltfpack {
+            let packed = dir.path().join(format!("{name}.packed.glb"));
+            gltfpack(&dense, &packed);
+            let (r, m) = deviation(&packed, &dense);
+            rows.push(("dense, then gltfpack -cc".into(), size(&packed), r, m));
+        }
+        for (label, bytes, r, m) in rows {
+            eprintln!("{name} | {label} | {bytes} | {r:.2e} | {m:.2e}");
+        }
+    }
+}
