@@ -5,6 +5,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use inbetween::blend::{BlendJob, CycleMethod};
 use inbetween::gltf::Access;
+use inbetween::preview;
 use inbetween::tween::{
     Basis, CompactOptions, KeySource, Layout, Method, Timing, TweenJob, DEFAULT_TOLERANCE,
 };
@@ -48,6 +49,14 @@ inbetween blend robot.glb -o jog.glb --clips Walking Running --weight 0.3 --name
         after_help = "Examples:\n  inbetween inspect Flamingo.glb\n  inbetween inspect face.glb --json"
     )]
     Inspect(InspectArgs),
+    /// Draw a contact sheet (PNG) of a mesh's frames: one band per method (labelled), frames
+    /// across in time order with keys marked, every cell from the same orthographic camera
+    /// fitted to the whole animation; optionally the frames as an animated GIF or APNG.
+    #[command(
+        after_help = "Examples:\n  inbetween preview samples/tube_bend.glb -o sheet.png --methods linear,seed,spline\n  \
+inbetween preview Flamingo.glb -o fl.png --frames 8 --animate fl.gif\n  inbetween preview tween_out.glb -o out.png"
+    )]
+    Preview(PreviewArgs),
     /// Hold-out accuracy: keep every K-th key, predict the dropped ones with each method, and
     /// print the RMS vertex error over the bounding-box diagonal (mean and max) per method.
     Eval(EvalArgs),
@@ -328,6 +337,125 @@ impl TweenArgs {
 }
 
 #[derive(Args)]
+pub struct PreviewArgs {
+    /// Input .gltf or .glb: morph keys (tweened by each method), a tween output (its own
+    /// frames: band `file`), or a file without morph keys (its meshes as stored).
+    input: PathBuf,
+    /// The contact sheet (.png).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Bands, comma-separated: linear, seed, spline, file (the file's keys as a renderer plays
+    /// them). Default: file for a tween output, else linear,spline.
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    methods: Vec<String>,
+    /// Frames across, picked evenly over the frames the timing options give (first and last
+    /// always).
+    #[arg(long, default_value_t = preview::DEFAULT_FRAMES)]
+    frames: usize,
+    /// Size of the whole sheet in pixels, WxH (default: 160 x 160 per cell).
+    #[arg(long, value_name = "WxH")]
+    size: Option<String>,
+    /// Camera: front (along -Z), side (along -X), top (down -Y), or auto (the axis along which
+    /// the mesh moves least, so the motion lies in the picture).
+    #[arg(long, default_value = "auto")]
+    view: String,
+    /// Normals shaded per triangle (flat) or interpolated (smooth).
+    #[arg(long, default_value = "flat")]
+    shading: String,
+    /// Also write every frame (up to 240) as an animation: .gif, or .png/.apng (APNG).
+    #[arg(long, value_name = "FILE")]
+    animate: Option<PathBuf>,
+    /// As for tween: frames per second between keys [default: 30].
+    #[arg(long, value_name = "RATE", conflicts_with_all = ["tweens", "fps"])]
+    rate: Option<f64>,
+    /// As for tween: exactly N frames between consecutive keys.
+    #[arg(long, value_name = "N", conflicts_with = "fps")]
+    tweens: Option<usize>,
+    /// As for tween: frames at this fixed rate.
+    #[arg(long, value_name = "FPS")]
+    fps: Option<f64>,
+    /// Where the keys come from.
+    #[arg(long, value_enum, default_value_t = KeySource::default().into())]
+    keys: KeysArg,
+    /// The animation (name or index) whose weights channel supplies the keys.
+    #[arg(long, value_name = "NAME|INDEX")]
+    animation: Option<String>,
+    /// Also read external buffers and images of a .gltf input under this folder (repeatable).
+    #[arg(long, value_name = "FOLDER")]
+    allow_external: Vec<PathBuf>,
+    /// Worker threads (default: all cores). The picture is identical for any value.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// No progress bar, no summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+impl PreviewArgs {
+    pub fn job(self) -> Result<preview::PreviewJob, String> {
+        let shown = self
+            .methods
+            .iter()
+            .map(|m| match m.trim() {
+                "linear" => Ok(preview::Shown::Method(Method::Linear)),
+                "seed" => Ok(preview::Shown::Method(Method::Seed)),
+                "spline" => Ok(preview::Shown::Method(Method::Spline)),
+                "file" => Ok(preview::Shown::File),
+                other => Err(format!(
+                    "--methods takes linear, seed, spline and file (got {other:?})"
+                )),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let size = match &self.size {
+            None => None,
+            Some(s) => {
+                let bad =
+                    || format!("--size takes WIDTHxHEIGHT in pixels, e.g. 1600x400 (got {s:?})");
+                let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+                Some((
+                    w.trim().parse().map_err(|_| bad())?,
+                    h.trim().parse().map_err(|_| bad())?,
+                ))
+            }
+        };
+        let view = match self.view.as_str() {
+            "auto" => None,
+            "front" => Some(preview::View::Front),
+            "side" => Some(preview::View::Side),
+            "top" => Some(preview::View::Top),
+            v => return Err(format!("--view takes auto, front, side or top (got {v:?})")),
+        };
+        let shading = match self.shading.as_str() {
+            "flat" => preview::Shading::Flat,
+            "smooth" => preview::Shading::Smooth,
+            v => return Err(format!("--shading takes flat or smooth (got {v:?})")),
+        };
+        Ok(preview::PreviewJob {
+            input: self.input,
+            output: self.output,
+            shown,
+            frames: self.frames,
+            size,
+            view,
+            shading,
+            animate: self.animate,
+            keys: self.keys.into(),
+            animation: self.animation,
+            timing: match (self.fps, self.tweens, self.rate) {
+                (Some(f), _, _) => Timing::Fps(f),
+                (_, Some(n), _) => Timing::Tweens(n),
+                (_, _, Some(r)) => Timing::Rate(r),
+                _ => Timing::default(),
+            },
+            access: Access {
+                roots: self.allow_external,
+            },
+            quiet: self.quiet,
+        })
+    }
+}
+
+#[derive(Args)]
 pub struct BlendArgs {
     /// Input .gltf or .glb with a skinned character and its animations.
     input: PathBuf,
@@ -457,6 +585,12 @@ pub struct BenchArgs {
     /// With --end-to-end: output format (glb, gltf, usda, usdc, usdz).
     #[arg(long, default_value = "glb")]
     pub e2e_format: String,
+    /// Instead: time `inbetween preview` (12 frames) on a bent tube of this many triangles.
+    #[arg(long, value_name = "TRIANGLES")]
+    pub preview: Option<usize>,
+    /// With --preview: the bands (comma-separated methods).
+    #[arg(long, default_value = "linear")]
+    pub preview_methods: String,
     /// With --end-to-end: more `tween` options for the timed run (e.g. --e2e-arg=--compact).
     #[arg(long = "e2e-arg", value_name = "ARG", allow_hyphen_values = true)]
     pub e2e_args: Vec<String>,

@@ -14,6 +14,7 @@ pub mod gltf;
 pub mod inspect;
 mod memory;
 mod output;
+pub mod preview;
 mod progress;
 pub mod tween;
 pub mod usd;

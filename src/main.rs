@@ -4,7 +4,7 @@ mod cli;
 
 use clap::Parser;
 use cli::{BenchArgs, Cli, Command, EvalArgs};
-use inbetween::{bench, blend, eval, inspect, tween};
+use inbetween::{bench, blend, eval, inspect, preview, tween};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -28,6 +28,14 @@ fn main() -> ExitCode {
                 true => println!("{}", serde_json::to_string_pretty(&i).unwrap_or_default()),
                 false => print!("{}", inspect::text(&i)),
             })
+        }
+        Command::Preview(args) => {
+            set_threads(args.threads);
+            let quiet = args.quiet;
+            match args.job() {
+                Ok(job) => finish(preview::run_preview(&job), |s| summary(quiet, s.line(&job))),
+                Err(e) => finish::<()>(Err(anyhow::anyhow!(e)), |_| {}),
+            }
         }
         Command::Eval(args) => run_eval(&args),
         Command::Bench(args) => run_bench(args),
@@ -78,6 +86,12 @@ fn run_eval(args: &EvalArgs) -> ExitCode {
 
 fn run_bench(args: BenchArgs) -> ExitCode {
     set_threads(args.threads);
+    if let Some(triangles) = args.preview {
+        let r = bench::preview(triangles, &args.preview_methods);
+        return finish(r, |r| {
+            println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
+        });
+    }
     if let Some(triangles) = args.end_to_end {
         let r = bench::end_to_end(triangles, args.e2e_tweens, &args.e2e_format, &args.e2e_args);
         return finish(r, |r| {

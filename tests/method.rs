@@ -492,7 +492,8 @@ fn sweep_case(
 #[test]
 fn whole_turns_at_any_resolution() {
     // (rings, segments around, ry, rz, length); shapes that differ only in resolution in a row.
-    let shapes: &[&[(usize, usize, f64, f64, f64)]] = &[
+    type Tube = (usize, usize, f64, f64, f64);
+    let shapes: &[&[Tube]] = &[
         &[
             (60, 24, 0.5, 0.25, 6.0),
             (40, 16, 0.5, 0.25, 6.0),

@@ -407,6 +407,71 @@ pub fn end_to_end(
     Ok(r)
 }
 
+/// `inbetween preview` timed on a bent tube of `triangles` (two keys) drawn by `methods`
+/// (12 frames, the default sheet): the whole run and the drawing of its cells.
+#[derive(Debug, Serialize)]
+pub struct PreviewBench {
+    pub triangles: usize,
+    pub methods: String,
+    pub cells: usize,
+    pub wall_s: f64,
+    pub draw_s: f64,
+    pub sheet_pixels: (usize, usize),
+}
+
+pub fn preview(triangles: usize, methods: &str) -> Result<PreviewBench> {
+    let (segments, rings) = tube_for(triangles);
+    let s = synth::tube(rings, segments, 6.0, 1.0, 1.0);
+    let k1 = synth::bend(&s.positions, 3.0, 120f64.to_radians(), 0.8);
+    let dir = std::env::temp_dir().join(format!("inbetween-preview-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let input = dir.join("keys.glb");
+    let tri_count = s.triangles.len();
+    synth::KeyframeFile {
+        meshes: vec![synth::KeyedMesh::new("tube", s, vec![k1])],
+        key_times: None,
+        key_weights: None,
+    }
+    .write(&input)?;
+    let shown = methods
+        .split(',')
+        .map(|m| match m {
+            "linear" => Ok(crate::preview::Shown::Method(crate::tween::Method::Linear)),
+            "seed" => Ok(crate::preview::Shown::Method(crate::tween::Method::Seed)),
+            "spline" => Ok(crate::preview::Shown::Method(crate::tween::Method::Spline)),
+            m => Err(anyhow::anyhow!("unknown method {m:?}")),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let job = crate::preview::PreviewJob {
+        input,
+        output: dir.join("sheet.png"),
+        shown: shown.clone(),
+        frames: crate::preview::DEFAULT_FRAMES,
+        size: None,
+        view: None,
+        shading: crate::preview::Shading::Flat,
+        animate: None,
+        keys: crate::tween::KeySource::default(),
+        animation: None,
+        timing: crate::tween::Timing::Tweens(10),
+        access: Default::default(),
+        quiet: true,
+    };
+    let start = Instant::now();
+    let r = crate::preview::run_preview(&job);
+    let wall_s = start.elapsed().as_secs_f64();
+    let _ = std::fs::remove_dir_all(&dir);
+    let r = r?;
+    Ok(PreviewBench {
+        triangles: tri_count,
+        methods: methods.to_string(),
+        cells: r.frames * shown.len(),
+        wall_s,
+        draw_s: r.draw_seconds,
+        sheet_pixels: r.size,
+    })
+}
+
 /// Least-squares slope of log(per-frame seed time) against log(triangles): how per-frame
 /// time grows with mesh size (1 = linear). `None` with fewer than two sizes.
 pub fn fitted_exponent(rows: &[BenchRow]) -> Option<f64> {

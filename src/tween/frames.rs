@@ -398,6 +398,17 @@ pub fn track_frames_welded(
     track: &Track,
     opts: &TweenOptions,
 ) -> Result<(Welded, Vec<Vec<DVec3>>)> {
+    frames_at(mesh, track, opts, &plan(&track.times, opts))
+}
+
+/// The frames `frames` of `track` (a selection of its plan), on the welded mesh, computed one
+/// segment at a time (the preview's frames).
+pub fn frames_at(
+    mesh: &MorphMesh,
+    track: &Track,
+    opts: &TweenOptions,
+    frames: &[FrameAt],
+) -> Result<(Welded, Vec<Vec<DVec3>>)> {
     let welded = Welded::build(mesh);
     let pattern = pattern_for(opts.method, &welded)?;
     let keys: Vec<Vec<DVec3>> = key_poses(mesh, track)
@@ -405,7 +416,6 @@ pub fn track_frames_welded(
         .map(|k| welded.weld(k))
         .collect();
     let mut out = Vec::new();
-    let frames = plan(&track.times, opts);
     let key_track = KeyTrack {
         keys: &keys,
         times: &track.times,
@@ -413,7 +423,7 @@ pub fn track_frames_welded(
         triangles: &welded.triangles,
     };
     let mut current: Option<((usize, usize), Segment)> = None;
-    for f in &frames {
+    for f in frames {
         if current
             .as_ref()
             .is_none_or(|(ab, _)| *ab != (f.key_a, f.key_b))

@@ -363,6 +363,26 @@ fn attr(p: &Value, name: &str) -> Option<usize> {
     p["attributes"][name].as_u64().map(|v| v as usize)
 }
 
+/// A primitive's base positions and triangles.
+pub type Geometry = (Vec<DVec3>, Vec<[u32; 3]>);
+
+/// Every primitive of mesh `mi` as it is stored (base positions and triangles; targets read but
+/// not applied): what the preview draws of a mesh without morph keys.
+pub fn mesh_geometry(doc: &Document, mi: usize) -> Result<Vec<Geometry>> {
+    let mesh = &doc.json["meshes"][mi];
+    let name = mesh["name"]
+        .as_str()
+        .map_or_else(|| format!("mesh {mi}"), str::to_owned);
+    let prims = arr(mesh, "primitives");
+    let targets = prims.first().map_or(0, |p| arr(p, "targets").len());
+    prims
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p["mode"].as_u64().unwrap_or(4) == 4)
+        .map(|(pi, p)| read_primitive(doc, &name, pi, p, targets).map(|p| (p.base, p.triangles)))
+        .collect()
+}
+
 fn read_primitive(
     doc: &Document,
     mesh: &str,

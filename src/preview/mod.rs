@@ -1,0 +1,610 @@
+//! `inbetween preview`: a contact sheet (PNG) of a mesh's frames, one band per method, and the
+//! frames as an animation (GIF or APNG).
+//!
+//! The pipeline, one module per stage: frames (the `tween` stages, per method, at the frames
+//! picked) -> [`camera`] (view axis and fit) -> [`raster`] (shaded triangles, z-buffer) ->
+//! [`sheet`] (bands, labels with [`font`], key marks) -> [`encode`] (PNG, APNG, GIF); [`run_preview`]
+//! runs it from file to file.
+
+mod camera;
+mod encode;
+mod font;
+mod raster;
+mod sheet;
+
+pub use camera::View;
+pub use raster::{Picture, Shading, BACKGROUND};
+
+use crate::gltf::{arr, Access, Document};
+use crate::output::Outputs;
+use crate::progress::Progress;
+use crate::tween::{
+    find_morph_meshes, frames_at, key_poses, mesh_geometry, plan, FrameAt, KeyOptions, KeySource,
+    Method, MorphMesh, Timing, TweenOptions,
+};
+use anyhow::{bail, Result};
+use camera::Camera;
+use glam::{DMat4, DQuat, DVec3};
+use raster::Drawn;
+use rayon::prelude::*;
+use serde_json::Value;
+use sheet::Band;
+use std::path::{Path, PathBuf};
+
+/// What a band shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shown {
+    /// Frames computed by a tween method.
+    Method(Method),
+    /// The file's own keys as a renderer plays them (a tween output's frames).
+    File,
+    /// The meshes as stored (a file without morph keys).
+    Stored,
+}
+
+impl Shown {
+    fn label(self) -> &'static str {
+        match self {
+            Shown::Method(Method::Linear) => "linear",
+            Shown::Method(Method::Seed) => "seed",
+            Shown::Method(Method::Spline) => "spline",
+            Shown::File => "file",
+            Shown::Stored => "as stored",
+        }
+    }
+}
+
+/// Default cell size in pixels, and most frames across by default.
+pub const CELL: (usize, usize) = (160, 160);
+pub const DEFAULT_FRAMES: usize = 12;
+/// Most frames an animation holds (picked evenly beyond).
+pub const MAX_ANIMATION_FRAMES: usize = 240;
+
+/// What `inbetween preview` was asked for.
+pub struct PreviewJob {
+    pub input: PathBuf,
+    pub output: PathBuf,
+    /// Bands; empty: `file` for a tween output, else linear and spline.
+    pub shown: Vec<Shown>,
+    pub frames: usize,
+    /// Whole sheet in pixels; `None`: [`CELL`] per frame.
+    pub size: Option<(usize, usize)>,
+    /// `None`: the view that shows the most motion.
+    pub view: Option<View>,
+    pub shading: Shading,
+    pub animate: Option<PathBuf>,
+    pub keys: KeySource,
+    pub animation: Option<String>,
+    pub timing: Timing,
+    pub access: Access,
+    pub quiet: bool,
+}
+
+/// What was drawn, for the summary line.
+pub struct PreviewSummary {
+    pub bands: Vec<&'static str>,
+    pub frames: usize,
+    pub view: View,
+    pub size: (usize, usize),
+    pub animation_frames: usize,
+    pub triangles: usize,
+    pub note: Option<String>,
+    pub seconds: f64,
+    /// Of which drawing the sheet's cells.
+    pub draw_seconds: f64,
+}
+
+impl PreviewSummary {
+    pub fn line(&self, job: &PreviewJob) -> String {
+        let mut s = format!(
+            "{}: {} band{} ({}) x {} frames of {} triangles, {:?} view, {} x {} pixels",
+            job.output.display(),
+            self.bands.len(),
+            if self.bands.len() == 1 { "" } else { "s" },
+            self.bands.join(", "),
+            self.frames,
+            self.triangles,
+            self.view,
+            self.size.0,
+            self.size.1,
+        );
+        if let Some(a) = &job.animate {
+            s += &format!(
+                "; {} frames animated in {}",
+                self.animation_frames,
+                a.display()
+            );
+        }
+        s += &format!(
+            "; {:.2} s (drawing {:.2} s)",
+            self.seconds, self.draw_seconds
+        );
+        if let Some(n) = &self.note {
+            s += &format!("\nnote: {n}");
+        }
+        s
+    }
+}
+
+/// One column of a band: every mesh's world-space points, and whether the column is a key.
+struct Column {
+    meshes: Vec<Vec<DVec3>>,
+    key: bool,
+    time: f64,
+}
+
+/// The triangles of each mesh drawn (welded), and each band's columns.
+struct Scene {
+    triangles: Vec<Vec<[u32; 3]>>,
+    bands: Vec<(Shown, Vec<Column>)>,
+}
+
+/// World matrix of the first node that instances each mesh (identity when none does).
+fn mesh_worlds(json: &Value) -> Vec<DMat4> {
+    let nodes = arr(json, "nodes");
+    let local = |n: &Value| -> DMat4 {
+        if let Some(m) = n["matrix"].as_array().filter(|m| m.len() == 16) {
+            let v: Vec<f64> = m.iter().map(|x| x.as_f64().unwrap_or(0.0)).collect();
+            return DMat4::from_cols_slice(&v);
+        }
+        let f = |k: &str, d: &[f64]| -> Vec<f64> {
+            n[k].as_array().map_or(d.to_vec(), |a| {
+                a.iter().map(|x| x.as_f64().unwrap_or(0.0)).collect()
+            })
+        };
+        let (t, r, s) = (
+            f("translation", &[0.0; 3]),
+            f("rotation", &[0.0, 0.0, 0.0, 1.0]),
+            f("scale", &[1.0; 3]),
+        );
+        if t.len() != 3 || r.len() != 4 || s.len() != 3 {
+            return DMat4::IDENTITY;
+        }
+        let q = DQuat::from_xyzw(r[0], r[1], r[2], r[3]);
+        let q = if q.length() > 0.0 {
+            q.normalize()
+        } else {
+            DQuat::IDENTITY
+        };
+        DMat4::from_scale_rotation_translation(
+            DVec3::new(s[0], s[1], s[2]),
+            q,
+            DVec3::new(t[0], t[1], t[2]),
+        )
+    };
+    let mut parent = vec![None; nodes.len()];
+    for (i, n) in nodes.iter().enumerate() {
+        for c in arr(n, "children") {
+            if let Some(c) = c.as_u64().map(|c| c as usize).filter(|&c| c < nodes.len()) {
+                parent[c] = Some(i);
+            }
+        }
+    }
+    let world = |mut i: usize| -> DMat4 {
+        let mut m = DMat4::IDENTITY;
+        // A cycle in a broken file ends after as many steps as there are nodes.
+        for _ in 0..=nodes.len() {
+            m = local(&nodes[i]) * m;
+            match parent[i] {
+                Some(p) => i = p,
+                None => break,
+            }
+        }
+        m
+    };
+    let meshes = arr(json, "meshes").len();
+    (0..meshes)
+        .map(|mi| {
+            nodes
+                .iter()
+                .position(|n| n["mesh"].as_u64() == Some(mi as u64))
+                .map_or(DMat4::IDENTITY, world)
+        })
+        .collect()
+}
+
+/// `count` indices spread evenly over `0..len`, first and last included.
+fn spread(len: usize, count: usize) -> Vec<usize> {
+    if len <= count || count < 2 {
+        return (0..len.min(count.max(1))).collect();
+    }
+    (0..count)
+        .map(|i| (i * (len - 1) + (count - 1) / 2) / (count - 1))
+        .collect()
+}
+
+/// The columns of band `shown` for mesh `m` at the frames `picked` of its first track.
+fn columns(
+    m: &MorphMesh,
+    shown: Shown,
+    timing: Timing,
+    picked: &[usize],
+    world: &DMat4,
+) -> Result<(Vec<[u32; 3]>, Vec<Column>)> {
+    let track = &m.tracks[0];
+    let to_world = |v: Vec<DVec3>| {
+        v.into_iter()
+            .map(|p| world.transform_point3(p))
+            .collect::<Vec<_>>()
+    };
+    match shown {
+        Shown::File | Shown::Stored => {
+            let welded = crate::tween::Welded::build(m);
+            let keys = key_poses(m, track);
+            let cols = picked
+                .iter()
+                .map(|&k| Column {
+                    meshes: vec![to_world(welded.weld(&keys[k]))],
+                    key: true,
+                    time: track.times[k],
+                })
+                .collect();
+            Ok((welded.triangles, cols))
+        }
+        Shown::Method(method) => {
+            let opts = TweenOptions::new(method, timing);
+            let all = plan(&track.times, &opts);
+            let frames: Vec<FrameAt> = picked.iter().map(|&i| all[i]).collect();
+            let (welded, f) = frames_at(m, track, &opts, &frames)?;
+            let cols = f
+                .into_iter()
+                .zip(&frames)
+                .map(|(pts, fa)| Column {
+                    meshes: vec![to_world(pts)],
+                    key: fa.t == 0.0 || fa.t == 1.0,
+                    time: fa.time,
+                })
+                .collect();
+            Ok((welded.triangles, cols))
+        }
+    }
+}
+
+/// How many columns a band of `shown` has over the first track of `m`.
+fn available(m: &MorphMesh, shown: Shown, timing: Timing) -> usize {
+    let track = &m.tracks[0];
+    match shown {
+        Shown::File | Shown::Stored => track.times.len(),
+        Shown::Method(method) => plan(&track.times, &TweenOptions::new(method, timing)).len(),
+    }
+}
+
+/// Every band's columns: `count` columns picked evenly over each mesh's first track.
+fn scene(
+    doc: &Document,
+    meshes: &[MorphMesh],
+    shown: &[Shown],
+    timing: Timing,
+    count: usize,
+    quiet: bool,
+) -> Result<Scene> {
+    let worlds = mesh_worlds(&doc.json);
+    let progress = Progress::new((shown.len() * meshes.len()) as u64, "preview", quiet);
+    let mut triangles = Vec::new();
+    let mut bands = Vec::new();
+    for (b, &s) in shown.iter().enumerate() {
+        let mut cols: Vec<Column> = Vec::new();
+        for (mi, m) in meshes.iter().enumerate() {
+            let picked = spread(available(m, s, timing), count);
+            let (tris, c) = columns(m, s, timing, &picked, &worlds[m.mesh])?;
+            if b == 0 {
+                triangles.push(tris);
+            }
+            // One column per picked frame, holding every mesh's points.
+            for (i, c) in c.into_iter().enumerate() {
+                match cols.get_mut(i) {
+                    Some(col) if mi > 0 => col.meshes.extend(c.meshes),
+                    _ => cols.push(c),
+                }
+            }
+            progress.inc();
+        }
+        bands.push((s, cols));
+    }
+    progress.finish();
+    Ok(Scene { triangles, bands })
+}
+
+/// The scene of a file without morph keys: every mesh instance's stored geometry, one column.
+fn still(doc: &Document) -> Result<Scene> {
+    let worlds = mesh_worlds(&doc.json);
+    let mut triangles = Vec::new();
+    let mut points = Vec::new();
+    for (mi, world) in worlds.iter().enumerate() {
+        if !arr(&doc.json, "nodes")
+            .iter()
+            .any(|n| n["mesh"].as_u64() == Some(mi as u64))
+        {
+            continue;
+        }
+        for (base, tris) in mesh_geometry(doc, mi)? {
+            points.push(base.iter().map(|&p| world.transform_point3(p)).collect());
+            triangles.push(tris);
+        }
+    }
+    if triangles.is_empty() {
+        bail!(doc.err("has no triangle mesh to draw"));
+    }
+    let col = Column {
+        meshes: points,
+        key: true,
+        time: 0.0,
+    };
+    Ok(Scene {
+        triangles,
+        bands: vec![(Shown::Stored, vec![col])],
+    })
+}
+
+/// Draw every column of `scene` in cells of `cell` pixels.
+fn draw_bands(scene: &Scene, camera: &Camera, cell: (usize, usize), shading: Shading) -> Vec<Band> {
+    scene
+        .bands
+        .iter()
+        .map(|(shown, cols)| Band {
+            label: shown.label().to_string(),
+            cells: cols
+                .par_iter()
+                .map(|c| {
+                    let drawn: Vec<Drawn> = c
+                        .meshes
+                        .iter()
+                        .zip(&scene.triangles)
+                        .map(|(points, triangles)| Drawn {
+                            points: points.clone(),
+                            triangles,
+                        })
+                        .collect();
+                    (raster::draw(&drawn, camera, cell.0, cell.1, shading), c.key)
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// Whether the file is a tween output: a mesh has targets named as `tween` names its frames
+/// (`f0007_t0.2917`).
+fn is_tween_output(doc: &Document) -> bool {
+    let frame_name = |n: &Value| {
+        n.as_str()
+            .and_then(|n| n.strip_prefix('f'))
+            .and_then(|n| n.split_once("_t"))
+            .is_some_and(|(f, t)| {
+                !f.is_empty() && f.bytes().all(|b| b.is_ascii_digit()) && t.parse::<f64>().is_ok()
+            })
+    };
+    arr(&doc.json, "meshes")
+        .iter()
+        .any(|m| arr(&m["extras"], "targetNames").iter().any(frame_name))
+}
+
+fn image_kind(path: &Path, allowed: &[&str], what: &str) -> Result<String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if !allowed.contains(&ext.as_str()) {
+        bail!(
+            "{}: {what} must end in {} (got {:?})",
+            path.display(),
+            allowed
+                .iter()
+                .map(|e| format!(".{e}"))
+                .collect::<Vec<_>>()
+                .join(" or "),
+            path.extension()
+                .map(|e| e.to_string_lossy().to_string())
+                .unwrap_or_default()
+        );
+    }
+    Ok(ext)
+}
+
+/// Run the preview job. Nothing is written unless every step succeeds.
+pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
+    let started = std::time::Instant::now();
+    image_kind(&job.output, &["png"], "the sheet")?;
+    let anim_kind = job
+        .animate
+        .as_deref()
+        .map(|a| image_kind(a, &["gif", "png", "apng"], "--animate"))
+        .transpose()?;
+    if job.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    if let Some((w, h)) = job.size {
+        if w < 16 || h < 16 || w > 16_384 || h > 16_384 {
+            bail!("--size must be between 16x16 and 16384x16384 pixels (got {w}x{h})");
+        }
+    }
+    let doc = Document::open_with(&job.input, &job.access)?;
+    let has_targets = arr(&doc.json, "meshes").iter().any(|m| {
+        arr(m, "primitives")
+            .iter()
+            .any(|p| !arr(p, "targets").is_empty())
+    });
+    let mut note = None;
+    let (scene, meshes) = if has_targets {
+        let meshes = find_morph_meshes(
+            &doc,
+            &KeyOptions {
+                source: job.keys,
+                animation: job.animation.as_deref(),
+            },
+        )?;
+        let shown = match (job.shown.is_empty(), is_tween_output(&doc)) {
+            (false, _) => job.shown.clone(),
+            (true, true) => vec![Shown::File],
+            (true, false) => vec![Shown::Method(Method::Linear), Shown::Method(Method::Spline)],
+        };
+        (
+            scene(&doc, &meshes, &shown, job.timing, job.frames, job.quiet)?,
+            Some((meshes, shown)),
+        )
+    } else {
+        note = Some("no morph keys: the meshes as stored (for a skinned file its bind pose; blend plays skeletal clips)".into());
+        (still(&doc)?, None)
+    };
+    let columns = scene
+        .bands
+        .iter()
+        .map(|(_, c)| c.len())
+        .max()
+        .unwrap_or(1)
+        .max(1);
+    let bands = scene.bands.len().max(1);
+    let cell = match job.size {
+        Some((w, h)) => (
+            (w / columns).max(8),
+            (h.saturating_sub(bands * (sheet::LABEL + sheet::KEY_BAR)) / bands).max(8),
+        ),
+        None => CELL,
+    };
+    let all_points = || {
+        scene
+            .bands
+            .iter()
+            .flat_map(|(_, c)| c.iter())
+            .flat_map(|c| c.meshes.iter())
+            .flatten()
+    };
+    let view = job.view.unwrap_or_else(|| {
+        let first: Vec<Vec<DVec3>> = scene.bands[0].1.iter().map(|c| c.meshes.concat()).collect();
+        match first.len() {
+            1 => View::widest(&first[0]),
+            _ => View::most_motion(&first),
+        }
+    });
+    let camera = Camera::fit(view, all_points(), cell.0, cell.1);
+    let draw_start = std::time::Instant::now();
+    let drawn = draw_bands(&scene, &camera, cell, job.shading);
+    let draw_seconds = draw_start.elapsed().as_secs_f64();
+    let mut picture = sheet::compose(&drawn, cell, columns);
+    if let Some((w, h)) = job.size {
+        let mut exact = Picture::new(w, h, BACKGROUND);
+        exact.paste(&picture, 0, 0);
+        picture = exact;
+    }
+    let mut files = Outputs::new();
+    files.write(&job.output, &encode::png(&picture)?)?;
+    let mut animation_frames = 0;
+    if let (Some(path), Some(kind), Some((meshes, shown))) = (&job.animate, &anim_kind, &meshes) {
+        // Every frame of the plan (up to MAX_ANIMATION_FRAMES), the bands stacked in each.
+        let anim = scene_all(&doc, meshes, shown, job.timing, job.quiet)?;
+        let drawn = draw_bands(&anim, &camera, cell, job.shading);
+        let n = drawn.iter().map(|b| b.cells.len()).min().unwrap_or(0);
+        let times: Vec<f64> = anim.bands[0].1.iter().map(|c| c.time).collect();
+        let frames: Vec<(Picture, f64)> = (0..n)
+            .map(|i| {
+                let one: Vec<Band> = drawn
+                    .iter()
+                    .map(|b| Band {
+                        label: b.label.clone(),
+                        cells: vec![b.cells[i].clone()],
+                    })
+                    .collect();
+                let delay = if i + 1 < n {
+                    times[i + 1] - times[i]
+                } else {
+                    1.0 / 30.0
+                };
+                (sheet::compose(&one, cell, 1), delay.max(0.02))
+            })
+            .collect();
+        animation_frames = frames.len();
+        let bytes = match kind.as_str() {
+            "gif" => encode::gif(&frames)?,
+            _ => encode::apng(&frames)?,
+        };
+        files.write(path, &bytes)?;
+    } else if job.animate.is_some() {
+        note = Some(note.unwrap_or_default() + "; nothing to animate");
+    }
+    files.commit()?;
+    Ok(PreviewSummary {
+        bands: scene.bands.iter().map(|(s, _)| s.label()).collect(),
+        frames: columns,
+        view,
+        size: (picture.width, picture.height),
+        animation_frames,
+        triangles: scene.triangles.iter().map(Vec::len).sum(),
+        note,
+        seconds: started.elapsed().as_secs_f64(),
+        draw_seconds,
+    })
+}
+
+/// The animation's scene: every frame of each band (evenly picked down to
+/// [`MAX_ANIMATION_FRAMES`]).
+fn scene_all(
+    doc: &Document,
+    meshes: &[MorphMesh],
+    shown: &[Shown],
+    timing: Timing,
+    quiet: bool,
+) -> Result<Scene> {
+    let most = meshes
+        .iter()
+        .flat_map(|m| shown.iter().map(move |&s| available(m, s, timing)))
+        .max()
+        .unwrap_or(1);
+    scene(
+        doc,
+        meshes,
+        shown,
+        timing,
+        most.min(MAX_ANIMATION_FRAMES),
+        quiet,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_keeps_the_ends_and_order() {
+        assert_eq!(spread(5, 12), vec![0, 1, 2, 3, 4]);
+        let s = spread(100, 12);
+        assert_eq!((s[0], s[11], s.len()), (0, 99, 12));
+        assert!(s.windows(2).all(|w| w[0] < w[1]));
+    }
+
+    #[test]
+    fn a_triangle_is_drawn_and_the_rest_is_background() {
+        let tris = [[0u32, 1, 2]];
+        let points = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ];
+        let cam = Camera::fit(View::Front, points.iter(), 32, 32);
+        let p = raster::draw(
+            &[Drawn {
+                points: points.clone(),
+                triangles: &tris,
+            }],
+            &cam,
+            32,
+            32,
+            Shading::Flat,
+        );
+        let ink = p.count_not(BACKGROUND);
+        // About half of the fitted square (less the margins).
+        assert!((300..=600).contains(&ink), "{ink}");
+        // Seen edge-on from the side it vanishes.
+        let side = Camera::fit(View::Side, points.iter(), 32, 32);
+        let q = raster::draw(
+            &[Drawn {
+                points,
+                triangles: &tris,
+            }],
+            &side,
+            32,
+            32,
+            Shading::Flat,
+        );
+        assert!(q.count_not(BACKGROUND) < 40);
+    }
+}

@@ -1,0 +1,214 @@
+//! `inbetween preview`: the contact sheet's size and bands, methods that differ, the same bytes
+//! twice, animations that decode, tween outputs and skinned files, errors as everywhere.
+
+mod common;
+
+use common::*;
+use inbetween::preview::BACKGROUND;
+use std::path::Path;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// (width, height, RGB bytes) of a PNG.
+fn decode_png(path: &Path) -> (usize, usize, Vec<u8>) {
+    let d = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut r = d.read_info().unwrap();
+    let mut buf = vec![0; r.output_buffer_size().unwrap()];
+    let info = r.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    buf.truncate(info.buffer_size());
+    (info.width as usize, info.height as usize, buf)
+}
+
+/// Non-background pixels in rows `y0..y1` of a picture.
+fn ink(rgb: &[u8], width: usize, y0: usize, y1: usize) -> usize {
+    rgb[3 * width * y0..3 * width * y1]
+        .chunks_exact(3)
+        .filter(|c| *c != BACKGROUND)
+        .count()
+}
+
+#[test]
+fn a_sheet_has_its_size_and_a_band_per_method_each_holding_the_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let sheet = dir.path().join("sheet.png");
+    let input = sample("tube_bend.glb");
+    let args = [
+        "preview",
+        s(&input),
+        "-o",
+        s(&sheet),
+        "--methods",
+        "linear,seed,spline",
+        "--size",
+        "1200x480",
+        "--frames",
+        "6",
+        "-q",
+    ];
+    run_ok(&args);
+    let (w, h, rgb) = decode_png(&sheet);
+    assert_eq!((w, h), (1200, 480));
+    // Three bands of equal height; each holds the tube in every one of its six cells.
+    let band = 480 / 3;
+    let mut bands = Vec::new();
+    for b in 0..3 {
+        let rows = &rgb[3 * w * b * band..3 * w * (b + 1) * band];
+        let cells: Vec<usize> = (0..6)
+            .map(|c| {
+                rows.chunks_exact(3 * w)
+                    .map(|row| ink(&row[3 * 200 * c..3 * 200 * (c + 1)], 200, 0, 1))
+                    .sum()
+            })
+            .collect();
+        assert!(
+            cells.iter().all(|&n| n > 300),
+            "band {b}: ink per cell {cells:?}"
+        );
+        bands.push(rows.to_vec());
+    }
+    // Linear shrinks the bent tube where seed and spline keep it: the bands differ, the most
+    // between linear and the others; the keys (first and last cells) are the same in all.
+    let differ = |a: &[u8], b: &[u8]| {
+        a.chunks_exact(3)
+            .zip(b.chunks_exact(3))
+            .filter(|(x, y)| x != y)
+            .count()
+    };
+    let (ls, ss) = (differ(&bands[0], &bands[2]), differ(&bands[1], &bands[2]));
+    eprintln!("pixels that differ: linear/spline {ls}, seed/spline {ss}");
+    assert!(ls > 2000 && ss > 50 && ls > ss, "{ls} {ss}");
+    // The same run twice: the same bytes.
+    let again = dir.path().join("again.png");
+    let mut args2 = args;
+    args2[3] = s(&again);
+    run_ok(&args2);
+    assert_eq!(
+        std::fs::read(&sheet).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
+    // Any number of threads: the same bytes.
+    let one = dir.path().join("one.png");
+    let mut args3 = args.to_vec();
+    args3[3] = s(&one);
+    args3.extend(["--threads", "1"]);
+    run_ok(&args3);
+    assert_eq!(std::fs::read(&sheet).unwrap(), std::fs::read(&one).unwrap());
+}
+
+#[test]
+fn animations_decode_with_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("bar_twist.glb");
+    let gif_path = dir.path().join("a.gif");
+    let apng_path = dir.path().join("a.apng");
+    for anim in [&gif_path, &apng_path] {
+        run_ok(&[
+            "preview",
+            s(&input),
+            "-o",
+            s(&dir.path().join("s.png")),
+            "--tweens",
+            "4",
+            "--animate",
+            s(anim),
+            "-q",
+        ]);
+    }
+    let keys = common::morph_meshes(&input)[0].tracks[0].times.len();
+    let want = (keys - 1) * 5 + 1;
+    // GIF: every frame, each with the mesh in it.
+    let mut opts = gif::DecodeOptions::new();
+    opts.set_color_output(gif::ColorOutput::RGBA);
+    let mut d = opts
+        .read_info(std::fs::File::open(&gif_path).unwrap())
+        .unwrap();
+    let mut frames = 0;
+    while let Some(f) = d.read_next_frame().unwrap() {
+        let inked = f
+            .buffer
+            .chunks_exact(4)
+            .filter(|c| c[..3] != BACKGROUND)
+            .count();
+        assert!(inked > 200, "frame {frames}: {inked}");
+        frames += 1;
+    }
+    assert_eq!(frames, want);
+    // APNG: an animation control chunk with the same count.
+    let r = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(&apng_path).unwrap(),
+    ))
+    .read_info()
+    .unwrap();
+    assert_eq!(
+        r.info().animation_control.map(|a| a.num_frames as usize),
+        Some(want)
+    );
+}
+
+#[test]
+fn a_tween_output_shows_its_own_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.glb");
+    tween_quietly(&sample("tube_bend.glb"), &out, &["--tweens", "3"]);
+    let sheet = dir.path().join("t.png");
+    let r = run_ok(&["preview", s(&out), "-o", s(&sheet)]);
+    let line = String::from_utf8_lossy(&r.stderr);
+    // One band, `file`: the output's five frames (its keys), all drawn.
+    assert!(line.contains("1 band (file) x 5 frames"), "{line}");
+    let (w, h, rgb) = decode_png(&sheet);
+    assert_eq!((w, h), (5 * 160, h));
+    assert!(ink(&rgb, w, 0, h) > 2000);
+}
+
+#[test]
+fn a_skinned_file_shows_its_bind_pose_with_a_note() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let sheet = dir.path().join("fox.png");
+    let r = run_ok(&["preview", s(&fx.join("skinned/Fox.glb")), "-o", s(&sheet)]);
+    let line = String::from_utf8_lossy(&r.stderr);
+    assert!(line.contains("note: no morph keys"), "{line}");
+    let (w, h, rgb) = decode_png(&sheet);
+    assert!(ink(&rgb, w, 0, h) > 1500, "{}", ink(&rgb, w, 0, h));
+}
+
+#[test]
+fn bad_requests_fail_in_one_line_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("tube_bend.glb");
+    let missing = dir.path().join("nope.glb");
+    for (args, names) in [
+        (vec!["preview", s(&input), "-o", "x.jpg"], "x.jpg"),
+        (vec!["preview", s(&missing), "-o", "x.png"], "nope.glb"),
+        (
+            vec!["preview", s(&input), "-o", "x.png", "--methods", "cubic"],
+            "cubic",
+        ),
+        (
+            vec!["preview", s(&input), "-o", "x.png", "--size", "10"],
+            "--size",
+        ),
+        (
+            vec!["preview", s(&input), "-o", "x.png", "--animate", "x.mp4"],
+            "x.mp4",
+        ),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_inbetween"))
+            .args(&args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(names), "{err}");
+        assert!(
+            walk(dir.path()).is_empty(),
+            "{args:?} left {:?}",
+            walk(dir.path())
+        );
+    }
+}
