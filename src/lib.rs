@@ -19,4 +19,4 @@ mod progress;
 pub mod tween;
 pub mod usd;
 
-pub use dev::{bench, eval, synth};
+pub use dev::{bench, eval, fuzz, synth};
