@@ -300,3 +300,99 @@ fn usdc_size_is_close_to_usd_core_resave() {
     eprintln!("100-frame cache of 16,020 triangles: ours {a} bytes, usd-core re-save {b} bytes, ratio {:.3}", a / b);
     assert!(a <= 1.5 * b, "ratio {}", a / b);
 }
+
+/// COLOR_0 becomes a per-vertex `primvars:displayColor` (issue 19): Flamingo and Parrot (float
+/// RGB colours), and a copy of Flamingo whose colours are normalized unsigned-byte RGBA with
+/// alpha, in every USD format; the colours equal the glTF's within 1/255, the alpha becomes
+/// `primvars:displayOpacity`. usd-core reads them (the validators run in
+/// `fixtures_as_usd_point_caches`).
+#[test]
+fn vertex_colours_become_display_colours() {
+    let Some(fx) = fixtures() else { return };
+    let Some(python) = python() else {
+        missing_tool("python with usd-core (.venv)");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    // Flamingo's colours as UNSIGNED_BYTE normalized RGBA, alpha falling over the vertices.
+    let rgba = dir.path().join("rgba.glb");
+    let doc = inbetween::gltf::Document::open(&fx.join("morph-keyframes/Flamingo.glb")).unwrap();
+    let acc = doc.json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"]
+        .as_u64()
+        .unwrap() as usize;
+    let (colors, comps) = doc.read_f64(acc).unwrap();
+    let n = colors.len() / comps;
+    let mut json = doc.json.clone();
+    let bin = doc.buffers[0].clone();
+    let mut bytes = bin.clone();
+    while bytes.len() % 4 != 0 {
+        bytes.push(0);
+    }
+    let offset = bytes.len();
+    for v in 0..n {
+        for c in 0..3 {
+            bytes.push((colors[v * comps + c] * 255.0).round() as u8);
+        }
+        bytes.push((255 * v / n.max(1)) as u8);
+    }
+    json["bufferViews"].as_array_mut().unwrap().push(serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": 4 * n, "byteStride": 4}));
+    let view = json["bufferViews"].as_array().unwrap().len() - 1;
+    json["accessors"].as_array_mut().unwrap().push(serde_json::json!({"bufferView": view, "componentType": 5121, "normalized": true, "count": n, "type": "VEC4"}));
+    let new = json["accessors"].as_array().unwrap().len() - 1;
+    json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = serde_json::json!(new);
+    json["buffers"][0]["byteLength"] = serde_json::json!(bytes.len());
+    write_glb(&rgba, &json, &bytes);
+    for input in [
+        fx.join("morph-keyframes/Flamingo.glb"),
+        fx.join("morph-keyframes/Parrot.glb"),
+        rgba,
+    ] {
+        let doc = inbetween::gltf::Document::open(&input).unwrap();
+        let acc = doc.json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"]
+            .as_u64()
+            .unwrap() as usize;
+        let (want, comps) = doc.read_f64(acc).unwrap();
+        for fmt in FORMATS {
+            let usd = dir.path().join(format!("c.{fmt}"));
+            tween_quietly(&input, &usd, &["--tweens", "1"]);
+            let out = run_tool(
+                &python,
+                "usd_colors.py",
+                &[usd.as_os_str()],
+                &input.display().to_string(),
+            );
+            let meshes: serde_json::Value = serde_json::from_slice(&out).unwrap();
+            let m = &meshes[0];
+            assert_eq!(m["interpolation"], "vertex", "{} .{fmt}", input.display());
+            let got = m["color"].as_array().unwrap();
+            assert_eq!(got.len() * comps, want.len());
+            let worst = got
+                .iter()
+                .enumerate()
+                .flat_map(|(v, c)| (0..3).map(move |k| (v, k, c[k].as_f64().unwrap())))
+                .map(|(v, k, x)| (x - want[v * comps + k]).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst <= 1.0 / 255.0,
+                "{} .{fmt}: colours off by {worst}",
+                input.display()
+            );
+            if comps == 4 {
+                assert_eq!(m["opacity_interpolation"], "vertex");
+                let alpha = m["opacity"].as_array().unwrap();
+                let worst = alpha
+                    .iter()
+                    .enumerate()
+                    .map(|(v, a)| (a.as_f64().unwrap() - want[v * 4 + 3]).abs())
+                    .fold(0.0, f64::max);
+                assert!(
+                    worst <= 1.0 / 255.0,
+                    "{} .{fmt}: alpha off by {worst}",
+                    input.display()
+                );
+            } else {
+                assert!(m["opacity"].is_null());
+            }
+        }
+    }
+}

@@ -10,7 +10,9 @@
 //! * each glTF node is an Xform (with `xformOp:transform` when it is not the identity), each
 //!   triangle primitive a Mesh (`subdivisionScheme = "none"`, `faceVertexCounts` of 3,
 //!   `faceVertexIndices`), `primvars:st` from TEXCOORD_0 with V flipped (`1 - v`),
-//!   `primvars:displayColor` from the material's base colour, `doubleSided` from the material;
+//!   `primvars:displayColor` per vertex from COLOR_0 (linear, as glTF stores it; its alpha as
+//!   `primvars:displayOpacity`), else one constant from the material's base colour,
+//!   `doubleSided` from the material;
 //! * meshes that are not animated are written once, without time samples;
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
@@ -28,10 +30,20 @@ pub struct MeshPrim {
     pub normals: Option<Vec<[f32; 3]>>,
     pub st: Option<Vec<[f32; 2]>>,
     pub indices: Vec<u32>,
-    pub color: Option<[f32; 3]>,
+    /// `primvars:displayColor`: COLOR_0 per vertex (linear, as glTF stores it), else the
+    /// material's base colour as one constant.
+    pub color: Option<DisplayColor>,
+    /// `primvars:displayOpacity` per vertex: COLOR_0's alpha, when it has one.
+    pub opacity: Option<Vec<f32>>,
     pub double_sided: bool,
     /// For an animated primitive: where its frames come from and their time codes.
     pub animation: Option<Animation>,
+}
+
+/// Where a mesh's display colour comes from.
+pub enum DisplayColor {
+    Constant([f32; 3]),
+    Vertex(Vec<[f32; 3]>),
 }
 
 /// The frames of an animated primitive: frame f of primitive `primitive` (its position in the
@@ -255,6 +267,30 @@ impl Ctx<'_> {
                 Some([0, 1, 2].map(|i| c.get(i).and_then(Value::as_f64).unwrap_or(1.0) as f32))
             });
             let color = color.or(material.map(|_| [1.0, 1.0, 1.0]));
+            // COLOR_0 (float or normalized, RGB or RGBA) wins over the material's constant.
+            let rgba = match p["attributes"]["COLOR_0"].as_u64() {
+                Some(a) => {
+                    let comps = if doc.json["accessors"][a as usize]["type"] == "VEC4" {
+                        4
+                    } else {
+                        3
+                    };
+                    read_attribute(doc, p, "COLOR_0", comps, n, &what)?.map(|v| (v, comps))
+                }
+                None => None,
+            };
+            let (color, opacity) = match rgba {
+                Some((v, comps)) => {
+                    let c = |x: f64| x.clamp(0.0, 1.0) as f32;
+                    let rgb = v
+                        .chunks_exact(comps)
+                        .map(|x| [c(x[0]), c(x[1]), c(x[2])])
+                        .collect();
+                    let alpha = (comps == 4).then(|| v.chunks_exact(4).map(|x| c(x[3])).collect());
+                    (Some(DisplayColor::Vertex(rgb)), alpha)
+                }
+                None => (color.map(DisplayColor::Constant), None),
+            };
             let double_sided = material.is_some_and(|m| m["doubleSided"].as_bool() == Some(true));
             // Processed meshes keep every primitive (a non-triangle one is an error there).
             let animation = processed.map(|k| Animation {
@@ -279,6 +315,7 @@ impl Ctx<'_> {
                 st,
                 indices,
                 color,
+                opacity,
                 double_sided,
                 animation,
             })));

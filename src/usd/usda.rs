@@ -3,7 +3,7 @@
 //! is held in memory.
 
 use super::stage::{
-    animated, extent, for_each_sample, Animation, FrameSource, MeshPrim, Prim, Stage,
+    animated, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
 };
 use crate::output::{naming, Outputs};
 use anyhow::Result;
@@ -163,15 +163,42 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str, spool: &Spool) -> Re
             writeln!(out, "{p}}}")?;
         }
     }
-    if let Some(c) = m.color {
-        writeln!(
-            out,
-            "{p}color3f[] primvars:displayColor = [({}, {}, {})] (",
-            F(c[0]),
-            F(c[1]),
-            F(c[2])
-        )?;
-        writeln!(out, "{p}    interpolation = \"constant\"")?;
+    match &m.color {
+        Some(DisplayColor::Constant(c)) => {
+            writeln!(
+                out,
+                "{p}color3f[] primvars:displayColor = [({}, {}, {})] (",
+                F(c[0]),
+                F(c[1]),
+                F(c[2])
+            )?;
+            writeln!(out, "{p}    interpolation = \"constant\"")?;
+            writeln!(out, "{p})")?;
+        }
+        Some(DisplayColor::Vertex(colors)) => {
+            write!(out, "{p}color3f[] primvars:displayColor = [")?;
+            for (i, c) in colors.iter().enumerate() {
+                if i > 0 {
+                    write!(out, ", ")?;
+                }
+                write!(out, "({}, {}, {})", F(c[0]), F(c[1]), F(c[2]))?;
+            }
+            writeln!(out, "] (")?;
+            writeln!(out, "{p}    interpolation = \"vertex\"")?;
+            writeln!(out, "{p})")?;
+        }
+        None => {}
+    }
+    if let Some(alpha) = &m.opacity {
+        write!(out, "{p}float[] primvars:displayOpacity = [")?;
+        for (i, a) in alpha.iter().enumerate() {
+            if i > 0 {
+                write!(out, ", ")?;
+            }
+            write!(out, "{}", F(*a))?;
+        }
+        writeln!(out, "] (")?;
+        writeln!(out, "{p}    interpolation = \"vertex\"")?;
         writeln!(out, "{p})")?;
     }
     if let Some(st) = &m.st {

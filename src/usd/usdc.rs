@@ -11,7 +11,9 @@
 //! laid out as `[offset to times][times][times rep][offset to reps][sample arrays][count][reps]`
 //! with every size known beforehand, so nothing is patched but the bootstrap.
 
-use super::stage::{animated, extent, for_each_sample, FrameSource, MeshPrim, Prim, Stage};
+use super::stage::{
+    animated, extent, for_each_sample, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
+};
 use anyhow::Result;
 use std::collections::HashMap;
 use std::io::{Seek, SeekFrom, Write};
@@ -24,6 +26,7 @@ const MIN_COMPRESSED_ARRAY: usize = 16;
 // Value types (crate type enum).
 const T_BOOL: u64 = 1;
 const T_INT: u64 = 3;
+const T_FLOAT: u64 = 8;
 const T_DOUBLE: u64 = 9;
 const T_STRING: u64 = 10;
 const T_TOKEN: u64 = 11;
@@ -67,6 +70,7 @@ enum Val<'a> {
     Ints(Vec<i32>),
     Vec3fs(&'a [[f32; 3]]),
     Vec2fs(&'a [[f32; 2]]),
+    Floats(&'a [f32]),
 }
 
 /// A path in the spec tree: its parent's index and its element (prim name or property name).
@@ -179,6 +183,13 @@ impl<W: Write + Seek> Writer<W> {
                 let raw: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
                 self.bytes(&raw)?;
                 rep_heap(T_VEC2F, at, true)
+            }
+            Val::Floats(v) => {
+                let at = self.pos;
+                self.u64(v.len() as u64)?;
+                let raw: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+                self.bytes(&raw)?;
+                rep_heap(T_FLOAT, at, true)
             }
         })
     }
@@ -375,11 +386,32 @@ impl<W: Write + Seek> Writer<W> {
         };
         self.attribute(me, "points", "point3f[]", vec![v])?;
         props.push("points");
-        if let Some(c) = m.color {
-            let constant = self.field("interpolation", Val::Token("constant"))?;
-            let v = self.field("default", Val::Vec3fs(&[c]))?;
-            self.attribute(me, "primvars:displayColor", "color3f[]", vec![constant, v])?;
+        if let Some(color) = &m.color {
+            let (interpolation, v) = match color {
+                DisplayColor::Constant(c) => {
+                    ("constant", self.field("default", Val::Vec3fs(&[*c]))?)
+                }
+                DisplayColor::Vertex(c) => ("vertex", self.field("default", Val::Vec3fs(c))?),
+            };
+            let interpolation = self.field("interpolation", Val::Token(interpolation))?;
+            self.attribute(
+                me,
+                "primvars:displayColor",
+                "color3f[]",
+                vec![interpolation, v],
+            )?;
             props.push("primvars:displayColor");
+        }
+        if let Some(alpha) = &m.opacity {
+            let interpolation = self.field("interpolation", Val::Token("vertex"))?;
+            let v = self.field("default", Val::Floats(alpha))?;
+            self.attribute(
+                me,
+                "primvars:displayOpacity",
+                "float[]",
+                vec![interpolation, v],
+            )?;
+            props.push("primvars:displayOpacity");
         }
         if let Some(st) = &m.st {
             let v = self.field("default", Val::Vec2fs(st))?;
