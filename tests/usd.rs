@@ -325,7 +325,7 @@ fn vertex_colours_become_display_colours() {
     let mut json = doc.json.clone();
     let bin = doc.buffers[0].clone();
     let mut bytes = bin.clone();
-    while bytes.len() % 4 != 0 {
+    while !bytes.len().is_multiple_of(4) {
         bytes.push(0);
     }
     let offset = bytes.len();
