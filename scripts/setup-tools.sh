@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Install what the tests use besides cargo, inside the project (nothing system-wide):
-#   tools/node/node_modules  the Khronos glTF-Validator, gltfpack and glTF-Transform (npm)
+# Install what the tests use besides cargo, inside the project (but chromium, from apt):
+#   tools/node/node_modules  the Khronos glTF-Validator, gltfpack, glTF-Transform, three.js (npm)
 #   .venv                    python with numpy + scipy (the peer reference), usd-core, jsonschema
+#   chromium                 (apt, system-wide) for the three.js playback test
 # Safe to run again: it only installs what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -13,4 +14,12 @@ if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import numpy, scipy, pxr,
   echo "setup: creating .venv with numpy, scipy, usd-core, jsonschema (pip)"
   python3 -m venv .venv
   .venv/bin/pip install --quiet --disable-pip-version-check -r tools/requirements.txt
+fi
+# Chromium (Debian package) plays outputs through three.js in tests/browser.rs (WebGL2 on
+# SwiftShader, no GPU). The one system-wide install: apt needs root (or sudo).
+if ! command -v chromium >/dev/null 2>&1; then
+  echo "setup: installing chromium (apt)"
+  if [ "$(id -u)" = 0 ]; then SUDO=""; else SUDO="sudo"; fi
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium >/dev/null \
+    || { $SUDO apt-get update -q >/dev/null && $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium >/dev/null; }
 fi
