@@ -182,13 +182,9 @@ impl From<CyclesArg> for CycleMethod {
     }
 }
 
+/// Where frames lie in time (`tween` and `preview`).
 #[derive(Args)]
-pub struct TweenArgs {
-    /// Input .gltf (embedded or external buffers) or .glb.
-    input: PathBuf,
-    /// Output file; the format follows the extension (.glb, .gltf, .usda, .usdc or .usdz).
-    #[arg(short, long)]
-    output: PathBuf,
+pub struct TimingArgs {
     /// Frames per second between keys [default: 30]: every key is kept as it is, the gap
     /// between two keys gets round(gap x RATE) - 1 evenly spaced frames, and keys already
     /// closer than 1/RATE s get none (a clip baked at 30 or 60 samples a second stays as it
@@ -203,6 +199,28 @@ pub struct TweenArgs {
     /// grid meets them.
     #[arg(long, value_name = "FPS")]
     fps: Option<f64>,
+}
+
+impl TimingArgs {
+    fn timing(&self) -> Timing {
+        match (self.fps, self.tweens, self.rate) {
+            (Some(f), _, _) => Timing::Fps(f),
+            (_, Some(n), _) => Timing::Tweens(n),
+            (_, _, Some(r)) => Timing::Rate(r),
+            _ => Timing::default(),
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct TweenArgs {
+    /// Input .gltf (embedded or external buffers) or .glb.
+    input: PathBuf,
+    /// Output file; the format follows the extension (.glb, .gltf, .usda, .usdc or .usdz).
+    #[arg(short, long)]
+    output: PathBuf,
+    #[command(flatten)]
+    timing: TimingArgs,
     /// How a glTF output carries the frames. `rig`: the authored morph targets stay (names,
     /// other animations driving them); keys are played by the authored weights and only the
     /// frames between keys get targets of their own. `frames`: one target per frame, keys
@@ -313,12 +331,7 @@ impl TweenArgs {
             method: self.method.into(),
             keys: self.keys.into(),
             animation: self.animation,
-            timing: match (self.fps, self.tweens, self.rate) {
-                (Some(f), _, _) => Timing::Fps(f),
-                (_, Some(n), _) => Timing::Tweens(n),
-                (_, _, Some(r)) => Timing::Rate(r),
-                _ => Timing::default(),
-            },
+            timing: self.timing.timing(),
             layout: self.layout.into(),
             compact,
             quiet: self.quiet,
@@ -365,15 +378,8 @@ pub struct PreviewArgs {
     /// Also write every frame (up to 240) as an animation: .gif, or .png/.apng (APNG).
     #[arg(long, value_name = "FILE")]
     animate: Option<PathBuf>,
-    /// As for tween: frames per second between keys [default: 30].
-    #[arg(long, value_name = "RATE", conflicts_with_all = ["tweens", "fps"])]
-    rate: Option<f64>,
-    /// As for tween: exactly N frames between consecutive keys.
-    #[arg(long, value_name = "N", conflicts_with = "fps")]
-    tweens: Option<usize>,
-    /// As for tween: frames at this fixed rate.
-    #[arg(long, value_name = "FPS")]
-    fps: Option<f64>,
+    #[command(flatten)]
+    timing: TimingArgs,
     /// Where the keys come from.
     #[arg(long, value_enum, default_value_t = KeySource::default().into())]
     keys: KeysArg,
@@ -441,12 +447,7 @@ impl PreviewArgs {
             animate: self.animate,
             keys: self.keys.into(),
             animation: self.animation,
-            timing: match (self.fps, self.tweens, self.rate) {
-                (Some(f), _, _) => Timing::Fps(f),
-                (_, Some(n), _) => Timing::Tweens(n),
-                (_, _, Some(r)) => Timing::Rate(r),
-                _ => Timing::default(),
-            },
+            timing: self.timing.timing(),
             access: Access {
                 roots: self.allow_external,
             },

@@ -12,10 +12,9 @@ fn main() -> ExitCode {
         Command::Tween(args) => {
             set_threads(args.threads);
             let quiet = args.quiet;
-            match args.job() {
-                Ok(job) => finish(tween::run_tween(&job), |s| summary(quiet, s.line(&job))),
-                Err(e) => finish::<()>(Err(anyhow::anyhow!(e)), |_| {}),
-            }
+            run_job(args.job(), tween::run_tween, |s, job| {
+                summary(quiet, s.line(job))
+            })
         }
         Command::Blend(args) => {
             let quiet = args.quiet;
@@ -32,10 +31,9 @@ fn main() -> ExitCode {
         Command::Preview(args) => {
             set_threads(args.threads);
             let quiet = args.quiet;
-            match args.job() {
-                Ok(job) => finish(preview::run_preview(&job), |s| summary(quiet, s.line(&job))),
-                Err(e) => finish::<()>(Err(anyhow::anyhow!(e)), |_| {}),
-            }
+            run_job(args.job(), preview::run_preview, |s, job| {
+                summary(quiet, s.line(job))
+            })
         }
         Command::Eval(args) => run_eval(&args),
         Command::Bench(args) => run_bench(args),
@@ -53,6 +51,18 @@ fn finish<T>(result: anyhow::Result<T>, done: impl FnOnce(T)) -> ExitCode {
             eprintln!("inbetween: error: {}", format!("{e:#}").replace('\n', " "));
             ExitCode::from(2)
         }
+    }
+}
+
+/// Run `job` (or report why the arguments do not make one) with `run`, then `done`.
+fn run_job<J, T>(
+    job: Result<J, String>,
+    run: impl FnOnce(&J) -> anyhow::Result<T>,
+    done: impl FnOnce(T, &J),
+) -> ExitCode {
+    match job {
+        Ok(job) => finish(run(&job), |s| done(s, &job)),
+        Err(e) => finish::<()>(Err(anyhow::anyhow!(e)), |_| {}),
     }
 }
 

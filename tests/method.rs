@@ -401,13 +401,7 @@ fn a_720_degree_twist_in_eight_keys_stays_smooth() {
             .enumerate()
             .map(|(j, frame)| {
                 let want = synth::twist(&keys[0], (720.0 * j as f64 / 32.0).to_radians(), LEN);
-                let ms = frame
-                    .iter()
-                    .zip(&want)
-                    .map(|(p, q)| (*p - *q).length_squared())
-                    .sum::<f64>()
-                    / want.len() as f64;
-                ms.sqrt() / d
+                rms(frame, &want) / d
             })
             .fold(0.0, f64::max);
         eprintln!("{method:?}: 720-degree twist in 8 keys, worst frame RMS / diagonal {worst:.5}");
@@ -467,14 +461,17 @@ fn sweep_case(
     let (k, f) = frames(&meshes[0], Method::default(), 1);
     let middle = f.len() / 2;
     let want = pose(&k[0], middle as f64 / (f.len() - 1) as f64);
-    let d = common::diag(&k[0]);
-    let ms = f[middle]
-        .iter()
-        .zip(&want)
+    rms(&f[middle], &want) / common::diag(&k[0])
+}
+
+/// RMS distance between corresponding points.
+fn rms(a: &[DVec3], b: &[DVec3]) -> f64 {
+    (a.iter()
+        .zip(b)
         .map(|(p, q)| (*p - *q).length_squared())
         .sum::<f64>()
-        / want.len() as f64;
-    ms.sqrt() / d
+        / b.len().max(1) as f64)
+        .sqrt()
 }
 
 /// Whole turns at any resolution (issue 16): tubes coarse and fine, square and not, thin and

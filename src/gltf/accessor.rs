@@ -154,14 +154,9 @@ impl Document {
         let ty = a["componentType"].as_u64().unwrap_or(0) as u32;
         comp_size(ty)
             .ok_or_else(|| self.err(format!("accessor {index} has unknown componentType {ty}")))?;
-        let ncomp = match a["type"].as_str().unwrap_or("") {
-            "SCALAR" => 1,
-            "VEC2" => 2,
-            "VEC3" => 3,
-            "VEC4" | "MAT2" => 4,
-            "MAT3" => 9,
-            "MAT4" => 16,
-            t => bail!(self.err(format!("accessor {index} has unknown type {t:?}"))),
+        let kind = a["type"].as_str().unwrap_or("");
+        let Some(ncomp) = components(kind) else {
+            bail!(self.err(format!("accessor {index} has unknown type {kind:?}")));
         };
         Ok(Accessor {
             view: a["bufferView"].as_u64().map(|v| v as usize),
@@ -391,4 +386,17 @@ pub fn read_attribute3(
             .map(|c| DVec3::new(c[0], c[1], c[2]))
             .collect()
     }))
+}
+
+/// Components of an accessor `type` (`SCALAR` 1 ... `MAT4` 16).
+pub(crate) fn components(ty: &str) -> Option<usize> {
+    Some(match ty {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" | "MAT2" => 4,
+        "MAT3" => 9,
+        "MAT4" => 16,
+        _ => return None,
+    })
 }

@@ -200,26 +200,22 @@ impl Output {
                 Storage::Short => 32767.0,
                 Storage::Byte => 127.0,
             };
-            let lo: Vec<f32> = (0..3)
-                .map(|c| {
-                    values
-                        .iter()
-                        .skip(c)
-                        .step_by(3)
-                        .map(|&x| storage.stored(x) * scale)
-                        .fold(f32::INFINITY, f32::min)
-                })
-                .collect();
-            let hi: Vec<f32> = (0..3)
-                .map(|c| {
-                    values
-                        .iter()
-                        .skip(c)
-                        .step_by(3)
-                        .map(|&x| storage.stored(x) * scale)
-                        .fold(f32::NEG_INFINITY, f32::max)
-                })
-                .collect();
+            let bound = |init: f32, pick: fn(f32, f32) -> f32| -> Vec<f32> {
+                (0..3)
+                    .map(|c| {
+                        values
+                            .iter()
+                            .skip(c)
+                            .step_by(3)
+                            .map(|&x| storage.stored(x) * scale)
+                            .fold(init, pick)
+                    })
+                    .collect()
+            };
+            let (lo, hi) = (
+                bound(f32::INFINITY, f32::min),
+                bound(f32::NEG_INFINITY, f32::max),
+            );
             acc["min"] = json!(lo);
             acc["max"] = json!(hi);
         }

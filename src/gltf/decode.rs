@@ -10,6 +10,7 @@
 //! Sizes are checked before decoding: a view decodes to at most its declared length, and all
 //! decoded data together to at most [`MAX_DECODED`] bytes.
 
+use super::accessor::components;
 use super::read::arr;
 use serde_json::{json, Value};
 
@@ -413,18 +414,6 @@ fn point_accessor(json: &mut Value, acc: usize, p: Placed, buffer: usize) {
     if let Some(o) = a.as_object_mut() {
         o.remove("byteOffset");
     }
-}
-
-fn components(ty: &str) -> Option<usize> {
-    Some(match ty {
-        "SCALAR" => 1,
-        "VEC2" => 2,
-        "VEC3" => 3,
-        "VEC4" | "MAT2" => 4,
-        "MAT3" => 9,
-        "MAT4" => 16,
-        _ => return None,
-    })
 }
 
 fn component_size(ty: u32) -> usize {

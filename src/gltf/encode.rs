@@ -8,6 +8,7 @@
 //! extension is required, as the spec allows); the compressed bytes sit in the binary buffer.
 //! Views of images, or shared by accessors that disagree on their layout, stay as they are.
 
+use super::accessor::components;
 use super::build::Output;
 use super::read::arr;
 use serde_json::{json, Value};
@@ -40,18 +41,6 @@ fn component_size(ty: u64) -> usize {
     }
 }
 
-fn components(ty: &str) -> usize {
-    match ty {
-        "SCALAR" => 1,
-        "VEC2" => 2,
-        "VEC3" => 3,
-        "VEC4" | "MAT2" => 4,
-        "MAT3" => 9,
-        "MAT4" => 16,
-        _ => 0,
-    }
-}
-
 /// How each of `views` (the views being written) is used by the accessors of `json`.
 fn uses(json: &Value, views: &[Value]) -> BTreeMap<usize, Use> {
     let mut out: BTreeMap<usize, Use> = BTreeMap::new();
@@ -70,7 +59,7 @@ fn uses(json: &Value, views: &[Value]) -> BTreeMap<usize, Use> {
         .collect();
     for (i, a) in arr(json, "accessors").iter().enumerate() {
         let elem = component_size(a["componentType"].as_u64().unwrap_or(0))
-            * components(a["type"].as_str().unwrap_or(""));
+            * components(a["type"].as_str().unwrap_or("")).unwrap_or(0);
         if let Some(v) = a["bufferView"].as_u64() {
             let Some(view) = views.get(v as usize) else {
                 continue;
@@ -126,21 +115,7 @@ fn compress(data: &[u8], u: Use, exp_bits: Option<i32>) -> Option<(Vec<u8>, Valu
                         .chunks_exact(4)
                         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
                         .collect();
-                    let mut encoded = vec![0u32; floats.len()];
-                    // SAFETY: both arrays hold count * stride / 4 values of 4 bytes; the
-                    // encoder reads `floats` and writes `encoded`, one vector of stride bytes
-                    // per element.
-                    unsafe {
-                        meshopt::ffi::meshopt_encodeFilterExp(
-                            encoded.as_mut_ptr().cast(),
-                            count,
-                            stride,
-                            bits,
-                            floats.as_ptr(),
-                            meshopt::EncodeExpMode::SharedComponent
-                                as meshopt::ffi::meshopt_EncodeExpMode,
-                        );
-                    }
+                    let encoded = exp_encode(&floats, count, stride, bits);
                     data = encoded.iter().flat_map(|v| v.to_le_bytes()).collect();
                     "EXPONENTIAL"
                 }
@@ -369,24 +344,35 @@ pub fn clear_marks(out: &mut Output) {
     }
 }
 
-/// `values` (vectors of `components` f32) as a reader decodes them after the EXPONENTIAL filter
-/// at `bits` mantissa bits, as [`meshopt`] encodes a marked view (one exponent per component
-/// over the whole view).
-pub fn exp_roundtrip(values: &[f32], components: usize, bits: i32) -> Vec<f32> {
-    let stride = 4 * components;
-    let count = values.len() / components.max(1);
-    let mut encoded = vec![0u32; values.len()];
-    // SAFETY: `encoded` and `values` both hold count * components values; the filter reads
-    // one and writes the other, then decodes in place, stride bytes per element.
+/// `floats` (`count` vectors of `stride` bytes) through meshopt's EXPONENTIAL filter at `bits`
+/// mantissa bits, one exponent per component over all of them.
+fn exp_encode(floats: &[f32], count: usize, stride: usize, bits: i32) -> Vec<u32> {
+    let mut encoded = vec![0u32; floats.len()];
+    assert_eq!(floats.len() * 4, count * stride);
+    // SAFETY: both arrays hold count * stride / 4 values of 4 bytes (checked above); the
+    // encoder reads `floats` and writes `encoded`, one vector of stride bytes per element.
     unsafe {
         meshopt::ffi::meshopt_encodeFilterExp(
             encoded.as_mut_ptr().cast(),
             count,
             stride,
             bits,
-            values.as_ptr(),
+            floats.as_ptr(),
             meshopt::EncodeExpMode::SharedComponent as meshopt::ffi::meshopt_EncodeExpMode,
         );
+    }
+    encoded
+}
+
+/// `values` (vectors of `components` f32) as a reader decodes them after the EXPONENTIAL filter
+/// at `bits` mantissa bits, as [`meshopt`] encodes a marked view (one exponent per component
+/// over the whole view).
+pub fn exp_roundtrip(values: &[f32], components: usize, bits: i32) -> Vec<f32> {
+    let stride = 4 * components;
+    let count = values.len() / components.max(1);
+    let mut encoded = exp_encode(values, count, stride, bits);
+    // SAFETY: `encoded` holds count elements of stride bytes; decoded in place.
+    unsafe {
         meshopt::ffi::meshopt_decodeFilterExp(encoded.as_mut_ptr().cast(), count, stride);
     }
     encoded.iter().map(|&b| f32::from_bits(b)).collect()
