@@ -162,6 +162,9 @@ pub enum CyclesArg {
     Legs,
     /// The seed paper's angle between the thighs (bipeds).
     Thigh,
+    /// No cycles: each clip whole, on normalised time (for clips that do not walk: the pair is
+    /// refused otherwise).
+    None,
 }
 
 impl From<CycleMethod> for CyclesArg {
@@ -169,6 +172,7 @@ impl From<CycleMethod> for CyclesArg {
         match c {
             CycleMethod::Legs => CyclesArg::Legs,
             CycleMethod::Thigh => CyclesArg::Thigh,
+            CycleMethod::None => CyclesArg::None,
         }
     }
 }
@@ -178,6 +182,7 @@ impl From<CyclesArg> for CycleMethod {
         match c {
             CyclesArg::Legs => CycleMethod::Legs,
             CyclesArg::Thigh => CycleMethod::Thigh,
+            CyclesArg::None => CycleMethod::None,
         }
     }
 }

@@ -342,6 +342,7 @@ fn bad_input_gives_one_line_exit_2_and_no_file() {
     let Some(fx) = fixtures() else { return };
     let dir = tempfile::tempdir().unwrap();
     let fox = fx.join("skinned/Fox.glb");
+    let robot = fx.join("skinned/RobotExpressive.glb");
     let other_skin = fox_with_node0_clip(&fox, dir.path(), "other_skin.glb", "OtherSkeleton", true);
     let no_joint = fox_with_node0_clip(&fox, dir.path(), "no_joint.glb", "NotJoints", false);
     let cases: Vec<(PathBuf, Vec<&str>, &str)> = vec![
@@ -357,6 +358,27 @@ fn bad_input_gives_one_line_exit_2_and_no_file() {
             "different skeletons",
         ),
         (no_joint, vec!["Walk", "NotJoints"], "animates no joint"),
+        // Clips that do not walk (issue 17): an idle, a standing pose, a dance.
+        (
+            fox.clone(),
+            vec!["Survey", "Walk"],
+            "clip \"Survey\" has no stride cycle: its feet travel 0.000 leg lengths",
+        ),
+        (
+            robot.clone(),
+            vec!["Walking", "Idle"],
+            "clip \"Idle\" has no stride cycle",
+        ),
+        (
+            robot.clone(),
+            vec!["Standing", "Running"],
+            "clip \"Standing\" has no stride cycle",
+        ),
+        (
+            robot.clone(),
+            vec!["Walking", "Dance"],
+            "clip \"Dance\" has no stride cycle",
+        ),
         (fox.clone(), vec!["Walk", "Run"], ""),
     ];
     for (input, clips, needle) in cases {
@@ -386,4 +408,36 @@ fn bad_input_gives_one_line_exit_2_and_no_file() {
         );
         assert!(!out.exists());
     }
+}
+
+/// `--cycles none` blends clips that do not walk anyway, whole, on normalised time; the report
+/// says so.
+#[test]
+fn cycles_none_blends_what_does_not_walk() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("idle.glb");
+    let rep = dir.path().join("idle.json");
+    let robot = fx.join("skinned/RobotExpressive.glb");
+    let args = [
+        "blend",
+        robot.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--clips",
+        "Walking",
+        "Idle",
+    ];
+    let mut with = args.to_vec();
+    with.extend(["--cycles", "none", "--report", rep.to_str().unwrap(), "-q"]);
+    run_ok(&with);
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+    assert_eq!(r["cycle_method"], "none");
+    assert!(r["clips"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|c| c["cycles"].as_array().unwrap().is_empty()));
+    let (_, clips) = blend::load_gltf(&Document::open(&out).unwrap()).unwrap();
+    assert_eq!(clips.last().unwrap().name, "Walking+Idle");
 }

@@ -24,6 +24,8 @@ pub struct Analysis {
     /// Contacts per leg (same order as `Character::legs`).
     pub contacts: Vec<Vec<Contact>>,
     pub cycles: Option<Cycles>,
+    /// Largest forward-and-back travel of a foot relative to the root, in leg lengths.
+    pub stride: f64,
 }
 
 impl Analysis {
@@ -61,11 +63,25 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
                 .iter()
                 .map(|l| contacts::intervals(&track, &contacts::flags(&track, l, scale)))
                 .collect();
-            let cycles = cycles::detect(method, &track, rig.root, &legs, forward, scale);
+            let stride = legs
+                .iter()
+                .map(|l| {
+                    let along = track
+                        .pos
+                        .iter()
+                        .map(|p| (p[l.end()] - p[rig.root]).dot(forward) / scale);
+                    let (lo, hi) =
+                        along.fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
+                    (hi - lo).max(0.0)
+                })
+                .fold(0.0, f64::max);
+            let cycles = cycles::detect(method, &track, rig.root, &legs, forward, scale)
+                .filter(|_| stride >= cycles::MIN_STRIDE);
             Analysis {
                 track,
                 contacts,
                 cycles,
+                stride,
             }
         })
         .collect();

@@ -23,7 +23,13 @@ pub enum CycleMethod {
     Legs,
     /// The seed paper's signed angle between the thighs (bipeds).
     Thigh,
+    /// No cycles: each clip whole, blended on normalised time (clips that do not walk).
+    None,
 }
+
+/// Least forward-and-back travel of a foot (relative to the root, in leg lengths) that makes a
+/// stride: walks and runs measure 0.9-1.6, idles, dances, waves and T-poses below 0.01.
+pub const MIN_STRIDE: f64 = 0.1;
 
 /// Shortest stride period considered, in seconds.
 pub const MIN_PERIOD: f64 = 0.25;
@@ -65,6 +71,7 @@ pub fn detect(
     scale: f64,
 ) -> Option<Cycles> {
     let signals: Vec<Vec<f64>> = match method {
+        CycleMethod::None => return None,
         CycleMethod::Legs => legs
             .iter()
             .map(|l| {

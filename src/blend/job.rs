@@ -152,7 +152,7 @@ pub fn blend_clips(
         }
     }
     rig::use_skin(doc, &mut rig, skin);
-    let blended = blend(&rig, a, b, opts);
+    let blended = blend(&rig, a, b, opts).map_err(|e| doc.err(e))?;
     Ok(BlendedClips {
         animated: a.animated().union(&b.animated()).copied().collect(),
         names: [a.name.clone(), b.name.clone()],

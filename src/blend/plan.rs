@@ -426,10 +426,32 @@ impl Cleanup<'_> {
 }
 
 /// Blend clip `a` with clip `b` (weight `opts.weight` on `b`).
-pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
+/// Refused (unless `--cycles none`) when either clip has no stride cycle.
+pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Result<Blended> {
     let w = opts.weight;
     let (ch, an) = analyze(rig, &[a, b], opts.cycles);
     let (an_a, an_b) = (&an[0], &an[1]);
+    if opts.cycles != CycleMethod::None {
+        for (clip, an) in [(a, an_a), (b, an_b)] {
+            if an.cycles.is_some() {
+                continue;
+            }
+            let why = if ch.legs.is_empty() {
+                "no legs were found in its skeleton".to_string()
+            } else if an.stride < super::cycles::MIN_STRIDE {
+                format!(
+                    "its feet travel {:.3} leg lengths forward and back (a T-pose, an idle or a gesture, not a walk)",
+                    an.stride
+                )
+            } else {
+                "its feet do not repeat a stride".to_string()
+            };
+            anyhow::bail!(
+                "clip {:?} has no stride cycle: {why}; --cycles none blends the clips whole on normalised time",
+                clip.name
+            );
+        }
+    }
     let spans = [cycles_used(a, an_a), cycles_used(b, an_b)];
     let phase = phase(a, b, [an_a, an_b], [&spans[0], &spans[1]], w);
     let src = sources(rig, [a, b], [an_a, an_b], &phase);
@@ -527,11 +549,11 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> Blended {
         naive,
         result,
     };
-    Blended {
+    Ok(Blended {
         times: phase.frames.iter().map(|f| f.0).collect(),
         poses: frames,
         report,
-    }
+    })
 }
 
 /// The report's figures, all at the output rate.
