@@ -337,6 +337,8 @@ pub struct EndToEnd {
     pub input_mib: f64,
     pub output_mib: f64,
     pub wall_s: f64,
+    /// The same run by `--method linear` (reading and writing only), when no method was given.
+    pub linear_wall_s: Option<f64>,
     pub summary: String,
 }
 
@@ -367,24 +369,38 @@ pub fn end_to_end(
     }
     .write(&input)?;
     let exe = std::env::current_exe()?;
-    let start = Instant::now();
-    let out = std::process::Command::new(exe)
-        .args([
-            "tween",
-            input.to_str().unwrap_or(""),
-            "-o",
-            output.to_str().unwrap_or(""),
-            "--tweens",
-            &tweens.to_string(),
-        ])
-        .args(extra)
-        .output()?;
-    let wall_s = start.elapsed().as_secs_f64();
-    anyhow::ensure!(
-        out.status.success(),
-        "tween failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let run = |more: &[&str]| -> Result<(f64, String)> {
+        let start = Instant::now();
+        let out = std::process::Command::new(&exe)
+            .args([
+                "tween",
+                input.to_str().unwrap_or(""),
+                "-o",
+                output.to_str().unwrap_or(""),
+                "--tweens",
+                &tweens.to_string(),
+            ])
+            .args(extra)
+            .args(more)
+            .output()?;
+        let wall_s = start.elapsed().as_secs_f64();
+        anyhow::ensure!(
+            out.status.success(),
+            "tween failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        Ok((
+            wall_s,
+            String::from_utf8_lossy(&out.stderr).trim().to_string(),
+        ))
+    };
+    // The same input by `--method linear` (no set-up, no solve: reading and writing), one after
+    // the other, unless the options name a method.
+    let linear_wall_s = match extra.iter().any(|a| a.starts_with("--method")) {
+        true => None,
+        false => Some(run(&["--method", "linear"])?.0),
+    };
+    let (wall_s, summary) = run(&[])?;
     let mib = |p: &std::path::Path| {
         std::fs::metadata(p)
             .map(|m| m.len() as f64 / 1048576.0)
@@ -401,7 +417,8 @@ pub fn end_to_end(
         input_mib: mib(&input),
         output_mib: mib(&output),
         wall_s,
-        summary: String::from_utf8_lossy(&out.stderr).trim().to_string(),
+        linear_wall_s,
+        summary,
     };
     let _ = std::fs::remove_dir_all(&dir);
     Ok(r)

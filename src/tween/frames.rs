@@ -386,10 +386,13 @@ fn frame_deltas(
 
 /// The solve's sparsity pattern of `welded`, for the methods that solve (`seed`, `spline`).
 fn pattern_for(method: Method, welded: &Welded) -> Result<Option<Pattern>> {
-    Ok(match method {
+    let t0 = Instant::now();
+    let pattern = match method {
         Method::Seed | Method::Spline => Some(Pattern::new(welded.n, &welded.triangles)?),
         Method::Linear => None,
-    })
+    };
+    super::clock::add(super::clock::Part::Symbolic, t0);
+    Ok(pattern)
 }
 
 /// Welded positions of every frame of one track (for tests and benchmarks).

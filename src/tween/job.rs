@@ -58,6 +58,9 @@ pub struct Summary {
     pub most_targets: MostTargets,
     /// The figures of each mesh compacted (`--compact` and its parts).
     pub compacted: Vec<(String, CompactFigures)>,
+    /// Seconds of set-up by part (see `clock`): symbolic, key gradients and turns, numeric
+    /// factorization, spline window.
+    pub setup_parts: [f64; 4],
 }
 
 /// Morph targets some engines blend at once (what glTF asks every client to support, and
@@ -96,7 +99,7 @@ impl Summary {
         };
         let growth = self.output_bytes as f64 / self.input_bytes.max(1) as f64;
         let mut out = format!(
-            "{}: {} mesh{} ({} triangles), {} keys -> {} frames ({timing}) by the {} method; {} -> {} ({growth:.1}x); {:.3} s (set-up {:.3} s, frames {:.3} s), peak memory {:.0} MiB",
+            "{}: {} mesh{} ({} triangles), {} keys -> {} frames ({timing}) by the {} method; {} -> {} ({growth:.1}x); {:.3} s (set-up {:.3} s{}, frames {:.3} s), peak memory {:.0} MiB",
             job.output.display(),
             self.meshes.len(),
             if self.meshes.len() == 1 { "" } else { "es" },
@@ -108,6 +111,16 @@ impl Summary {
             size(self.output_bytes),
             self.seconds,
             setup,
+            match self.setup_parts.iter().any(|&x| x > 0.0) {
+                true => format!(
+                    " [{}]",
+                    (super::clock::NAMES.iter().zip(self.setup_parts))
+                        .map(|(n, x)| format!("{n} {x:.3}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                false => String::new(),
+            },
             solve,
             self.peak_rss_mib,
         );
@@ -380,5 +393,6 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         output_bytes: run.output_bytes,
         most_targets: run.applied.most_targets,
         compacted: run.applied.compacted,
+        setup_parts: super::clock::seconds(),
     })
 }

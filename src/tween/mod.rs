@@ -8,6 +8,7 @@
 //! [`morph_targets`] (glTF morph animation) or the USD writer; [`job`] runs it from file to
 //! file, with [`options`] holding what the user asked for.
 
+mod clock;
 mod compact;
 mod frames;
 mod gradient;

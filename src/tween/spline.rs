@@ -22,6 +22,7 @@
 //! (angle + 2 pi k about its axis) closest to the linear continuation of the two keys inside
 //! it, outward from the segment's own log.
 
+use super::clock::{self, Part};
 use super::gradient::{deformation, frame, gradient_operator, polar, quat_log, rotation};
 use super::solve::{scatter, Pattern, Placement};
 use super::weld::{bbox_diagonal, rms_rel};
@@ -417,12 +418,17 @@ impl<'a> SplineTrack<'a> {
     /// Prepare segment a (keys a and a + 1).
     pub fn segment(&self, a: usize) -> Result<SplineSegment> {
         let (x0, x1) = (&self.keys[a], &self.keys[a + 1]);
+        let t0 = std::time::Instant::now();
         let build = Build::new(self, a);
         // First key b alone: its branches are made consistent across the surface before the
         // other keys are unrolled from it.
         let (mut per, stretch_b) = build.first_key();
         let order = self.consistent_branches(&mut per);
+        clock::add(Part::KeyB, t0);
+        let t0 = std::time::Instant::now();
         let placement = build.placement(&per)?;
+        clock::add(Part::Numeric, t0);
+        let t0 = std::time::Instant::now();
         let stats = Components::of(&per, &build.areas, &placement);
         // The branch-consistent logs to b, before the split replaces some by swings.
         let full_b: Vec<DVec3> = per
@@ -439,6 +445,7 @@ impl<'a> SplineTrack<'a> {
             .collect();
         let paths = self.paths(&build.win, &logs, &scatter, &placement);
         let tris: Vec<Tri> = per.into_iter().flatten().collect();
+        clock::add(Part::Window, t0);
         Ok(SplineSegment {
             tris,
             placement,

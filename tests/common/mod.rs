@@ -18,10 +18,10 @@ pub fn fixtures() -> Option<PathBuf> {
     if dir.is_dir() {
         Some(dir)
     } else {
-        eprintln!(
-            "skipped: {} is missing (real-file fixtures are optional)",
+        skipped(&format!(
+            "{} is missing (real-file fixtures are optional)",
             dir.display()
-        );
+        ));
         None
     }
 }
@@ -31,11 +31,40 @@ fn require_tools() -> bool {
 }
 
 /// Announce a missing test tool: fail when tools are required, else skip with the reason.
+/// Say that a test skips part of its work, on stderr and in the file `INBETWEEN_SKIP_LOG`
+/// names (scripts/test.sh prints that file's lines after the run, so the summary shows them).
+pub fn skipped(why: &str) {
+    let test = std::thread::current().name().unwrap_or("?").to_string();
+    let bin = std::env::current_exe()
+        .ok()
+        .and_then(|p| {
+            p.file_stem().map(|s| {
+                s.to_string_lossy()
+                    .split('-')
+                    .next()
+                    .unwrap_or("")
+                    .to_string()
+            })
+        })
+        .unwrap_or_default();
+    eprintln!("skipped: {why}");
+    if let Some(log) = std::env::var_os("INBETWEEN_SKIP_LOG") {
+        use std::io::Write;
+        if let Ok(mut f) = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(log)
+        {
+            let _ = writeln!(f, "{bin}::{test}: {why}");
+        }
+    }
+}
+
 pub fn missing_tool(what: &str) -> bool {
     if require_tools() {
         panic!("{what} is missing; run scripts/setup-tools.sh");
     }
-    eprintln!("skipped: {what} is missing (run scripts/setup-tools.sh)");
+    skipped(&format!("{what} is missing (run scripts/setup-tools.sh)"));
     true
 }
 
