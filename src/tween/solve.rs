@@ -39,6 +39,10 @@ pub struct Pattern {
     /// upper-triangular CSC arrays.
     slots: Vec<[u32; 6]>,
     symbolic: SymbolicCholesky<u32>,
+    /// Triangles sharing an edge with each triangle (CSR: `neighbours[start[t]..start[t + 1]]`),
+    /// found once per mesh for the spline's branch growth.
+    neighbour_start: Vec<u32>,
+    neighbours: Vec<u32>,
 }
 
 impl Pattern {
@@ -90,13 +94,21 @@ impl Pattern {
             Default::default(),
         )
         .map_err(|e| anyhow!("symbolic factorization failed: {e:?}"))?;
+        let (neighbour_start, neighbours) = edge_neighbours(triangles);
         Ok(Pattern {
             n,
             col_ptr,
             row_idx,
             slots,
             symbolic,
+            neighbour_start,
+            neighbours,
         })
+    }
+
+    /// The triangles that share an edge with triangle `t`.
+    pub fn neighbours(&self, t: usize) -> &[u32] {
+        &self.neighbours[self.neighbour_start[t] as usize..self.neighbour_start[t + 1] as usize]
     }
 
     fn symbolic_matrix(&self) -> SymbolicSparseColMatRef<'_, u32> {
@@ -645,4 +657,42 @@ mod tests {
             "a non-trivial solution"
         );
     }
+}
+
+/// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
+/// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
+fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
+    use rayon::prelude::*;
+    let mut edges: Vec<(u64, u32)> = triangles
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(t, &[a, b, c])| {
+            [(a, b), (b, c), (c, a)]
+                .into_iter()
+                .map(move |(u, v)| (((u.min(v) as u64) << 32) | u.max(v) as u64, t as u32))
+        })
+        .collect();
+    edges.par_sort_unstable();
+    let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(edges.len());
+    let mut i = 0;
+    while i < edges.len() {
+        let j = i + edges[i..].iter().take_while(|e| e.0 == edges[i].0).count();
+        for x in &edges[i..j] {
+            for y in &edges[i..j] {
+                if x.1 != y.1 {
+                    pairs.push((x.1, y.1));
+                }
+            }
+        }
+        i = j;
+    }
+    pairs.par_sort_unstable();
+    let mut start = vec![0u32; triangles.len() + 1];
+    for &(t, _) in &pairs {
+        start[t as usize + 1] += 1;
+    }
+    for t in 0..triangles.len() {
+        start[t + 1] += start[t];
+    }
+    (start, pairs.into_iter().map(|p| p.1).collect())
 }

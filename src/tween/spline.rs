@@ -301,19 +301,6 @@ impl<'a> SplineTrack<'a> {
     fn consistent_branches(&self, per: &mut [Option<Tri>]) -> Vec<(u32, u32)> {
         let mut order = Vec::with_capacity(per.len());
         let m = per.len();
-        let mut edges: std::collections::HashMap<(u32, u32), Vec<u32>> =
-            std::collections::HashMap::with_capacity(3 * m / 2);
-        for (t, tri) in per.iter().enumerate() {
-            if let Some(tri) = tri {
-                let [a, b, c] = tri.corners;
-                for (u, v) in [(a, b), (b, c), (c, a)] {
-                    edges
-                        .entry((u.min(v), u.max(v)))
-                        .or_default()
-                        .push(t as u32);
-                }
-            }
-        }
         // Best-first growth: the triangle with the smallest rotation on the frontier is fixed
         // next (from the neighbour that reached it), so triangles near 180 degrees, whose
         // branch is ambiguous, are decided last from settled neighbours.
@@ -354,15 +341,12 @@ impl<'a> SplineTrack<'a> {
                 let Some(tri) = per[t as usize].as_ref() else {
                     continue;
                 };
-                let (corners, r) = (tri.corners, tri.r[1]);
-                let [a, b, c] = corners;
-                for (u, v) in [(a, b), (b, c), (c, a)] {
-                    for &nb in &edges[&(u.min(v), u.max(v))] {
-                        if !done[nb as usize] {
-                            if let Some(n) = per[nb as usize].as_ref() {
-                                let guess = closest_branch(n.r[1], r);
-                                heap.push(Reverse((key(guess), nb, t)));
-                            }
+                let r = tri.r[1];
+                for &nb in self.pattern.neighbours(t as usize) {
+                    if !done[nb as usize] {
+                        if let Some(n) = per[nb as usize].as_ref() {
+                            let guess = closest_branch(n.r[1], r);
+                            heap.push(Reverse((key(guess), nb, t)));
                         }
                     }
                 }
