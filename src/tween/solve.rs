@@ -614,6 +614,44 @@ pub fn scatter(rhs: &mut [[f64; 3]], corners: [u32; 3], v1: DVec3, v2: DVec3) {
     }
 }
 
+/// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
+/// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
+fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
+    use rayon::prelude::*;
+    let mut edges: Vec<(u64, u32)> = triangles
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(t, &[a, b, c])| {
+            [(a, b), (b, c), (c, a)]
+                .into_iter()
+                .map(move |(u, v)| (((u.min(v) as u64) << 32) | u.max(v) as u64, t as u32))
+        })
+        .collect();
+    edges.par_sort_unstable();
+    let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(edges.len());
+    let mut i = 0;
+    while i < edges.len() {
+        let j = i + edges[i..].iter().take_while(|e| e.0 == edges[i].0).count();
+        for x in &edges[i..j] {
+            for y in &edges[i..j] {
+                if x.1 != y.1 {
+                    pairs.push((x.1, y.1));
+                }
+            }
+        }
+        i = j;
+    }
+    pairs.par_sort_unstable();
+    let mut start = vec![0u32; triangles.len() + 1];
+    for &(t, _) in &pairs {
+        start[t as usize + 1] += 1;
+    }
+    for t in 0..triangles.len() {
+        start[t + 1] += start[t];
+    }
+    (start, pairs.into_iter().map(|p| p.1).collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -657,42 +695,4 @@ mod tests {
             "a non-trivial solution"
         );
     }
-}
-
-/// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
-/// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
-fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
-    use rayon::prelude::*;
-    let mut edges: Vec<(u64, u32)> = triangles
-        .par_iter()
-        .enumerate()
-        .flat_map_iter(|(t, &[a, b, c])| {
-            [(a, b), (b, c), (c, a)]
-                .into_iter()
-                .map(move |(u, v)| (((u.min(v) as u64) << 32) | u.max(v) as u64, t as u32))
-        })
-        .collect();
-    edges.par_sort_unstable();
-    let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(edges.len());
-    let mut i = 0;
-    while i < edges.len() {
-        let j = i + edges[i..].iter().take_while(|e| e.0 == edges[i].0).count();
-        for x in &edges[i..j] {
-            for y in &edges[i..j] {
-                if x.1 != y.1 {
-                    pairs.push((x.1, y.1));
-                }
-            }
-        }
-        i = j;
-    }
-    pairs.par_sort_unstable();
-    let mut start = vec![0u32; triangles.len() + 1];
-    for &(t, _) in &pairs {
-        start[t as usize + 1] += 1;
-    }
-    for t in 0..triangles.len() {
-        start[t + 1] += start[t];
-    }
-    (start, pairs.into_iter().map(|p| p.1).collect())
 }
