@@ -312,16 +312,15 @@ impl<'a> SplineTrack<'a> {
         let key = |r: DVec3| (r.length() * 1e9) as u64;
         let mut done = vec![false; m];
         let mut heap: BinaryHeap<Reverse<(u64, u32, u32)>> = BinaryHeap::new(); // (angle, tri, from)
-        let mut starts: Vec<u32> = (0..m as u32)
-            .filter(|&t| per[t as usize].is_some())
+                                                                                // Keys computed once, sorted in parallel ((key, index) pairs are distinct, so the order
+                                                                                // is the same as a stable sort by key would give).
+        let mut starts: Vec<(u64, u32)> = per
+            .par_iter()
+            .enumerate()
+            .filter_map(|(t, x)| x.as_ref().map(|x| (key(x.r[1]), t as u32)))
             .collect();
-        starts.sort_by_key(|&t| {
-            (
-                key(per[t as usize].as_ref().map_or(DVec3::ZERO, |x| x.r[1])),
-                t,
-            )
-        });
-        for &start in &starts {
+        starts.par_sort_unstable();
+        for &(_, start) in &starts {
             if done[start as usize] {
                 continue;
             }
