@@ -204,9 +204,32 @@ pub struct TimingArgs {
     /// grid meets them.
     #[arg(long, value_name = "FPS")]
     fps: Option<f64>,
+    /// Close every key sequence into a loop (append its first key after the last) and let
+    /// `spline` wrap around it. Without it, tracks whose last key equals the first wrap.
+    #[arg(long = "loop", conflicts_with = "no_loop")]
+    looping: bool,
+    /// Never wrap `spline` around the ends, even when the last key equals the first.
+    #[arg(long)]
+    no_loop: bool,
+    /// Seconds to continue the motion before the first key (the seed paper's exaggeration).
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    extend_before: f64,
+    /// Seconds to continue the motion after the last key.
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    extend_after: f64,
 }
 
 impl TimingArgs {
+    /// `Some(true)`: --loop; `Some(false)`: --no-loop; `None`: tracks whose last key equals the
+    /// first wrap.
+    fn looping(&self) -> Option<bool> {
+        match (self.looping, self.no_loop) {
+            (true, _) => Some(true),
+            (_, true) => Some(false),
+            _ => None,
+        }
+    }
+
     fn timing(&self) -> Timing {
         match (self.fps, self.tweens, self.rate) {
             (Some(f), _, _) => Timing::Fps(f),
@@ -272,19 +295,6 @@ pub struct TweenArgs {
     /// Worker threads for frames (default: all cores). Output is identical for any value.
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Close every key sequence into a loop (append its first key after the last) and let
-    /// `spline` wrap around it. Without it, tracks whose last key equals the first wrap.
-    #[arg(long = "loop", conflicts_with = "no_loop")]
-    looping: bool,
-    /// Never wrap `spline` around the ends, even when the last key equals the first.
-    #[arg(long)]
-    no_loop: bool,
-    /// Seconds to continue the motion before the first key (the seed paper's exaggeration).
-    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
-    extend_before: f64,
-    /// Seconds to continue the motion after the last key.
-    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
-    extend_after: f64,
     /// Also write per-frame shape figures (edge distortion, area and volume change,
     /// inverted triangles) to this JSON file (schema: schemas/report.schema.json).
     #[arg(long, value_name = "FILE.json")]
@@ -340,12 +350,8 @@ impl TweenArgs {
             layout: self.layout.into(),
             compact,
             quiet: self.quiet,
-            looping: match (self.looping, self.no_loop) {
-                (true, _) => Some(true),
-                (_, true) => Some(false),
-                _ => None,
-            },
-            extend: [self.extend_before, self.extend_after],
+            looping: self.timing.looping(),
+            extend: [self.timing.extend_before, self.timing.extend_after],
             report: self.report,
             access: Access {
                 roots: self.allow_external,
@@ -453,6 +459,8 @@ impl PreviewArgs {
             keys: self.keys.into(),
             animation: self.animation,
             timing: self.timing.timing(),
+            looping: self.timing.looping(),
+            extend: [self.timing.extend_before, self.timing.extend_after],
             access: Access {
                 roots: self.allow_external,
             },

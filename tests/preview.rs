@@ -212,3 +212,35 @@ fn bad_requests_fail_in_one_line_and_write_nothing() {
         );
     }
 }
+
+/// The timing options are tween's: --loop closes the keys into a loop (tube_bend: 31 frames
+/// at the default 30 per second, 61 with the loop), --extend-after continues past the last key.
+#[test]
+fn timing_options_are_those_of_tween() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("tube_bend.glb");
+    let sheet = dir.path().join("s.png");
+    for (extra, frames) in [
+        (vec![], 31),
+        (vec!["--loop"], 61),
+        (vec!["--extend-after", "0.5"], 46),
+    ] {
+        let mut args = vec![
+            "preview",
+            s(&input),
+            "-o",
+            s(&sheet),
+            "--frames",
+            "100",
+            "--methods",
+            "linear",
+        ];
+        args.extend(extra.iter().copied());
+        let r = run_ok(&args);
+        let line = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            line.contains(&format!("x {frames} frames")),
+            "{extra:?}: {line}"
+        );
+    }
+}

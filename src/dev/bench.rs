@@ -471,6 +471,8 @@ pub fn preview(triangles: usize, methods: &str) -> Result<PreviewBench> {
         keys: crate::tween::KeySource::default(),
         animation: None,
         timing: crate::tween::Timing::Tweens(10),
+        looping: None,
+        extend: [0.0, 0.0],
         access: Default::default(),
         quiet: true,
     };

@@ -19,8 +19,8 @@ use crate::gltf::{arr, Access, Document};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
-    find_morph_meshes, frames_at, key_poses, mesh_geometry, plan, FrameAt, KeyOptions, KeySource,
-    Method, MorphMesh, Timing, TweenOptions,
+    close_loop, find_morph_meshes, frames_at, key_poses, mesh_geometry, plan, FrameAt, KeyOptions,
+    KeySource, Method, MorphMesh, Timing, TweenOptions,
 };
 use anyhow::{bail, Result};
 use camera::Camera;
@@ -76,6 +76,10 @@ pub struct PreviewJob {
     pub keys: KeySource,
     pub animation: Option<String>,
     pub timing: Timing,
+    /// As `tween`'s --loop / --no-loop (`None`: tracks whose last key equals the first wrap).
+    pub looping: Option<bool>,
+    /// Seconds the motion continues before the first key and after the last.
+    pub extend: [f64; 2],
     pub access: Access,
     pub quiet: bool,
 }
@@ -217,7 +221,7 @@ fn spread(len: usize, count: usize) -> Vec<usize> {
 fn columns(
     m: &MorphMesh,
     shown: Shown,
-    timing: Timing,
+    base: &TweenOptions,
     picked: &[usize],
     world: &DMat4,
 ) -> Result<(Vec<[u32; 3]>, Vec<Column>)> {
@@ -242,7 +246,7 @@ fn columns(
             Ok((welded.triangles, cols))
         }
         Shown::Method(method) => {
-            let opts = TweenOptions::new(method, timing);
+            let opts = TweenOptions { method, ..*base };
             let all = plan(&track.times, &opts);
             let frames: Vec<FrameAt> = picked.iter().map(|&i| all[i]).collect();
             let (welded, f) = frames_at(m, track, &opts, &frames)?;
@@ -261,11 +265,11 @@ fn columns(
 }
 
 /// How many columns a band of `shown` has over the first track of `m`.
-fn available(m: &MorphMesh, shown: Shown, timing: Timing) -> usize {
+fn available(m: &MorphMesh, shown: Shown, base: &TweenOptions) -> usize {
     let track = &m.tracks[0];
     match shown {
         Shown::File | Shown::Stored => track.times.len(),
-        Shown::Method(method) => plan(&track.times, &TweenOptions::new(method, timing)).len(),
+        Shown::Method(method) => plan(&track.times, &TweenOptions { method, ..*base }).len(),
     }
 }
 
@@ -274,7 +278,7 @@ fn scene(
     doc: &Document,
     meshes: &[MorphMesh],
     shown: &[Shown],
-    timing: Timing,
+    base: &TweenOptions,
     count: usize,
     quiet: bool,
 ) -> Result<Scene> {
@@ -285,8 +289,8 @@ fn scene(
     for (b, &s) in shown.iter().enumerate() {
         let mut cols: Vec<Column> = Vec::new();
         for (mi, m) in meshes.iter().enumerate() {
-            let picked = spread(available(m, s, timing), count);
-            let (tris, c) = columns(m, s, timing, &picked, &worlds[m.mesh])?;
+            let picked = spread(available(m, s, base), count);
+            let (tris, c) = columns(m, s, base, &picked, &worlds[m.mesh])?;
             if b == 0 {
                 triangles.push(tris);
             }
@@ -425,21 +429,33 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
             .any(|p| !arr(p, "targets").is_empty())
     });
     let mut note = None;
+    // The tween options every band starts from (its method set per band).
+    let base = TweenOptions {
+        wrap: job.looping != Some(false),
+        extend: job.extend,
+        ..TweenOptions::new(Method::default(), job.timing)
+    };
     let (scene, meshes) = if has_targets {
-        let meshes = find_morph_meshes(
+        let mut meshes = find_morph_meshes(
             &doc,
             &KeyOptions {
                 source: job.keys,
                 animation: job.animation.as_deref(),
             },
         )?;
+        if job.looping == Some(true) {
+            meshes
+                .iter_mut()
+                .flat_map(|m| m.tracks.iter_mut())
+                .for_each(close_loop);
+        }
         let shown = match (job.shown.is_empty(), is_tween_output(&doc)) {
             (false, _) => job.shown.clone(),
             (true, true) => vec![Shown::File],
             (true, false) => vec![Shown::Method(Method::Linear), Shown::Method(Method::Spline)],
         };
         (
-            scene(&doc, &meshes, &shown, job.timing, job.frames, job.quiet)?,
+            scene(&doc, &meshes, &shown, &base, job.frames, job.quiet)?,
             Some((meshes, shown)),
         )
     } else {
@@ -491,7 +507,7 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     let mut animation_frames = 0;
     if let (Some(path), Some(kind), Some((meshes, shown))) = (&job.animate, &anim_kind, &meshes) {
         // Every frame of the plan (up to MAX_ANIMATION_FRAMES), the bands stacked in each.
-        let anim = scene_all(&doc, meshes, shown, job.timing, job.quiet)?;
+        let anim = scene_all(&doc, meshes, shown, &base, job.quiet)?;
         let drawn = draw_bands(&anim, &camera, cell, job.shading);
         let n = drawn.iter().map(|b| b.cells.len()).min().unwrap_or(0);
         let times: Vec<f64> = anim.bands[0].1.iter().map(|c| c.time).collect();
@@ -541,19 +557,19 @@ fn scene_all(
     doc: &Document,
     meshes: &[MorphMesh],
     shown: &[Shown],
-    timing: Timing,
+    base: &TweenOptions,
     quiet: bool,
 ) -> Result<Scene> {
     let most = meshes
         .iter()
-        .flat_map(|m| shown.iter().map(move |&s| available(m, s, timing)))
+        .flat_map(|m| shown.iter().map(move |&s| available(m, s, base)))
         .max()
         .unwrap_or(1);
     scene(
         doc,
         meshes,
         shown,
-        timing,
+        base,
         most.min(MAX_ANIMATION_FRAMES),
         quiet,
     )

@@ -34,7 +34,7 @@ pub use keys::{
     TrackOrigin,
 };
 pub use options::{Layout, Method, Timing, TweenOptions, DEFAULT_RATE};
-pub use schedule::{plan, schedule, FrameAt};
+pub use schedule::{close_loop, plan, schedule, FrameAt};
 pub use timegrid::{grid_of, Grid};
 pub use weld::bbox_diagonal;
 
