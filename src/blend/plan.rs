@@ -425,6 +425,27 @@ impl Cleanup<'_> {
     }
 }
 
+/// Refuse a clip without a stride cycle, saying why.
+fn walks(clip: &Clip, an: &Analysis, ch: &Character) -> anyhow::Result<()> {
+    if an.cycles.is_some() {
+        return Ok(());
+    }
+    let why = if ch.legs.is_empty() {
+        "no legs were found in its skeleton".to_string()
+    } else if an.stride < super::cycles::MIN_STRIDE {
+        format!(
+            "its feet travel {:.3} leg lengths forward and back (a T-pose, an idle or a gesture, not a walk)",
+            an.stride
+        )
+    } else {
+        "its feet do not repeat a stride".to_string()
+    };
+    anyhow::bail!(
+        "clip {:?} has no stride cycle: {why}; --cycles none blends the clips whole on normalised time",
+        clip.name
+    )
+}
+
 /// Blend clip `a` with clip `b` (weight `opts.weight` on `b`).
 /// Refused (unless `--cycles none`) when either clip has no stride cycle.
 pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Result<Blended> {
@@ -433,23 +454,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     let (an_a, an_b) = (&an[0], &an[1]);
     if opts.cycles != CycleMethod::None {
         for (clip, an) in [(a, an_a), (b, an_b)] {
-            if an.cycles.is_some() {
-                continue;
-            }
-            let why = if ch.legs.is_empty() {
-                "no legs were found in its skeleton".to_string()
-            } else if an.stride < super::cycles::MIN_STRIDE {
-                format!(
-                    "its feet travel {:.3} leg lengths forward and back (a T-pose, an idle or a gesture, not a walk)",
-                    an.stride
-                )
-            } else {
-                "its feet do not repeat a stride".to_string()
-            };
-            anyhow::bail!(
-                "clip {:?} has no stride cycle: {why}; --cycles none blends the clips whole on normalised time",
-                clip.name
-            );
+            walks(clip, an, &ch)?;
         }
     }
     let spans = [cycles_used(a, an_a), cycles_used(b, an_b)];

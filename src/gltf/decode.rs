@@ -239,6 +239,27 @@ fn unfilter(data: &mut [u8], filter: &str, stride: usize, count: usize) -> Resul
 
 /// Decode primitive `p` of mesh `m` when it is Draco-compressed: its attributes and indices
 /// land in `out`, in the types their accessors declare, and the accessors point there.
+/// The primitive's accessors say how many points and faces its stream decodes to (the extension
+/// requires them to match): nothing larger is decoded, so a stream whose header claims billions
+/// is refused there, before the decoder sizes anything by it.
+fn draco_limits(json: &Value, prim: &Value) -> draco_core::DecodeLimits {
+    let count = |a: &Value| {
+        a.as_u64()
+            .and_then(|a| json["accessors"][a as usize]["count"].as_u64())
+    };
+    let points = prim["attributes"]
+        .as_object()
+        .into_iter()
+        .flatten()
+        .filter_map(|(_, a)| count(a))
+        .max()
+        .unwrap_or(0);
+    let faces = count(&prim["indices"]).map_or(points / 3, |n| n / 3);
+    draco_core::DecodeLimits::default()
+        .with_max_points(points)
+        .with_max_faces(faces)
+}
+
 fn draco_primitive(
     json: &mut Value,
     buffers: &[Vec<u8>],
@@ -256,27 +277,9 @@ fn draco_primitive(
         .ok_or(format!("{what} has no bufferView"))? as usize;
     let stream = view_bytes(json, buffers, out, view)
         .ok_or(format!("{what}: bufferView {view} lies outside its buffer"))?;
-    // The primitive's accessors say how many points and faces the stream decodes to (the
-    // extension requires them to match): nothing larger is decoded, so a stream whose header
-    // claims billions is refused there, before the decoder sizes anything by it.
-    let count = |a: &Value| {
-        a.as_u64()
-            .and_then(|a| json["accessors"][a as usize]["count"].as_u64())
-    };
-    let points = prim["attributes"]
-        .as_object()
-        .into_iter()
-        .flatten()
-        .filter_map(|(_, a)| count(a))
-        .max()
-        .unwrap_or(0);
-    let faces = count(&prim["indices"]).map_or(points / 3, |n| n / 3);
-    let mut reader = draco_core::DecoderBuffer::new(&stream).with_limits(
-        draco_core::DecodeLimits::default()
-            .with_max_points(points)
-            .with_max_faces(faces)
-            .with_max_decoded_bytes(MAX_DECODED.saturating_sub(out.bytes.len() as u64)),
-    );
+    let limits = draco_limits(json, &prim)
+        .with_max_decoded_bytes(MAX_DECODED.saturating_sub(out.bytes.len() as u64));
+    let mut reader = draco_core::DecoderBuffer::new(&stream).with_limits(limits);
     let mut mesh = draco_core::Mesh::new();
     draco_core::MeshDecoder::new()
         .decode(&mut reader, &mut mesh)

@@ -405,6 +405,66 @@ fn image_kind(path: &Path, allowed: &[&str], what: &str) -> Result<String> {
     Ok(ext)
 }
 
+/// The morph meshes of `doc` as `job` asks (keys, animation, loop) and the bands to draw.
+fn morph_scene(job: &PreviewJob, doc: &Document) -> Result<(Vec<MorphMesh>, Vec<Shown>)> {
+    let keys = KeyOptions {
+        source: job.keys,
+        animation: job.animation.as_deref(),
+    };
+    let mut meshes = find_morph_meshes(doc, &keys)?;
+    if job.looping == Some(true) {
+        meshes
+            .iter_mut()
+            .flat_map(|m| m.tracks.iter_mut())
+            .for_each(close_loop);
+    }
+    let shown = match (job.shown.is_empty(), is_tween_output(doc)) {
+        (false, _) => job.shown.clone(),
+        (true, true) => vec![Shown::File],
+        (true, false) => vec![Shown::Method(Method::Linear), Shown::Method(Method::Spline)],
+    };
+    Ok((meshes, shown))
+}
+
+/// The view of `--view auto`: the most motion over the first band's columns, or for a still
+/// the widest picture.
+fn auto_view(scene: &Scene) -> View {
+    let first: Vec<Vec<DVec3>> = scene.bands[0].1.iter().map(|c| c.meshes.concat()).collect();
+    match first.len() {
+        1 => View::widest(&first[0]),
+        _ => View::most_motion(&first),
+    }
+}
+
+/// The animation's frames: each the bands stacked (one cell each), shown for its own time.
+fn animation(
+    anim: &Scene,
+    camera: &Camera,
+    cell: (usize, usize),
+    shading: Shading,
+) -> Vec<(Picture, f64)> {
+    let drawn = draw_bands(anim, camera, cell, shading);
+    let n = drawn.iter().map(|b| b.cells.len()).min().unwrap_or(0);
+    let times: Vec<f64> = anim.bands[0].1.iter().map(|c| c.time).collect();
+    (0..n)
+        .map(|i| {
+            let one: Vec<Band> = drawn
+                .iter()
+                .map(|b| Band {
+                    label: b.label.clone(),
+                    cells: vec![b.cells[i].clone()],
+                })
+                .collect();
+            let delay = if i + 1 < n {
+                times[i + 1] - times[i]
+            } else {
+                1.0 / 30.0
+            };
+            (sheet::compose(&one, cell, 1), delay.max(0.02))
+        })
+        .collect()
+}
+
 /// Run the preview job. Nothing is written unless every step succeeds.
 pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     let started = std::time::Instant::now();
@@ -436,24 +496,7 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
         ..TweenOptions::new(Method::default(), job.timing)
     };
     let (scene, meshes) = if has_targets {
-        let mut meshes = find_morph_meshes(
-            &doc,
-            &KeyOptions {
-                source: job.keys,
-                animation: job.animation.as_deref(),
-            },
-        )?;
-        if job.looping == Some(true) {
-            meshes
-                .iter_mut()
-                .flat_map(|m| m.tracks.iter_mut())
-                .for_each(close_loop);
-        }
-        let shown = match (job.shown.is_empty(), is_tween_output(&doc)) {
-            (false, _) => job.shown.clone(),
-            (true, true) => vec![Shown::File],
-            (true, false) => vec![Shown::Method(Method::Linear), Shown::Method(Method::Spline)],
-        };
+        let (meshes, shown) = morph_scene(job, &doc)?;
         (
             scene(&doc, &meshes, &shown, &base, job.frames, job.quiet)?,
             Some((meshes, shown)),
@@ -485,13 +528,7 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
             .flat_map(|c| c.meshes.iter())
             .flatten()
     };
-    let view = job.view.unwrap_or_else(|| {
-        let first: Vec<Vec<DVec3>> = scene.bands[0].1.iter().map(|c| c.meshes.concat()).collect();
-        match first.len() {
-            1 => View::widest(&first[0]),
-            _ => View::most_motion(&first),
-        }
-    });
+    let view = job.view.unwrap_or_else(|| auto_view(&scene));
     let camera = Camera::fit(view, all_points(), cell.0, cell.1);
     let draw_start = std::time::Instant::now();
     let drawn = draw_bands(&scene, &camera, cell, job.shading);
@@ -506,28 +543,12 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     files.write(&job.output, &encode::png(&picture)?)?;
     let mut animation_frames = 0;
     if let (Some(path), Some(kind), Some((meshes, shown))) = (&job.animate, &anim_kind, &meshes) {
-        // Every frame of the plan (up to MAX_ANIMATION_FRAMES), the bands stacked in each.
-        let anim = scene_all(&doc, meshes, shown, &base, job.quiet)?;
-        let drawn = draw_bands(&anim, &camera, cell, job.shading);
-        let n = drawn.iter().map(|b| b.cells.len()).min().unwrap_or(0);
-        let times: Vec<f64> = anim.bands[0].1.iter().map(|c| c.time).collect();
-        let frames: Vec<(Picture, f64)> = (0..n)
-            .map(|i| {
-                let one: Vec<Band> = drawn
-                    .iter()
-                    .map(|b| Band {
-                        label: b.label.clone(),
-                        cells: vec![b.cells[i].clone()],
-                    })
-                    .collect();
-                let delay = if i + 1 < n {
-                    times[i + 1] - times[i]
-                } else {
-                    1.0 / 30.0
-                };
-                (sheet::compose(&one, cell, 1), delay.max(0.02))
-            })
-            .collect();
+        let frames = animation(
+            &scene_all(&doc, meshes, shown, &base, job.quiet)?,
+            &camera,
+            cell,
+            job.shading,
+        );
         animation_frames = frames.len();
         let bytes = match kind.as_str() {
             "gif" => encode::gif(&frames)?,
