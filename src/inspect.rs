@@ -5,7 +5,7 @@
 //! mix, and the required extensions with whether they are decoded. Text, or JSON
 //! (`schemas/inspect.schema.json`).
 
-use crate::gltf::{arr, Access, Document};
+use crate::gltf::{arr, Access, Document, PASSED_THROUGH};
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, KeyOptions, KeySource, MorphMesh,
     TrackOrigin, TweenOptions,
@@ -15,30 +15,6 @@ use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeSet;
 use std::path::Path;
-
-/// Extensions whose data inbetween passes through untouched (it never needs to read them).
-const PASSED_THROUGH: &[&str] = &[
-    "KHR_texture_basisu",
-    "KHR_texture_transform",
-    "EXT_texture_webp",
-    "EXT_texture_avif",
-    "KHR_materials_emissive_strength",
-    "KHR_materials_clearcoat",
-    "KHR_materials_ior",
-    "KHR_materials_iridescence",
-    "KHR_materials_sheen",
-    "KHR_materials_specular",
-    "KHR_materials_transmission",
-    "KHR_materials_unlit",
-    "KHR_materials_variants",
-    "KHR_materials_volume",
-    "KHR_materials_anisotropy",
-    "KHR_materials_dispersion",
-    "KHR_materials_pbrSpecularGlossiness",
-    "KHR_lights_punctual",
-    "KHR_xmp_json_ld",
-    "EXT_mesh_gpu_instancing",
-];
 
 #[derive(Serialize)]
 pub struct Inspection {

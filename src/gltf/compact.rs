@@ -64,8 +64,9 @@ pub fn drop_channels(json: &mut Value, dropped: &[(usize, usize)], replaced: &mu
 }
 
 /// Extensions whose objects we know not to refer to accessors or buffer views by index (or
-/// whose references [`compact`] rewrites). With any other extension present, nothing is dropped.
-const KNOWN_EXTENSIONS: &[&str] = &[
+/// whose references [`compact`] rewrites): carried through as they are (`inspect` lists them
+/// as passed through). With any other extension present, nothing is dropped.
+pub const PASSED_THROUGH: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_materials_clearcoat",
     "KHR_materials_ior",
@@ -96,7 +97,7 @@ pub fn compact(out: &mut Output, candidates: &BTreeSet<usize>) {
     if candidates.is_empty()
         || arr(json, "extensionsUsed")
             .iter()
-            .any(|e| !KNOWN_EXTENSIONS.contains(&e.as_str().unwrap_or("")))
+            .any(|e| !PASSED_THROUGH.contains(&e.as_str().unwrap_or("")))
     {
         return;
     }
