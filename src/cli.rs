@@ -413,14 +413,13 @@ impl PreviewArgs {
         let shown = self
             .methods
             .iter()
-            .map(|m| match m.trim() {
-                "linear" => Ok(preview::Shown::Method(Method::Linear)),
-                "seed" => Ok(preview::Shown::Method(Method::Seed)),
-                "spline" => Ok(preview::Shown::Method(Method::Spline)),
-                "file" => Ok(preview::Shown::File),
-                other => Err(format!(
-                    "--methods takes linear, seed, spline and file (got {other:?})"
-                )),
+            .map(|m| {
+                preview::Shown::parse(m.trim()).ok_or_else(|| {
+                    format!(
+                        "--methods takes linear, seed, spline and file (got {:?})",
+                        m.trim()
+                    )
+                })
             })
             .collect::<Result<Vec<_>, _>>()?;
         let size = match &self.size {

@@ -342,6 +342,30 @@ pub struct EndToEnd {
     pub summary: String,
 }
 
+/// A tube of about `triangles` (radius 1, length 6) with the keys `keys` makes of its positions,
+/// written to `keys.glb` in a fresh temporary folder named by `tag`: (folder, file, triangles,
+/// vertices).
+fn tube_file(
+    triangles: usize,
+    tag: &str,
+    keys: impl FnOnce(&[DVec3]) -> Vec<Vec<DVec3>>,
+) -> Result<(PathBuf, PathBuf, usize, usize)> {
+    let (segments, rings) = tube_for(triangles);
+    let s = synth::tube(rings, segments, 6.0, 1.0, 1.0);
+    let keys = keys(&s.positions);
+    let dir = std::env::temp_dir().join(format!("inbetween-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let input = dir.join("keys.glb");
+    let counts = (s.triangles.len(), s.positions.len());
+    synth::KeyframeFile {
+        meshes: vec![synth::KeyedMesh::new("tube", s, keys)],
+        key_times: None,
+        key_weights: None,
+    }
+    .write(&input)?;
+    Ok((dir, input, counts.0, counts.1))
+}
+
 /// Write a tube of `triangles` with three keys (straight, bent 90, bent 150 and twisted 60) to
 /// a temporary .glb, run `inbetween tween --tweens N EXTRA...` on it in a child process writing
 /// `tween.<format>`, and time it.
@@ -351,23 +375,12 @@ pub fn end_to_end(
     format: &str,
     extra: &[String],
 ) -> Result<EndToEnd> {
-    let (segments, rings) = tube_for(triangles);
-    let s = synth::tube(rings, segments, 6.0, 1.0, 1.0);
-    let k1 = synth::bend(&s.positions, 3.0, 90f64.to_radians(), 0.8);
-    let (_, k2, _) = bench_keys(triangles);
-    let dir = std::env::temp_dir().join(format!("inbetween-e2e-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    let input = dir.join("keys.glb");
+    let (dir, input, tri_count, vertices) = tube_file(triangles, "e2e", |p| {
+        let (_, k2, _) = bench_keys(triangles);
+        vec![synth::bend(p, 3.0, 90f64.to_radians(), 0.8), k2]
+    })?;
     let output = dir.join(format!("tween.{format}"));
-    let tri_count = s.triangles.len();
-    let vertices = s.positions.len();
     let frames = 2 * (tweens + 1) + 1;
-    synth::KeyframeFile {
-        meshes: vec![synth::KeyedMesh::new("tube", s, vec![k1, k2])],
-        key_times: None,
-        key_weights: None,
-    }
-    .write(&input)?;
     let exe = std::env::current_exe()?;
     let run = |more: &[&str]| -> Result<(f64, String)> {
         let start = Instant::now();
@@ -437,26 +450,15 @@ pub struct PreviewBench {
 }
 
 pub fn preview(triangles: usize, methods: &str) -> Result<PreviewBench> {
-    let (segments, rings) = tube_for(triangles);
-    let s = synth::tube(rings, segments, 6.0, 1.0, 1.0);
-    let k1 = synth::bend(&s.positions, 3.0, 120f64.to_radians(), 0.8);
-    let dir = std::env::temp_dir().join(format!("inbetween-preview-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    let input = dir.join("keys.glb");
-    let tri_count = s.triangles.len();
-    synth::KeyframeFile {
-        meshes: vec![synth::KeyedMesh::new("tube", s, vec![k1])],
-        key_times: None,
-        key_weights: None,
-    }
-    .write(&input)?;
+    let (dir, input, tri_count, _) = tube_file(triangles, "preview", |p| {
+        vec![synth::bend(p, 3.0, 120f64.to_radians(), 0.8)]
+    })?;
     let shown = methods
         .split(',')
-        .map(|m| match m {
-            "linear" => Ok(crate::preview::Shown::Method(crate::tween::Method::Linear)),
-            "seed" => Ok(crate::preview::Shown::Method(crate::tween::Method::Seed)),
-            "spline" => Ok(crate::preview::Shown::Method(crate::tween::Method::Spline)),
-            m => Err(anyhow::anyhow!("unknown method {m:?}")),
+        .map(|m| {
+            crate::preview::Shown::parse(m)
+                .filter(|s| matches!(s, crate::preview::Shown::Method(_)))
+                .ok_or_else(|| anyhow::anyhow!("unknown method {m:?}"))
         })
         .collect::<Result<Vec<_>>>()?;
     let job = crate::preview::PreviewJob {

@@ -43,6 +43,19 @@ pub enum Shown {
 }
 
 impl Shown {
+    /// The bands `--methods` may name, by their labels.
+    pub const NAMED: [Shown; 4] = [
+        Shown::Method(Method::Linear),
+        Shown::Method(Method::Seed),
+        Shown::Method(Method::Spline),
+        Shown::File,
+    ];
+
+    /// The band `--methods` names `name` (linear, seed, spline or file).
+    pub fn parse(name: &str) -> Option<Shown> {
+        Shown::NAMED.into_iter().find(|s| s.label() == name)
+    }
+
     fn label(self) -> &'static str {
         match self {
             Shown::Method(Method::Linear) => "linear",
