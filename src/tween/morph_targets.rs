@@ -413,14 +413,13 @@ fn reencode_authored(
         acc["componentType"] == 5126 && acc["bufferView"].is_u64() && acc.get("sparse").is_none()
     };
     // Attribute by attribute, so that each attribute's targets share one filtered view (the
-    // compaction measured them so).
-    // The dense ones first, then the sparse ones, so that nothing comes between the dense ones.
+    // compaction measured them so): the dense ones first, then the sparse ones, so that nothing
+    // comes between the dense ones.
     let mut targets = old;
-    for ((name, bounds), sparse_pass) in [("POSITION", true), ("NORMAL", false), ("TANGENT", false)]
-        .into_iter()
-        .flat_map(|a| [(a, false), (a, true)])
-    {
-        for (i, t) in targets.iter_mut().enumerate() {
+    for (name, bounds) in [("POSITION", true), ("NORMAL", false), ("TANGENT", false)] {
+        // (target, its values, sparse), each decided once.
+        let mut chosen: Vec<(usize, Vec<f32>, bool)> = Vec::new();
+        for (i, t) in targets.iter().enumerate() {
             let values = match name {
                 "POSITION" => Some(&read.target_pos[i]),
                 "NORMAL" => read.target_nrm[i].as_ref(),
@@ -432,18 +431,19 @@ fn reencode_authored(
             if !plain(&out.json, a) {
                 continue;
             }
+            replaced.insert(a as usize);
             let flat: Vec<f32> = values.iter().flat_map(|d| d.as_vec3().to_array()).collect();
             let sparse = sparse && sparse_pays(&flat, storage, out.meshopt);
-            if sparse != sparse_pass {
-                continue;
-            }
-            replaced.insert(a as usize);
+            chosen.push((i, flat, sparse));
+        }
+        chosen.sort_by_key(|c| c.2);
+        for (i, flat, sparse) in chosen {
             let new = out.push_morph(&flat, storage, sparse, bounds);
             if let Some(view) = out.json["accessors"][new]["bufferView"].as_u64() {
                 out.bin.views[view as usize][FILTER_GROUP] =
                     json!(format!("authored {} {} {name}", w.mesh.mesh, read.index));
             }
-            t.insert(name.into(), json!(new));
+            targets[i].insert(name.into(), json!(new));
         }
     }
     targets
