@@ -2,6 +2,8 @@
 # Install what the tests use besides cargo, inside the project (but chromium, from apt):
 #   tools/node/node_modules  the Khronos glTF-Validator, gltfpack, glTF-Transform, three.js (npm)
 #   .venv                    python with numpy + scipy (the peer reference), usd-core, jsonschema
+#   .venv-bpy                Blender as a Python module (bpy 5.0.1 needs Python 3.11; it pins
+#                            numpy 1.26, hence a venv of its own) for the USD import test
 #   chromium                 (apt, system-wide) for the three.js playback test
 # Safe to run again: it only installs what is missing.
 set -euo pipefail
@@ -14,6 +16,15 @@ if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import numpy, scipy, pxr,
   echo "setup: creating .venv with numpy, scipy, usd-core, jsonschema (pip)"
   python3 -m venv .venv
   .venv/bin/pip install --quiet --disable-pip-version-check -r tools/requirements.txt
+fi
+if [ ! -x .venv-bpy/bin/python ] || ! .venv-bpy/bin/python -c "import bpy" 2>/dev/null; then
+  if ! command -v python3.11 >/dev/null 2>&1; then
+    echo "setup: bpy (Blender 5.0 as a Python module) needs python3.11, which is not on PATH; install it and run again" >&2
+    exit 1
+  fi
+  echo "setup: creating .venv-bpy with bpy 5.0.1 (pip, about 400 MB to download)"
+  python3.11 -m venv .venv-bpy
+  .venv-bpy/bin/pip install --quiet --disable-pip-version-check -r tools/requirements-bpy.txt
 fi
 # Chromium (Debian package) plays outputs through three.js in tests/browser.rs (WebGL2 on
 # SwiftShader, no GPU). The one system-wide install: apt needs root (or sudo).

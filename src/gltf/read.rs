@@ -5,7 +5,9 @@
 //! Accessors are decoded in [`super::accessor`].
 
 use super::decode::decode;
-use super::uri::{read_image, read_prefix, reference, regular_file, uri_error, Access, Reference};
+use super::uri::{
+    image_mime, read_image, read_prefix, reference, regular_file, uri_error, Access, Reference,
+};
 use anyhow::{anyhow, bail, Context, Result};
 use base64::Engine;
 use serde_json::Value;
@@ -151,6 +153,33 @@ impl Document {
             .resolve(&self.folder(), uri)
             .map_err(|why| uri_error(&self.path, &what, uri, why))?;
         read_image(&file).map_err(|why| uri_error(&self.path, &what, uri, why))
+    }
+
+    /// The bytes of image `i` wherever they are (a buffer view, a data URI or an external file)
+    /// and their type as their first bytes say (`None` when they are none glTF allows).
+    pub fn image(&self, i: usize) -> Result<(Vec<u8>, Option<&'static str>)> {
+        let img = &self.json["images"][i];
+        let data = if let Some(v) = img["bufferView"].as_u64() {
+            let view = &self.json["bufferViews"][v as usize];
+            let buffer = view["buffer"].as_u64().unwrap_or(0) as usize;
+            let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+            let len = view["byteLength"].as_u64().unwrap_or(0) as usize;
+            self.buffers
+                .get(buffer)
+                .and_then(|b| b.get(start..start.checked_add(len)?))
+                .ok_or_else(|| self.err(format!("image {i}: buffer view {v} is out of range")))?
+                .to_vec()
+        } else {
+            match img["uri"].as_str() {
+                Some(uri) if uri.starts_with("data:") => decode_data_uri(uri).ok_or_else(|| {
+                    self.err(format!("image {i} has a data URI that is not base64"))
+                })?,
+                Some(uri) => self.read_image(i, uri)?.0,
+                None => bail!(self.err(format!("image {i} has neither a uri nor a bufferView"))),
+            }
+        };
+        let mime = image_mime(&data);
+        Ok((data, mime))
     }
 }
 

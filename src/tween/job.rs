@@ -61,6 +61,8 @@ pub struct Summary {
     /// Seconds of set-up by part (see `clock`): symbolic, key gradients and turns, numeric
     /// factorization, spline window.
     pub setup_parts: [f64; 4],
+    /// What a USD output could not carry (textures USD cannot read), one line each.
+    pub left_out: Vec<String>,
 }
 
 /// Morph targets some engines blend at once (what glTF asks every client to support, and
@@ -141,6 +143,9 @@ impl Summary {
                 );
             }
         }
+        for what in &self.left_out {
+            out += &format!("\nwarning: {what}");
+        }
         if growth > GROWTH_WARNING {
             out += &format!(
                 "\nwarning: the output is {growth:.1}x the size of the input: --rate, --tweens or --fps set how many frames are written"
@@ -170,6 +175,7 @@ struct Run<'a> {
     reports: Vec<MeshReport>,
     output_bytes: u64,
     applied: Applied,
+    left_out: Vec<String>,
 }
 
 impl Run<'_> {
@@ -253,7 +259,15 @@ impl Run<'_> {
                 codes,
             })
             .collect();
-        let stage = usd::build_stage(&self.doc, &plans, rate)?;
+        // Texture files beside the layer are named after it: `<stem>_<image>.png`.
+        let stem = (self.job.output.file_stem())
+            .and_then(|s| s.to_str())
+            .unwrap_or("stage");
+        let stage = usd::build_stage(&self.doc, &plans, rate, &format!("{stem}_"))?;
+        let input = self.doc.path.display();
+        self.left_out = (stage.look.left_out.iter())
+            .map(|what| format!("{input}: {what}"))
+            .collect();
         let (meshes, opts, progress) = (&self.meshes, &self.opts, &self.progress);
         let (stats, reports) = (&mut self.stats, &mut self.reports);
         self.output_bytes = usd::write_file(
@@ -377,6 +391,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         reports: Vec::new(),
         output_bytes: 0,
         applied: Applied::default(),
+        left_out: Vec::new(),
     };
     let mut files = Outputs::new();
     match Container::of(format) {
@@ -394,5 +409,6 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         most_targets: run.applied.most_targets,
         compacted: run.applied.compacted,
         setup_parts: super::clock::seconds(),
+        left_out: run.left_out,
     })
 }

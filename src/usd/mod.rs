@@ -1,10 +1,12 @@
 //! USD point caches of a glTF scene.
 //!
 //! The pipeline, one module per stage: [`stage`] (the glTF scene as a USD stage model: Xforms,
-//! Meshes, which of them are animated and at which time codes) -> the frames, streamed in as
+//! Meshes, which of them are animated and at which time codes; [`material`]: the glTF
+//! materials as UsdShade materials and the texture files they read) -> the frames, streamed in as
 //! they are computed -> [`usda`] (text, samples spooled) | [`usdc`] (crate file) -> [`usdz`]
 //! (package); [`write`] picks the format and stages the file.
 
+mod material;
 mod stage;
 mod usda;
 mod usdc;

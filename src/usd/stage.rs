@@ -17,10 +17,12 @@
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
 
+use super::material::{st_name, Look, LookBuilder};
 use crate::gltf::{arr, read_attribute, read_attribute3, read_triangles, read_vec3, Document};
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
+use std::cell::RefCell;
 use std::collections::HashMap;
 
 /// One Mesh prim to write.
@@ -28,7 +30,8 @@ pub struct MeshPrim {
     pub name: String,
     pub points: Vec<[f32; 3]>,
     pub normals: Option<Vec<[f32; 3]>>,
-    pub st: Option<Vec<[f32; 2]>>,
+    /// Texture coordinate sets: (`st`, TEXCOORD_0), (`st1`, TEXCOORD_1), ..., V flipped.
+    pub st: Vec<(String, Vec<[f32; 2]>)>,
     pub indices: Vec<u32>,
     /// `primvars:displayColor`: COLOR_0 per vertex (linear, as glTF stores it), else the
     /// material's base colour as one constant.
@@ -36,6 +39,8 @@ pub struct MeshPrim {
     /// `primvars:displayOpacity` per vertex: COLOR_0's alpha, when it has one.
     pub opacity: Option<Vec<f32>>,
     pub double_sided: bool,
+    /// The Material prim bound to it (in [`Stage::look`]'s scope).
+    pub material: Option<String>,
     /// For an animated primitive: where its frames come from and their time codes.
     pub animation: Option<Animation>,
 }
@@ -93,6 +98,8 @@ pub struct Stage {
     pub start: f64,
     pub end: f64,
     pub children: Vec<Prim>,
+    /// The materials the meshes are bound to and the textures they read.
+    pub look: Look,
 }
 
 /// Make `s` a valid USD identifier.
@@ -132,8 +139,13 @@ pub struct MeshPlan {
 }
 
 /// Build the stage from the glTF document and the processed meshes' frames, at `rate` time
-/// codes per second.
-pub fn build_stage(doc: &Document, meshes: &[MeshPlan], rate: f64) -> Result<Stage> {
+/// codes per second; texture files are named `<texture_prefix><image name>.<png|jpg>`.
+pub fn build_stage(
+    doc: &Document,
+    meshes: &[MeshPlan],
+    rate: f64,
+    texture_prefix: &str,
+) -> Result<Stage> {
     let json = &doc.json;
     let codes: Vec<Vec<f64>> = meshes.iter().map(|m| m.codes.clone()).collect();
     let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
@@ -171,12 +183,17 @@ pub fn build_stage(doc: &Document, meshes: &[MeshPlan], rate: f64) -> Result<Sta
         doc,
         meshes,
         codes: &codes,
+        look: RefCell::new(LookBuilder::new(doc, texture_prefix)),
     };
     let mut taken = HashMap::new();
     let mut children = Vec::new();
     for n in roots {
         children.push(ctx.node(n, &mut taken, 0)?);
     }
+    let look = ctx
+        .look
+        .into_inner()
+        .finish(unique("Materials".into(), &mut taken))?;
     let all: Vec<f64> = codes.iter().flatten().copied().collect();
     let start = all.iter().copied().fold(f64::INFINITY, f64::min);
     let end = all.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -191,6 +208,7 @@ pub fn build_stage(doc: &Document, meshes: &[MeshPlan], rate: f64) -> Result<Sta
         start,
         end,
         children,
+        look,
     })
 }
 
@@ -198,6 +216,7 @@ struct Ctx<'a> {
     doc: &'a Document,
     meshes: &'a [MeshPlan],
     codes: &'a [Vec<f64>],
+    look: RefCell<LookBuilder<'a>>,
 }
 
 impl Ctx<'_> {
@@ -250,11 +269,15 @@ impl Ctx<'_> {
             let points = read_vec3(doc, pos as usize, &format!("{what} POSITION"))?;
             let n = points.len();
             let normals = read_attribute3(doc, p, "NORMAL", n, &what)?;
-            let st = read_attribute(doc, p, "TEXCOORD_0", 2, n, &what)?.map(|v| {
-                v.chunks_exact(2)
-                    .map(|t| [t[0] as f32, 1.0 - t[1] as f32])
-                    .collect()
-            });
+            let mut st = Vec::new();
+            for set in 0..8 {
+                let key = format!("TEXCOORD_{set}");
+                if let Some(v) = read_attribute(doc, p, &key, 2, n, &what)? {
+                    let v = v.chunks_exact(2);
+                    let v = v.map(|t| [t[0] as f32, 1.0 - t[1] as f32]).collect();
+                    st.push((st_name(set), v));
+                }
+            }
             let indices: Vec<u32> = read_triangles(doc, p, n, &what)?
                 .into_iter()
                 .flatten()
@@ -279,6 +302,7 @@ impl Ctx<'_> {
                 }
                 None => None,
             };
+            let rgba_present = rgba.is_some();
             let (color, opacity) = match rgba {
                 Some((v, comps)) => {
                     let c = |x: f64| x.clamp(0.0, 1.0) as f32;
@@ -292,6 +316,10 @@ impl Ctx<'_> {
                 None => (color.map(DisplayColor::Constant), None),
             };
             let double_sided = material.is_some_and(|m| m["doubleSided"].as_bool() == Some(true));
+            let material = match p["material"].as_u64() {
+                Some(m) => (self.look.borrow_mut()).material(m as usize, rgba_present)?,
+                None => None,
+            };
             // Processed meshes keep every primitive (a non-triangle one is an error there).
             let animation = processed.map(|k| Animation {
                 mesh: k,
@@ -317,6 +345,7 @@ impl Ctx<'_> {
                 color,
                 opacity,
                 double_sided,
+                material,
                 animation,
             })));
         }

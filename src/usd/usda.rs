@@ -2,6 +2,7 @@
 //! scratch files beside the output as frames arrive, then copied into the layer, so no frame
 //! is held in memory.
 
+use super::material::{Material, Value, SURFACE};
 use super::stage::{
     animated, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
 };
@@ -31,14 +32,80 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
     writeln!(out)?;
     writeln!(out, "def Xform \"{}\"", stage.root)?;
     writeln!(out, "{{")?;
+    let look = &stage.look;
+    let scope = format!("/{}/{}", stage.root, look.scope);
     for c in &stage.children {
-        write_prim(c, out, 1, spool)?;
+        write_prim(c, out, 1, &scope, spool)?;
+    }
+    if !look.materials.is_empty() {
+        writeln!(out, "    def Scope \"{}\"", look.scope)?;
+        writeln!(out, "    {{")?;
+        for m in &look.materials {
+            write_material(m, out, &format!("{scope}/{}", m.name))?;
+        }
+        writeln!(out, "    }}")?;
     }
     writeln!(out, "}}")?;
     Ok(())
 }
 
-fn write_prim(prim: &Prim, out: &mut dyn Write, depth: usize, spool: &Spool) -> Result<()> {
+/// A Material prim (in the materials scope) and its shaders; `path` is its own path.
+fn write_material(m: &Material, out: &mut dyn Write, path: &str) -> Result<()> {
+    writeln!(out, "        def Material \"{}\"", m.name)?;
+    writeln!(out, "        {{")?;
+    writeln!(
+        out,
+        "            token outputs:surface.connect = <{path}/{SURFACE}.outputs:surface>"
+    )?;
+    for s in &m.shaders {
+        writeln!(out, "            def Shader \"{}\"", s.name)?;
+        writeln!(out, "            {{")?;
+        let p = "                ";
+        writeln!(out, "{p}uniform token info:id = \"{}\"", s.id)?;
+        for i in &s.inputs {
+            let (ty, name) = (i.type_name, i.name);
+            match &i.value {
+                Value::Connect { shader, output } => writeln!(
+                    out,
+                    "{p}{ty} inputs:{name}.connect = <{path}/{shader}.outputs:{output}>"
+                )?,
+                v => writeln!(out, "{p}{ty} inputs:{name} = {}", value_text(v))?,
+            }
+        }
+        for (name, ty) in &s.outputs {
+            writeln!(out, "{p}{ty} outputs:{name}")?;
+        }
+        writeln!(out, "            }}")?;
+    }
+    writeln!(out, "        }}")?;
+    Ok(())
+}
+
+/// A shader input's value as USD text.
+fn value_text(v: &Value) -> String {
+    let list = |v: &[f32]| {
+        let items: Vec<String> = v.iter().map(|x| F(*x).to_string()).collect();
+        format!("({})", items.join(", "))
+    };
+    match v {
+        Value::Float(x) => F(*x).to_string(),
+        Value::Vec2(x) => list(x),
+        Value::Vec3(x) => list(x),
+        Value::Vec4(x) => list(x),
+        Value::Token(t) => format!("{t:?}"),
+        Value::Text(t) => format!("{t:?}"),
+        Value::Asset(a) => format!("@{a}@"),
+        Value::Connect { .. } => unreachable!("connections are written as .connect"),
+    }
+}
+
+fn write_prim(
+    prim: &Prim,
+    out: &mut dyn Write,
+    depth: usize,
+    scope: &str,
+    spool: &Spool,
+) -> Result<()> {
     let pad = "    ".repeat(depth);
     match prim {
         Prim::Xform {
@@ -64,11 +131,11 @@ fn write_prim(prim: &Prim, out: &mut dyn Write, depth: usize, spool: &Spool) -> 
                 )?;
             }
             for c in children {
-                write_prim(c, out, depth + 1, spool)?;
+                write_prim(c, out, depth + 1, scope, spool)?;
             }
             writeln!(out, "{pad}}}")?;
         }
-        Prim::Mesh(m) => write_mesh(m, out, &pad, spool)?,
+        Prim::Mesh(m) => write_mesh(m, out, &pad, scope, spool)?,
     }
     Ok(())
 }
@@ -99,10 +166,29 @@ fn write_vec3s(out: &mut dyn Write, v: &[[f32; 3]]) -> std::io::Result<()> {
     out.write_all(b"]")
 }
 
-fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str, spool: &Spool) -> Result<()> {
-    writeln!(out, "{pad}def Mesh \"{}\"", m.name)?;
+fn write_mesh(
+    m: &MeshPrim,
+    out: &mut dyn Write,
+    pad: &str,
+    scope: &str,
+    spool: &Spool,
+) -> Result<()> {
+    match &m.material {
+        Some(_) => {
+            writeln!(out, "{pad}def Mesh \"{}\" (", m.name)?;
+            writeln!(
+                out,
+                "{pad}    prepend apiSchemas = [\"MaterialBindingAPI\"]"
+            )?;
+            writeln!(out, "{pad})")?;
+        }
+        None => writeln!(out, "{pad}def Mesh \"{}\"", m.name)?,
+    }
     writeln!(out, "{pad}{{")?;
     let p = format!("{pad}    ");
+    if let Some(material) = &m.material {
+        writeln!(out, "{p}rel material:binding = <{scope}/{material}>")?;
+    }
     if m.double_sided {
         writeln!(out, "{p}uniform bool doubleSided = 1")?;
     }
@@ -163,6 +249,14 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str, spool: &Spool) -> Re
             writeln!(out, "{p}}}")?;
         }
     }
+    write_primvars(m, out, &p)?;
+    writeln!(out, "{p}uniform token subdivisionScheme = \"none\"")?;
+    writeln!(out, "{pad}}}")?;
+    Ok(())
+}
+
+/// A mesh's primvars (display colour and opacity, texture coordinates), indented by `p`.
+fn write_primvars(m: &MeshPrim, out: &mut dyn Write, p: &str) -> Result<()> {
     match &m.color {
         Some(DisplayColor::Constant(c)) => {
             writeln!(
@@ -201,8 +295,8 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str, spool: &Spool) -> Re
         writeln!(out, "{p}    interpolation = \"vertex\"")?;
         writeln!(out, "{p})")?;
     }
-    if let Some(st) = &m.st {
-        write!(out, "{p}texCoord2f[] primvars:st = [")?;
+    for (name, st) in &m.st {
+        write!(out, "{p}texCoord2f[] primvars:{name} = [")?;
         for (i, t) in st.iter().enumerate() {
             if i > 0 {
                 out.write_all(b", ")?;
@@ -213,8 +307,6 @@ fn write_mesh(m: &MeshPrim, out: &mut dyn Write, pad: &str, spool: &Spool) -> Re
         writeln!(out, "{p}    interpolation = \"vertex\"")?;
         writeln!(out, "{p})")?;
     }
-    writeln!(out, "{p}uniform token subdivisionScheme = \"none\"")?;
-    writeln!(out, "{pad}}}")?;
     Ok(())
 }
 

@@ -11,6 +11,7 @@
 //! laid out as `[offset to times][times][times rep][offset to reps][sample arrays][count][reps]`
 //! with every size known beforehand, so nothing is patched but the bootstrap.
 
+use super::material::{Look, Shader, Value, SURFACE};
 use super::stage::{
     animated, extent, for_each_sample, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
 };
@@ -30,9 +31,13 @@ const T_FLOAT: u64 = 8;
 const T_DOUBLE: u64 = 9;
 const T_STRING: u64 = 10;
 const T_TOKEN: u64 = 11;
+const T_ASSET_PATH: u64 = 12;
 const T_MATRIX4D: u64 = 15;
 const T_VEC2F: u64 = 20;
 const T_VEC3F: u64 = 24;
+const T_VEC4F: u64 = 28;
+const T_TOKEN_LIST_OP: u64 = 32;
+const T_PATH_LIST_OP: u64 = 34;
 const T_TOKEN_VECTOR: u64 = 41;
 const T_SPECIFIER: u64 = 42;
 const T_VARIABILITY: u64 = 44;
@@ -43,6 +48,12 @@ const T_DOUBLE_VECTOR: u64 = 48;
 const SPEC_ATTRIBUTE: u32 = 1;
 const SPEC_PRIM: u32 = 6;
 const SPEC_PSEUDO_ROOT: u32 = 7;
+const SPEC_RELATIONSHIP: u32 = 8;
+
+// List-op header bits (SdfListOp in a crate file).
+const LIST_EXPLICIT: u8 = 1;
+const LIST_HAS_EXPLICIT: u8 = 1 << 1;
+const LIST_HAS_PREPENDED: u8 = 1 << 5;
 
 const ARRAY_BIT: u64 = 1 << 63;
 const INLINED_BIT: u64 = 1 << 62;
@@ -71,6 +82,15 @@ enum Val<'a> {
     Vec3fs(&'a [[f32; 3]]),
     Vec2fs(&'a [[f32; 2]]),
     Floats(&'a [f32]),
+    Float(f32),
+    Vec2(&'a [f32; 2]),
+    Vec3(&'a [f32; 3]),
+    Vec4(&'a [f32; 4]),
+    Asset(&'a str),
+    /// An explicit list of paths (connections, relationship targets), as path indices.
+    Paths(Vec<usize>),
+    /// Tokens prepended to a list (`prepend apiSchemas = [...]`).
+    PrependTokens(Vec<&'a str>),
 }
 
 /// A path in the spec tree: its parent's index and its element (prim name or property name).
@@ -93,6 +113,8 @@ struct Writer<W: Write + Seek> {
     paths: Vec<PathNode>,
     /// (path index, fieldset index, spec type)
     specs: Vec<(u32, u32, u32)>,
+    /// The path of the materials scope, when the stage has materials.
+    scope: Option<usize>,
 }
 
 impl<W: Write + Seek> Writer<W> {
@@ -191,7 +213,40 @@ impl<W: Write + Seek> Writer<W> {
                 self.bytes(&raw)?;
                 rep_heap(T_FLOAT, at, true)
             }
+            Val::Float(x) => rep_inline(T_FLOAT, x.to_bits() as u64),
+            Val::Vec2(v) => self.floats_value(T_VEC2F, v)?,
+            Val::Vec3(v) => self.floats_value(T_VEC3F, v)?,
+            Val::Vec4(v) => self.floats_value(T_VEC4F, v)?,
+            Val::Asset(a) => rep_inline(T_ASSET_PATH, self.token(a) as u64),
+            Val::Paths(paths) => {
+                let at = self.pos;
+                self.bytes(&[LIST_EXPLICIT | LIST_HAS_EXPLICIT])?;
+                self.u64(paths.len() as u64)?;
+                for p in paths {
+                    self.bytes(&(p as u32).to_le_bytes())?;
+                }
+                rep_heap(T_PATH_LIST_OP, at, false)
+            }
+            Val::PrependTokens(names) => {
+                let idx: Vec<u32> = names.iter().map(|n| self.token(n)).collect();
+                let at = self.pos;
+                self.bytes(&[LIST_HAS_PREPENDED])?;
+                self.u64(idx.len() as u64)?;
+                for i in idx {
+                    self.bytes(&i.to_le_bytes())?;
+                }
+                rep_heap(T_TOKEN_LIST_OP, at, false)
+            }
         })
+    }
+
+    /// A single vector value (not an array) of type `ty`, in the heap.
+    fn floats_value(&mut self, ty: u64, v: &[f32]) -> Result<u64> {
+        let at = self.pos;
+        for x in v {
+            self.bytes(&x.to_le_bytes())?;
+        }
+        Ok(rep_heap(ty, at, false))
     }
 
     /// Write a u64 count and the token indices of `names`; returns where they start.
@@ -248,7 +303,18 @@ impl<W: Write + Seek> Writer<W> {
         self.bytes(&block)
     }
 
+    /// The path `name` under `parent` (a property or a prim), added unless it is there.
     fn path(&mut self, parent: Option<usize>, name: &str, property: bool) -> usize {
+        if let Some(p) = parent {
+            let found = self.paths[p]
+                .children
+                .iter()
+                .copied()
+                .find(|&c| self.paths[c].name == name && self.paths[c].property == property);
+            if let Some(c) = found {
+                return c;
+            }
+        }
         let i = self.paths.len();
         self.paths.push(PathNode {
             parent,
@@ -317,10 +383,23 @@ impl<W: Write + Seek> Writer<W> {
         props: Vec<String>,
         children: Vec<String>,
     ) -> Result<()> {
+        self.prim_spec_with(path, type_name, props, children, Vec::new())
+    }
+
+    /// A prim spec with fields `extra` besides its type, properties and children.
+    fn prim_spec_with(
+        &mut self,
+        path: usize,
+        type_name: &str,
+        props: Vec<String>,
+        children: Vec<String>,
+        extra: Vec<u32>,
+    ) -> Result<()> {
         let mut fields = vec![
             self.field("specifier", Val::Specifier)?,
             self.field("typeName", Val::Token(type_name))?,
         ];
+        fields.extend(extra);
         if !props.is_empty() {
             fields.push(self.field("properties", Val::TokenVector(props))?);
         }
@@ -337,13 +416,13 @@ impl<W: Write + Seek> Writer<W> {
             .as_ref()
             .and_then(|a| frames.get(&(a.mesh, a.primitive)));
         let me = self.path(Some(parent), &m.name, false);
-        let mut props = Vec::new();
+        let mut props: Vec<String> = Vec::new();
         let uniform = self.field("variability", Val::Uniform)?;
         let vertex = self.field("interpolation", Val::Token("vertex"))?;
         if m.double_sided {
             let v = self.field("default", Val::Bool(true))?;
             self.attribute(me, "doubleSided", "bool", vec![uniform, v])?;
-            props.push("doubleSided");
+            props.push("doubleSided".into());
         }
         match (&m.animation, reps) {
             (Some(a), Some(r)) => {
@@ -357,7 +436,7 @@ impl<W: Write + Seek> Writer<W> {
                 self.attribute(me, "extent", "float3[]", vec![v])?;
             }
         }
-        props.push("extent");
+        props.push("extent".into());
         let counts = self.field("default", Val::Ints(vec![3; m.indices.len() / 3]))?;
         self.attribute(me, "faceVertexCounts", "int[]", vec![counts])?;
         let indices = self.field(
@@ -365,7 +444,7 @@ impl<W: Write + Seek> Writer<W> {
             Val::Ints(m.indices.iter().map(|&i| i as i32).collect()),
         )?;
         self.attribute(me, "faceVertexIndices", "int[]", vec![indices])?;
-        props.extend(["faceVertexCounts", "faceVertexIndices"]);
+        props.extend(["faceVertexCounts".into(), "faceVertexIndices".into()]);
         if let Some(normals) = &m.normals {
             let v = match (&m.animation, reps) {
                 (Some(a), Some(r)) if a.normals => {
@@ -375,7 +454,7 @@ impl<W: Write + Seek> Writer<W> {
                 _ => self.field("default", Val::Vec3fs(normals))?,
             };
             self.attribute(me, "normals", "normal3f[]", vec![vertex, v])?;
-            props.push("normals");
+            props.push("normals".into());
         }
         let v = match (&m.animation, reps) {
             (Some(a), Some(r)) => {
@@ -385,7 +464,7 @@ impl<W: Write + Seek> Writer<W> {
             _ => self.field("default", Val::Vec3fs(&m.points))?,
         };
         self.attribute(me, "points", "point3f[]", vec![v])?;
-        props.push("points");
+        props.push("points".into());
         if let Some(color) = &m.color {
             let (interpolation, v) = match color {
                 DisplayColor::Constant(c) => {
@@ -400,7 +479,7 @@ impl<W: Write + Seek> Writer<W> {
                 "color3f[]",
                 vec![interpolation, v],
             )?;
-            props.push("primvars:displayColor");
+            props.push("primvars:displayColor".into());
         }
         if let Some(alpha) = &m.opacity {
             let interpolation = self.field("interpolation", Val::Token("vertex"))?;
@@ -411,22 +490,79 @@ impl<W: Write + Seek> Writer<W> {
                 "float[]",
                 vec![interpolation, v],
             )?;
-            props.push("primvars:displayOpacity");
+            props.push("primvars:displayOpacity".into());
         }
-        if let Some(st) = &m.st {
+        for (name, st) in &m.st {
             let v = self.field("default", Val::Vec2fs(st))?;
-            self.attribute(me, "primvars:st", "texCoord2f[]", vec![vertex, v])?;
-            props.push("primvars:st");
+            let name = format!("primvars:{name}");
+            self.attribute(me, &name, "texCoord2f[]", vec![vertex, v])?;
+            props.push(name);
         }
         let v = self.field("default", Val::Token("none"))?;
         self.attribute(me, "subdivisionScheme", "token", vec![uniform, v])?;
-        props.push("subdivisionScheme");
-        self.prim_spec(
-            me,
-            "Mesh",
-            props.into_iter().map(str::to_owned).collect(),
-            vec![],
-        )
+        props.push("subdivisionScheme".into());
+        let mut extra = Vec::new();
+        if let (Some(material), Some(scope)) = (&m.material, self.scope) {
+            let target = self.path(Some(scope), material, false);
+            let rel = self.path(Some(me), "material:binding", true);
+            let targets = self.field("targetPaths", Val::Paths(vec![target]))?;
+            self.spec(rel, vec![uniform, targets], SPEC_RELATIONSHIP);
+            props.push("material:binding".into());
+            extra.push(self.field("apiSchemas", Val::PrependTokens(vec!["MaterialBindingAPI"]))?);
+        }
+        self.prim_spec_with(me, "Mesh", props, vec![], extra)
+    }
+
+    /// The materials scope (at path `scope`) with its materials and their shaders.
+    fn look(&mut self, look: &Look, scope: usize) -> Result<()> {
+        for m in &look.materials {
+            let mp = self.path(Some(scope), &m.name, false);
+            let surface = self.path(Some(mp), SURFACE, false);
+            let out = self.path(Some(surface), "outputs:surface", true);
+            let c = self.field("connectionPaths", Val::Paths(vec![out]))?;
+            self.attribute(mp, "outputs:surface", "token", vec![c])?;
+            for s in &m.shaders {
+                self.shader(s, mp)?;
+            }
+            let children = m.shaders.iter().map(|s| s.name.clone()).collect();
+            self.prim_spec(mp, "Material", vec!["outputs:surface".into()], children)?;
+        }
+        let names = look.materials.iter().map(|m| m.name.clone()).collect();
+        self.prim_spec(scope, "Scope", vec![], names)
+    }
+
+    /// One shader of the material at path `material`.
+    fn shader(&mut self, s: &Shader, material: usize) -> Result<()> {
+        let me = self.path(Some(material), &s.name, false);
+        let uniform = self.field("variability", Val::Uniform)?;
+        let id = self.field("default", Val::Token(s.id))?;
+        self.attribute(me, "info:id", "token", vec![uniform, id])?;
+        let mut props = vec!["info:id".to_owned()];
+        for i in &s.inputs {
+            let name = format!("inputs:{}", i.name);
+            let v = match &i.value {
+                Value::Connect { shader, output } => {
+                    let from = self.path(Some(material), shader, false);
+                    let out = self.path(Some(from), &format!("outputs:{output}"), true);
+                    self.field("connectionPaths", Val::Paths(vec![out]))?
+                }
+                Value::Float(x) => self.field("default", Val::Float(*x))?,
+                Value::Vec2(x) => self.field("default", Val::Vec2(x))?,
+                Value::Vec3(x) => self.field("default", Val::Vec3(x))?,
+                Value::Vec4(x) => self.field("default", Val::Vec4(x))?,
+                Value::Token(t) => self.field("default", Val::Token(t))?,
+                Value::Text(t) => self.field("default", Val::String(t))?,
+                Value::Asset(a) => self.field("default", Val::Asset(a))?,
+            };
+            self.attribute(me, &name, i.type_name, vec![v])?;
+            props.push(name);
+        }
+        for (name, ty) in &s.outputs {
+            let name = format!("outputs:{name}");
+            self.attribute(me, &name, ty, vec![])?;
+            props.push(name);
+        }
+        self.prim_spec(me, "Shader", props, vec![])
     }
 
     fn raw_field(&mut self, name: &str, rep: u64) -> u32 {
@@ -582,6 +718,7 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
         fieldsets: Vec::new(),
         paths: Vec::new(),
         specs: Vec::new(),
+        scope: None,
     };
     w.bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
     let prims = animated(stage);
@@ -606,15 +743,18 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     w.token(&stage.root);
     let root = w.path(None, "", false);
     let top = w.path(Some(root), &stage.root, false);
+    let mut children: Vec<String> = stage.children.iter().map(prim_name).collect();
+    if !stage.look.materials.is_empty() {
+        w.scope = Some(w.path(Some(top), &stage.look.scope, false));
+        children.push(stage.look.scope.clone());
+    }
     for c in &stage.children {
         w.prim(c, top, &frames)?;
     }
-    w.prim_spec(
-        top,
-        "Xform",
-        vec![],
-        stage.children.iter().map(prim_name).collect(),
-    )?;
+    if let Some(scope) = w.scope {
+        w.look(&stage.look, scope)?;
+    }
+    w.prim_spec(top, "Xform", vec![], children)?;
     let doc = format!("Written by inbetween {}", env!("CARGO_PKG_VERSION"));
     let fields = vec![
         w.field("defaultPrim", Val::Token(&stage.root))?,
