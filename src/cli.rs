@@ -35,10 +35,13 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
     Tween(TweenArgs),
     /// Blend two skeletal clips of a character into a new clip (walk + run = jog): cycles found
     /// and synchronised on foot contacts, the second clip aligned to the first, joints slerped,
-    /// planted feet cleaned up with two-bone IK. The output is the input plus one animation.
+    /// planted feet cleaned up with two-bone IK. A glTF output is the input plus one animation
+    /// per weight; two BVH captures give a BVH file.
     #[command(
         after_help = "Examples:\n  inbetween blend Fox.glb -o fox_trot.glb --clips Walk Run\n  \
-inbetween blend robot.glb -o jog.glb --clips Walking Running --weight 0.3 --name Jog --report jog.json"
+inbetween blend robot.glb -o jog.glb --clips Walking Running --weight 0.3 --name Jog --report jog.json\n  \
+inbetween blend Fox.glb -o fox_space.glb --clips Walk Run --weight 0,0.25,0.5,0.75,1\n  \
+inbetween blend walk.bvh run.bvh -o jog.bvh"
     )]
     Blend(BlendArgs),
     /// Show what inbetween finds in a file: morph meshes and their targets, animations (keys,
@@ -470,18 +473,23 @@ impl PreviewArgs {
 
 #[derive(Args)]
 pub struct BlendArgs {
-    /// Input .gltf or .glb with a skinned character and its animations.
-    input: PathBuf,
-    /// Output .gltf or .glb.
+    /// Input: a .gltf or .glb with a skinned character and its animations (name two of them
+    /// with --clips), or two .bvh captures of one skeleton (a clip each).
+    #[arg(required = true, num_args = 1..=2, value_name = "INPUT")]
+    inputs: Vec<PathBuf>,
+    /// Output .gltf or .glb (the blend added as a new animation); .bvh for .bvh inputs (the
+    /// first capture's skeleton and channel order, at its frame time).
     #[arg(short, long)]
     output: PathBuf,
-    /// The two animations to blend (names or indices).
-    #[arg(long, num_args = 2, value_names = ["A", "B"], required = true)]
+    /// The two animations of a glTF input to blend (names or indices).
+    #[arg(long, num_args = 2, value_names = ["A", "B"])]
     clips: Vec<String>,
-    /// Weight of B: 0 gives A, 1 gives B.
-    #[arg(long, default_value_t = 0.5)]
-    weight: f64,
-    /// Name of the new animation (default "A+B").
+    /// Weight of B: 0 gives A, 1 gives B. A list (0,0.25,0.5,0.75,1) writes one blend per
+    /// weight on the same synchronised cycle, named "A+B@<weight>" (a 1-D blend space); BVH
+    /// outputs then go to <output stem>@<weight>.bvh.
+    #[arg(long, default_value = "0.5", value_delimiter = ',')]
+    weight: Vec<f64>,
+    /// Name of the new animation (default "A+B"; "@<weight>" added for a list of weights).
     #[arg(long)]
     name: Option<String>,
     /// How gait cycles are found.
@@ -506,10 +514,10 @@ pub struct BlendArgs {
 impl BlendArgs {
     pub fn job(self) -> BlendJob {
         BlendJob {
-            input: self.input,
+            inputs: self.inputs,
             output: self.output,
-            clips: [self.clips[0].clone(), self.clips[1].clone()],
-            weight: self.weight,
+            clips: (self.clips.len() == 2).then(|| [self.clips[0].clone(), self.clips[1].clone()]),
+            weights: self.weight,
             name: self.name,
             cycles: self.cycles.into(),
             cleanup: !self.no_cleanup,

@@ -441,3 +441,233 @@ fn cycles_none_blends_what_does_not_walk() {
     let (_, clips) = blend::load_gltf(&Document::open(&out).unwrap()).unwrap();
     assert_eq!(clips.last().unwrap().name, "Walking+Idle");
 }
+
+/// Two CMU captures (walk and run, 120 fps, joint names differing) blended into BVH (issue 17):
+/// the output has the first capture's hierarchy text and channel order, its frame time, one
+/// frame per frame time of the blend, and read back it is the blend itself: every joint
+/// within 1e-3 scene units (centimetres) of the blended poses. The report is the glTF one's,
+/// valid against the schema. Different skeletons, a BVH-to-glTF request and --clips with BVH
+/// inputs are refused.
+#[test]
+fn bvh_captures_blend_into_bvh() {
+    let Some(fx) = fixtures() else { return };
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let walk = fx.join("bvh/kevinxie4c_walk.bvh");
+    let run = fx.join("bvh/kevinxie4c_cmu_run_filtered.bvh");
+    let out = dir.path().join("jog.bvh");
+    let rep = dir.path().join("jog.json");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    run_ok(&[
+        "blend",
+        &s(&walk),
+        &s(&run),
+        "-o",
+        &s(&out),
+        "--report",
+        &s(&rep),
+        "-q",
+    ]);
+    let schema = root().join("schemas/blend-report.schema.json");
+    run_tool(
+        &python,
+        "check_schema.py",
+        &[schema.as_os_str(), rep.as_os_str()],
+        "blend report",
+    );
+    let report: Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+    let a = blend::load_bvh(&walk).unwrap();
+    let b = blend::load_bvh(&run).unwrap();
+    let back = blend::load_bvh(&out).unwrap();
+    // Same hierarchy, text and all.
+    let text = std::fs::read_to_string(&out).unwrap();
+    let original = std::fs::read_to_string(&walk).unwrap();
+    let head = |t: &str| t[..t.find("MOTION").unwrap()].to_owned();
+    assert_eq!(head(&text), head(&original));
+    assert_eq!(back.rig.names, a.rig.names);
+    assert_eq!(back.frame_time, a.frame_time);
+    let blended = blend::blend(&a.rig, &a.clip, &b.clip, &blend::BlendOptions::new(0.5)).unwrap();
+    let duration = *blended.times.last().unwrap();
+    assert!((duration - report["result"]["duration"].as_f64().unwrap()).abs() < 1e-9);
+    let frames = (duration / a.frame_time + 1e-6).floor() as usize + 1;
+    let read_back = (back.clip.duration() / back.frame_time).round() as usize + 1;
+    assert_eq!(
+        read_back, frames,
+        "frames: {read_back} read back, {frames} expected"
+    );
+    // The blend as a clip, sampled where the BVH frames are.
+    let mut worst: f64 = 0.0;
+    for k in 0..frames {
+        let t = k as f64 * a.frame_time;
+        let i = blended
+            .times
+            .partition_point(|&x| x <= t)
+            .clamp(1, blended.times.len() - 1);
+        let (t0, t1) = (blended.times[i - 1], blended.times[i]);
+        let u = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+        let want = a
+            .rig
+            .positions(&blend_pose(&blended.poses[i - 1], &blended.poses[i], u));
+        let got = back.rig.positions(&back.clip.pose(&back.rig, t));
+        for (g, w) in got.iter().zip(&want) {
+            worst = worst.max(g.distance(*w));
+        }
+    }
+    eprintln!("BVH round trip: {frames} frames, worst joint {worst:.2e} cm");
+    assert!(worst < 1e-3, "worst joint off by {worst} cm");
+    // Refusals.
+    let odd = fx.join("bvh/bvh11_131_01_start_walk_stop.bvh");
+    let bad = dir.path().join("bad.bvh");
+    let walk_s = s(&walk);
+    assert_refused(
+        &["blend", &walk_s, &s(&odd), "-o", &s(&bad)],
+        "kevinxie4c_walk.bvh",
+        "different skeletons",
+        &bad,
+    );
+    let glb = dir.path().join("bad.glb");
+    assert_refused(
+        &["blend", &walk_s, &s(&run), "-o", &s(&glb)],
+        "bad.glb",
+        "into a .bvh output",
+        &glb,
+    );
+    assert_refused(
+        &[
+            "blend",
+            &walk_s,
+            &s(&run),
+            "-o",
+            &s(&bad),
+            "--clips",
+            "a",
+            "b",
+        ],
+        "kevinxie4c_walk.bvh",
+        "each .bvh input is one clip",
+        &bad,
+    );
+    assert_refused(
+        &["blend", &walk_s, "-o", &s(&bad)],
+        "kevinxie4c_walk.bvh",
+        "two .bvh captures",
+        &bad,
+    );
+}
+
+/// `a` to `b` at `u`: translations lerped, rotations slerped (as LINEAR playback does).
+fn blend_pose(a: &blend::Pose, b: &blend::Pose, u: f64) -> blend::Pose {
+    let mut p = a.clone();
+    for (l, (x, y)) in p.local.iter_mut().zip(a.local.iter().zip(&b.local)) {
+        l.t = x.t.lerp(y.t, u);
+        l.r = blend::slerp(x.r, y.r, u);
+    }
+    p
+}
+
+/// `--weight 0,0.25,0.5,0.75,1` (issue 17): one animation per weight, named "Walk+Run@<w>",
+/// each the very blend a run at that single weight writes (same times, same values), all
+/// looping on the synchronised cycle: duration (1-w) x walk cycle + w x run cycle; the report
+/// is the list of the five reports. With BVH inputs, one file per weight.
+#[test]
+fn weight_lists_make_a_blend_space() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let fox = fx.join("skinned/Fox.glb");
+    let space = dir.path().join("space.glb");
+    let rep = dir.path().join("space.json");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    run_ok(&[
+        "blend",
+        &s(&fox),
+        "--clips",
+        "Walk",
+        "Run",
+        "--weight",
+        "0,0.25,0.5,0.75,1",
+        "-o",
+        &s(&space),
+        "--report",
+        &s(&rep),
+        "-q",
+    ]);
+    let reports: Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+    let reports = reports.as_array().unwrap();
+    assert_eq!(reports.len(), 5);
+    let (gdoc, buffers, _) = ::gltf::import(&space).unwrap();
+    let read =
+        |doc: &::gltf::Document, bufs: &[::gltf::buffer::Data], name: &str| -> Vec<Vec<f32>> {
+            let anim = doc
+                .animations()
+                .find(|a| a.name() == Some(name))
+                .unwrap_or_else(|| panic!("no {name}"));
+            let mut out = Vec::new();
+            for ch in anim.channels() {
+                let r = ch.reader(|b| Some(&bufs[b.index()]));
+                out.push(r.read_inputs().unwrap().collect());
+                out.push(match r.read_outputs().unwrap() {
+                    ::gltf::animation::util::ReadOutputs::Translations(v) => v.flatten().collect(),
+                    ::gltf::animation::util::ReadOutputs::Rotations(v) => {
+                        v.into_f32().flatten().collect()
+                    }
+                    ::gltf::animation::util::ReadOutputs::Scales(v) => v.flatten().collect(),
+                    ::gltf::animation::util::ReadOutputs::MorphTargetWeights(v) => {
+                        v.into_f32().collect()
+                    }
+                });
+            }
+            out
+        };
+    for (k, w) in [0.0, 0.25, 0.5, 0.75, 1.0].into_iter().enumerate() {
+        let r = &reports[k];
+        assert_eq!(r["weight"].as_f64(), Some(w));
+        assert!(r["result"]["looping"].as_bool().unwrap());
+        let pa = r["clips"][0]["cycles"][0]["period"].as_f64().unwrap();
+        let pb = r["clips"][1]["cycles"][0]["period"].as_f64().unwrap();
+        let want = (1.0 - w) * pa + w * pb;
+        let got = r["result"]["duration"].as_f64().unwrap();
+        assert!(
+            (got - want).abs() < 1e-6,
+            "w {w}: duration {got}, cycles give {want}"
+        );
+        let one = dir.path().join(format!("one{k}.glb"));
+        run_ok(&[
+            "blend",
+            &s(&fox),
+            "--clips",
+            "Walk",
+            "Run",
+            "--weight",
+            &w.to_string(),
+            "-o",
+            &s(&one),
+            "-q",
+        ]);
+        let (odoc, obufs, _) = ::gltf::import(&one).unwrap();
+        assert_eq!(
+            read(&gdoc, &buffers, &format!("Walk+Run@{w}")),
+            read(&odoc, &obufs, "Walk+Run"),
+            "w {w}"
+        );
+    }
+    // BVH inputs: one file per weight, none at the plain output path.
+    let walk = fx.join("bvh/kevinxie4c_walk.bvh");
+    let run = fx.join("bvh/kevinxie4c_cmu_run_filtered.bvh");
+    let out = dir.path().join("jog.bvh");
+    run_ok(&[
+        "blend",
+        &s(&walk),
+        &s(&run),
+        "-o",
+        &s(&out),
+        "--weight",
+        "0.25,0.75",
+        "-q",
+    ]);
+    assert!(!out.exists());
+    for w in ["0.25", "0.75"] {
+        let file = dir.path().join(format!("jog@{w}.bvh"));
+        let back = blend::load_bvh(&file).unwrap();
+        assert_eq!(back.rig.len(), blend::load_bvh(&walk).unwrap().rig.len());
+    }
+}

@@ -1,6 +1,7 @@
 //! BVH motion capture files as a rig and one clip (End Sites become leaf joints named
-//! `<parent>_end`, so chains end where the foot or toe does). Used to check cycle detection on
-//! real capture; `blend` itself reads and writes glTF.
+//! `<parent>_end`, so chains end where the foot or toe does), with what writing the same
+//! skeleton back needs ([`Bvh`]: the hierarchy's text and each joint's channels, for
+//! [`super::write_bvh`]).
 
 use super::rig::{clip_from_channels, Channel, Clip, Interp, Path, Pose, Rig, Trs};
 use crate::gltf::at;
@@ -8,16 +9,33 @@ use anyhow::Result;
 use glam::{DQuat, DVec3};
 use std::path::Path as FsPath;
 
-#[derive(Clone, Copy)]
-enum Dof {
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Dof {
     Pos(usize),
     Rot(DVec3),
 }
 
+/// A BVH file as read: its rig (every joint in the skeleton), its motion, and its layout.
+pub struct Bvh {
+    pub rig: Rig,
+    pub clip: Clip,
+    /// Seconds per frame.
+    pub frame_time: f64,
+    /// The file's text from the start up to (not including) the word MOTION.
+    pub(super) header: String,
+    /// Each joint with channels and its channels, in file order.
+    pub(super) dofs: Vec<(usize, Vec<Dof>)>,
+}
+
 /// Read a BVH file into a rig (every joint in the skeleton) and its motion.
 pub fn read(path: &FsPath) -> Result<(Rig, Clip)> {
+    load(path).map(|b| (b.rig, b.clip))
+}
+
+/// Read a BVH file with its layout (see [`Bvh`]).
+pub fn load(path: &FsPath) -> Result<Bvh> {
     let text = std::fs::read_to_string(path).map_err(|e| at(path, format!("cannot read: {e}")))?;
-    parse(&text).map_err(|e| at(path, e))
+    parse_layout(&text).map_err(|e| at(path, e))
 }
 
 /// The whitespace-separated words of a BVH file, each asked for by what it should be, and the
@@ -46,6 +64,11 @@ struct Hierarchy {
 
 /// Parse the text of a BVH file (errors say what is wrong, without the file name).
 pub fn parse(text: &str) -> Result<(Rig, Clip), String> {
+    parse_layout(text).map(|b| (b.rig, b.clip))
+}
+
+/// Parse the text of a BVH file with its layout.
+fn parse_layout(text: &str) -> Result<Bvh, String> {
     let mut words = Words {
         words: text.split_whitespace(),
         len: text.len(),
@@ -53,8 +76,8 @@ pub fn parse(text: &str) -> Result<(Rig, Clip), String> {
     if words.next("HIERARCHY")? != "HIERARCHY" {
         return Err("not a BVH file (no HIERARCHY)".into());
     }
-    let h = hierarchy(&mut words)?;
-    let channels = motion(&mut words, &h)?;
+    let (h, motion_at) = hierarchy(&mut words, text)?;
+    let (channels, frame_time) = motion(&mut words, &h)?;
     let n = h.names.len();
     let rest = Pose {
         local: h
@@ -65,11 +88,17 @@ pub fn parse(text: &str) -> Result<(Rig, Clip), String> {
         weights: vec![Vec::new(); n],
     };
     let rig = Rig::new(h.names, h.parent, rest).map_err(|e| e.to_string())?;
-    Ok((rig, clip_from_channels("motion".into(), 0, channels)))
+    Ok(Bvh {
+        rig,
+        clip: clip_from_channels("motion".into(), 0, channels),
+        frame_time,
+        header: text[..motion_at].to_string(),
+        dofs: h.dofs,
+    })
 }
 
-/// The hierarchy, up to and including the word MOTION.
-fn hierarchy(words: &mut Words) -> Result<Hierarchy, String> {
+/// The hierarchy, up to and including the word MOTION, and where that word starts in `text`.
+fn hierarchy(words: &mut Words, text: &str) -> Result<(Hierarchy, usize), String> {
     let mut h = Hierarchy::default();
     let mut stack: Vec<usize> = Vec::new();
     let mut last: Option<usize> = None;
@@ -105,7 +134,7 @@ fn hierarchy(words: &mut Words) -> Result<Hierarchy, String> {
                 let j = last.ok_or("CHANNELS outside a joint")?;
                 h.dofs.push((j, channel_list(words)?));
             }
-            "MOTION" => return Ok(h),
+            "MOTION" => return Ok((h, tok.as_ptr() as usize - text.as_ptr() as usize)),
             other => return Err(format!("unexpected {other:?} in the hierarchy")),
         }
     }
@@ -134,8 +163,9 @@ fn channel_list(words: &mut Words) -> Result<Vec<Dof>, String> {
     Ok(list)
 }
 
-/// The MOTION section: one channel per moved property of each joint, keyed every frame.
-fn motion(words: &mut Words, h: &Hierarchy) -> Result<Vec<Channel>, String> {
+/// The MOTION section: one channel per moved property of each joint, keyed every frame, and
+/// the frame time.
+fn motion(words: &mut Words, h: &Hierarchy) -> Result<(Vec<Channel>, f64), String> {
     if words.next("Frames:")? != "Frames:" {
         return Err("no \"Frames:\" line".into());
     }
@@ -199,7 +229,7 @@ fn motion(words: &mut Words, h: &Hierarchy) -> Result<Vec<Channel>, String> {
             }
         }
     }
-    Ok(channels)
+    Ok((channels, dt))
 }
 
 fn num(s: &str) -> Result<f64, String> {

@@ -1,5 +1,6 @@
-//! `inbetween blend` from file to file: read, pick the clips and their skeleton, blend, append
-//! the new animation, write the document (atomically) and the report.
+//! `inbetween blend` from file to file: read, pick the clips and their skeleton, blend (once per
+//! weight), append the new animations to the glTF document, or write BVH files with the first
+//! capture's skeleton; the files (and the report) are staged and appear together.
 
 use super::cycles::CycleMethod;
 use super::plan::{blend, BlendOptions, Blended, Report};
@@ -11,12 +12,14 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 
 pub struct BlendJob {
-    pub input: PathBuf,
+    /// One .gltf/.glb with the character and its clips, or two .bvh captures (a clip each).
+    pub inputs: Vec<PathBuf>,
     pub output: PathBuf,
-    /// Animation names or indices.
-    pub clips: [String; 2],
-    pub weight: f64,
-    /// Name of the new animation (default "A+B").
+    /// Animation names or indices (glTF input).
+    pub clips: Option<[String; 2]>,
+    /// Weights of B, one blend each (a blend space when there are several).
+    pub weights: Vec<f64>,
+    /// Name of the new animation (default "A+B"; `@<weight>` added when there are several).
     pub name: Option<String>,
     pub cycles: CycleMethod,
     pub cleanup: bool,
@@ -25,17 +28,31 @@ pub struct BlendJob {
     pub access: Access,
 }
 
-pub struct BlendSummary {
+/// One blend written: the clip's name, the file it is in, and its figures.
+pub struct BlendDone {
     pub name: String,
+    pub file: PathBuf,
     pub report: Report,
 }
 
+pub struct BlendSummary {
+    pub blends: Vec<BlendDone>,
+}
+
 impl BlendSummary {
-    pub fn line(&self, job: &BlendJob) -> String {
+    /// One line per blend.
+    pub fn line(&self, _job: &BlendJob) -> String {
+        let lines: Vec<String> = self.blends.iter().map(BlendDone::line).collect();
+        lines.join("\n")
+    }
+}
+
+impl BlendDone {
+    fn line(&self) -> String {
         let r = &self.report;
         format!(
             "{}: \"{}\" = {:.2} x \"{}\" + {:.2} x \"{}\": {} frames, {:.3} s{}; planted-foot sliding {:.4} -> {:.4} leg/frame (sources {:.4}, {:.4}; naive blend {:.4})",
-            job.output.display(),
+            self.file.display(),
             self.name,
             1.0 - r.weight,
             r.clips[0].name,
@@ -161,43 +178,166 @@ pub fn blend_clips(
     })
 }
 
+/// The name of the blend at weight `w`: `base`, with `@<w>` when the job has several weights.
+fn named(base: &str, w: f64, job: &BlendJob) -> String {
+    match job.weights.len() {
+        1 => base.to_owned(),
+        _ => format!("{base}@{w}"),
+    }
+}
+
+/// The report file: one blend's report, or the list of them for several weights.
+fn stage_report(job: &BlendJob, blends: &[BlendDone], files: &mut Outputs) -> Result<()> {
+    let Some(path) = &job.report else {
+        return Ok(());
+    };
+    let json = match blends {
+        [one] => serde_json::to_vec_pretty(&one.report)?,
+        many => serde_json::to_vec_pretty(&many.iter().map(|b| &b.report).collect::<Vec<_>>())?,
+    };
+    files.write(path, &json)?;
+    Ok(())
+}
+
 pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
+    if job.weights.is_empty() {
+        bail!("--weight needs at least one weight");
+    }
+    if let Some(w) = job.weights.iter().find(|w| !(0.0..=1.0).contains(*w)) {
+        bail!("--weight {w} is outside [0, 1]");
+    }
+    let is_bvh = |p: &PathBuf| {
+        p.extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
+    };
+    match &job.inputs[..] {
+        [a, b] if is_bvh(a) && is_bvh(b) => run_bvh(job, [a, b]),
+        [input] if !is_bvh(input) => run_gltf(job, input),
+        _ => bail!(
+            "{}: blend takes one .gltf or .glb with --clips A B, or two .bvh captures (got {} input{})",
+            job.inputs[0].display(),
+            job.inputs.len(),
+            if job.inputs.len() == 1 { "" } else { "s" }
+        ),
+    }
+}
+
+/// A glTF character's two clips blended at every weight, appended as new animations.
+fn run_gltf(job: &BlendJob, input: &std::path::Path) -> Result<BlendSummary> {
     let Some(container) = Container::of(Format::of(&job.output)?) else {
         bail!(
             "{}: blend writes .gltf or .glb (a skeletal clip has no USD point-cache form here)",
             job.output.display()
         );
     };
-    if !(0.0..=1.0).contains(&job.weight) {
-        bail!("--weight {} is outside [0, 1]", job.weight);
-    }
-    let doc = Document::open_with(&job.input, &job.access)?;
-    let opts = BlendOptions {
-        cycles: job.cycles,
-        cleanup: job.cleanup,
-        ..BlendOptions::new(job.weight)
+    let Some(clips) = &job.clips else {
+        bail!(
+            "{}: --clips A B names the two animations to blend",
+            input.display()
+        );
     };
-    let BlendedClips {
-        rig,
-        blended,
-        animated,
-        names,
-    } = blend_clips(&doc, &job.clips, &opts)?;
-    let name = job
-        .name
-        .clone()
-        .unwrap_or_else(|| format!("{}+{}", names[0], names[1]));
-    let channels = super::write::channels(&rig, &blended.poses, &animated);
+    let doc = Document::open_with(input, &job.access)?;
     let mut out = gltf::begin(&doc, container, &job.output)?;
-    super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);
+    let mut blends = Vec::new();
+    for &w in &job.weights {
+        let opts = BlendOptions {
+            cycles: job.cycles,
+            cleanup: job.cleanup,
+            ..BlendOptions::new(w)
+        };
+        let BlendedClips {
+            rig,
+            blended,
+            animated,
+            names,
+        } = blend_clips(&doc, clips, &opts)?;
+        let base = (job.name.clone()).unwrap_or_else(|| format!("{}+{}", names[0], names[1]));
+        let name = named(&base, w, job);
+        let channels = super::write::channels(&rig, &blended.poses, &animated);
+        super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);
+        blends.push(BlendDone {
+            name,
+            file: job.output.clone(),
+            report: blended.report,
+        });
+    }
     let mut files = Outputs::new();
     gltf::stage(out, container, &job.output, &mut files)?;
-    if let Some(path) = &job.report {
-        files.write(path, &serde_json::to_vec_pretty(&blended.report)?)?;
-    }
+    stage_report(job, &blends, &mut files)?;
     files.commit()?;
-    Ok(BlendSummary {
-        name,
-        report: blended.report,
-    })
+    Ok(BlendSummary { blends })
+}
+
+/// Two captures of one skeleton blended at every weight, each written as BVH with the first
+/// capture's hierarchy and channels: to the output, or with several weights to
+/// `<output stem>@<weight>.bvh` beside it.
+fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
+    let ext = job
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("");
+    if !ext.eq_ignore_ascii_case("bvh") {
+        bail!(
+            "{}: two .bvh inputs are blended into a .bvh output",
+            job.output.display()
+        );
+    }
+    if job.clips.is_some() {
+        bail!(
+            "{}: --clips names animations of a glTF input; each .bvh input is one clip",
+            inputs[0].display()
+        );
+    }
+    let mut loaded = Vec::new();
+    for p in inputs {
+        let mut bvh = super::bvh::load(p)?;
+        bvh.clip.name = (p.file_stem().and_then(|s| s.to_str()))
+            .unwrap_or("capture")
+            .to_owned();
+        loaded.push(bvh);
+    }
+    let (a, b) = (&loaded[0], &loaded[1]);
+    if a.rig.parent != b.rig.parent {
+        bail!(
+            "{} and {} have different skeletons ({} and {} joints, End Sites included): blend needs one skeleton",
+            inputs[0].display(),
+            inputs[1].display(),
+            a.rig.len(),
+            b.rig.len()
+        );
+    }
+    let mut files = Outputs::new();
+    let mut blends = Vec::new();
+    for &w in &job.weights {
+        let opts = BlendOptions {
+            cycles: job.cycles,
+            cleanup: job.cleanup,
+            ..BlendOptions::new(w)
+        };
+        let blended = blend(&a.rig, &a.clip, &b.clip, &opts).map_err(|e| gltf::at(inputs[0], e))?;
+        let poses = super::write_bvh::resample(a, &blended.times, &blended.poses, a.frame_time);
+        let base = (job.name.clone()).unwrap_or_else(|| format!("{}+{}", a.clip.name, b.clip.name));
+        let file = match job.weights.len() {
+            1 => job.output.clone(),
+            _ => {
+                let stem = job
+                    .output
+                    .file_stem()
+                    .and_then(|s| s.to_str())
+                    .unwrap_or("blend");
+                job.output.with_file_name(format!("{stem}@{w}.bvh"))
+            }
+        };
+        files.write_with(&file, |out| super::write_bvh::write(a, &poses, out))?;
+        blends.push(BlendDone {
+            name: named(&base, w, job),
+            file,
+            report: blended.report,
+        });
+    }
+    stage_report(job, &blends, &mut files)?;
+    files.commit()?;
+    Ok(BlendSummary { blends })
 }

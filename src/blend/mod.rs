@@ -3,8 +3,8 @@
 //! The pipeline, one module per stage: [`rig`] (read the character and its clips; [`bvh`] for
 //! capture files) -> [`track`] (sample for analysis) -> [`legs`] -> [`contacts`] -> [`cycles`]
 //! ([`analyze`] runs these) -> [`timewarp`] -> [`align`] -> [`mix`] -> [`cleanup`] ->
-//! [`measure`] -> [`write`]; [`plan`] runs the middle from clips to frames, [`job`] from file to
-//! file.
+//! [`measure`] -> [`write`] (glTF) | [`write_bvh`] (BVH); [`plan`] runs the middle from clips
+//! to frames, [`job`] from file to file.
 
 mod align;
 mod analyze;
@@ -21,12 +21,13 @@ mod rig;
 mod timewarp;
 mod track;
 mod write;
+mod write_bvh;
 
 pub use analyze::{analyze, Analysis, Character};
-pub use bvh::{parse as parse_bvh, read as read_bvh};
+pub use bvh::{load as load_bvh, parse as parse_bvh, read as read_bvh, Bvh};
 pub use cycles::{touchdowns, CycleMethod};
-pub use job::{blend_clips, run_blend, BlendJob, BlendSummary, BlendedClips};
-pub use plan::{BlendOptions, Blended};
-pub use rig::{load_gltf, Clip, Path, Pose, Rig};
+pub use job::{blend_clips, run_blend, BlendDone, BlendJob, BlendSummary, BlendedClips};
+pub use plan::{blend, BlendOptions, Blended};
+pub use rig::{load_gltf, slerp, Clip, Path, Pose, Rig};
 pub use track::{pose_unwrapped, size, Track};
 pub use write::append_animation;
