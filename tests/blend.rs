@@ -442,6 +442,24 @@ fn cycles_none_blends_what_does_not_walk() {
     assert_eq!(clips.last().unwrap().name, "Walking+Idle");
 }
 
+/// The CMU walk and run captures of one skeleton (kevinxie4c, 120 fps).
+fn cmu_walk_and_run(fx: &Path) -> (PathBuf, PathBuf) {
+    (
+        fx.join("bvh/kevinxie4c_walk.bvh"),
+        fx.join("bvh/kevinxie4c_cmu_run_filtered.bvh"),
+    )
+}
+
+/// `inbetween blend WALK.bvh RUN.bvh -o out -q EXTRA...` on the CMU pair.
+fn blend_cmu(fx: &Path, out: &Path, extra: &[&str]) {
+    let (walk, run) = cmu_walk_and_run(fx);
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let (walk, run, out) = (s(&walk), s(&run), s(out));
+    let mut args = vec!["blend", &walk, &run, "-o", &out, "-q"];
+    args.extend_from_slice(extra);
+    run_ok(&args);
+}
+
 /// Two CMU captures (walk and run, 120 fps, joint names differing) blended into BVH (issue 17):
 /// the output has the first capture's hierarchy text and channel order, its frame time, one
 /// frame per frame time of the blend, and read back it is the blend itself: every joint
@@ -453,21 +471,11 @@ fn bvh_captures_blend_into_bvh() {
     let Some(fx) = fixtures() else { return };
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let walk = fx.join("bvh/kevinxie4c_walk.bvh");
-    let run = fx.join("bvh/kevinxie4c_cmu_run_filtered.bvh");
+    let (walk, run) = cmu_walk_and_run(&fx);
     let out = dir.path().join("jog.bvh");
     let rep = dir.path().join("jog.json");
     let s = |p: &Path| p.to_str().unwrap().to_owned();
-    run_ok(&[
-        "blend",
-        &s(&walk),
-        &s(&run),
-        "-o",
-        &s(&out),
-        "--report",
-        &s(&rep),
-        "-q",
-    ]);
+    blend_cmu(&fx, &out, &["--report", &s(&rep)]);
     let schema = root().join("schemas/blend-report.schema.json");
     run_tool(
         &python,
@@ -577,20 +585,15 @@ fn weight_lists_make_a_blend_space() {
     let space = dir.path().join("space.glb");
     let rep = dir.path().join("space.json");
     let s = |p: &Path| p.to_str().unwrap().to_owned();
-    run_ok(&[
-        "blend",
-        &s(&fox),
-        "--clips",
-        "Walk",
-        "Run",
-        "--weight",
-        "0,0.25,0.5,0.75,1",
-        "-o",
-        &s(&space),
-        "--report",
-        &s(&rep),
-        "-q",
-    ]);
+    // Fox's Walk and Run blended at `weights` into `out`, with `extra` arguments.
+    let fox_blend = |weights: &str, out: &Path, extra: &[&str]| {
+        let (fox, out) = (s(&fox), s(out));
+        let mut args = vec!["blend", &fox, "--clips", "Walk", "Run", "--weight", weights];
+        args.extend(["-o", &out, "-q"]);
+        args.extend_from_slice(extra);
+        run_ok(&args);
+    };
+    fox_blend("0,0.25,0.5,0.75,1", &space, &["--report", &s(&rep)]);
     let reports: Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
     let reports = reports.as_array().unwrap();
     assert_eq!(reports.len(), 5);
@@ -631,18 +634,7 @@ fn weight_lists_make_a_blend_space() {
             "w {w}: duration {got}, cycles give {want}"
         );
         let one = dir.path().join(format!("one{k}.glb"));
-        run_ok(&[
-            "blend",
-            &s(&fox),
-            "--clips",
-            "Walk",
-            "Run",
-            "--weight",
-            &w.to_string(),
-            "-o",
-            &s(&one),
-            "-q",
-        ]);
+        fox_blend(&w.to_string(), &one, &[]);
         let (odoc, obufs, _) = ::gltf::import(&one).unwrap();
         assert_eq!(
             read(&gdoc, &buffers, &format!("Walk+Run@{w}")),
@@ -651,19 +643,9 @@ fn weight_lists_make_a_blend_space() {
         );
     }
     // BVH inputs: one file per weight, none at the plain output path.
-    let walk = fx.join("bvh/kevinxie4c_walk.bvh");
-    let run = fx.join("bvh/kevinxie4c_cmu_run_filtered.bvh");
+    let (walk, _) = cmu_walk_and_run(&fx);
     let out = dir.path().join("jog.bvh");
-    run_ok(&[
-        "blend",
-        &s(&walk),
-        &s(&run),
-        "-o",
-        &s(&out),
-        "--weight",
-        "0.25,0.75",
-        "-q",
-    ]);
+    blend_cmu(&fx, &out, &["--weight", "0.25,0.75"]);
     assert!(!out.exists());
     for w in ["0.25", "0.75"] {
         let file = dir.path().join(format!("jog@{w}.bvh"));

@@ -28,6 +28,17 @@ pub struct BlendJob {
     pub access: Access,
 }
 
+impl BlendJob {
+    /// The blend options at weight `w`.
+    fn options(&self, w: f64) -> BlendOptions {
+        BlendOptions {
+            cycles: self.cycles,
+            cleanup: self.cleanup,
+            ..BlendOptions::new(w)
+        }
+    }
+}
+
 /// One blend written: the clip's name, the file it is in, and its figures.
 pub struct BlendDone {
     pub name: String,
@@ -241,11 +252,7 @@ fn run_gltf(job: &BlendJob, input: &std::path::Path) -> Result<BlendSummary> {
     let mut out = gltf::begin(&doc, container, &job.output)?;
     let mut blends = Vec::new();
     for &w in &job.weights {
-        let opts = BlendOptions {
-            cycles: job.cycles,
-            cleanup: job.cleanup,
-            ..BlendOptions::new(w)
-        };
+        let opts = job.options(w);
         let BlendedClips {
             rig,
             blended,
@@ -311,11 +318,7 @@ fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
     let mut files = Outputs::new();
     let mut blends = Vec::new();
     for &w in &job.weights {
-        let opts = BlendOptions {
-            cycles: job.cycles,
-            cleanup: job.cleanup,
-            ..BlendOptions::new(w)
-        };
+        let opts = job.options(w);
         let blended = blend(&a.rig, &a.clip, &b.clip, &opts).map_err(|e| gltf::at(inputs[0], e))?;
         let poses = super::write_bvh::resample(a, &blended.times, &blended.poses, a.frame_time);
         let base = (job.name.clone()).unwrap_or_else(|| format!("{}+{}", a.clip.name, b.clip.name));
