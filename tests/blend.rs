@@ -523,6 +523,30 @@ fn bvh_captures_blend_into_bvh() {
     }
     eprintln!("BVH round trip: {frames} frames, worst joint {worst:.2e} cm");
     assert!(worst < 1e-3, "worst joint off by {worst} cm");
+    // Planted feet: before clean-up the time-warped, aligned blend slides less than the naive
+    // one; after it at most 1e-3 leg per frame (the capture's ground rises 0.05 leg over the
+    // walk: contacts are found against a floor that follows it).
+    let rep3 = dir.path().join("three.json");
+    blend_cmu(
+        &fx,
+        &dir.path().join("three.bvh"),
+        &["--weight", "0.25,0.5,0.75", "--report", &s(&rep3)],
+    );
+    let three: Value = serde_json::from_slice(&std::fs::read(&rep3).unwrap()).unwrap();
+    for r in three.as_array().unwrap() {
+        let w = r["weight"].as_f64().unwrap();
+        let (naive, res) = (sliding(&r["naive"]), &r["result"]);
+        let (before, after) = (
+            sliding(&res["before_cleanup"]),
+            sliding(&res["after_cleanup"]),
+        );
+        eprintln!("CMU w {w}: naive {naive:.4}, before clean-up {before:.4}, after {after:.1e}");
+        assert!(
+            before < naive,
+            "w {w}: before clean-up {before} >= naive {naive}"
+        );
+        assert!(after <= 1e-3, "w {w}: after clean-up {after}");
+    }
     // Refusals.
     let odd = fx.join("bvh/bvh11_131_01_start_walk_stop.bvh");
     let bad = dir.path().join("bad.bvh");

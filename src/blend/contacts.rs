@@ -12,6 +12,10 @@ pub const HEIGHT_TOLERANCE: f64 = 0.06;
 pub const SPEED_TOLERANCE: f64 = 1.5;
 /// Shortest contact kept, in seconds; shorter gaps between contacts are closed.
 pub const MIN_CONTACT: f64 = 0.03;
+/// Half the span (seconds) over which a foot's floor is taken: a capture whose ground drifts
+/// or slopes (CMU walks rise 0.05 leg over 2.5 s) has a floor that follows it. A clip no longer
+/// than the whole span has one floor, as before.
+pub const FLOOR_WINDOW: f64 = 1.0;
 
 /// One contact: from touchdown to lift-off (seconds on the clip's timeline; on a looping clip
 /// `end` may pass the clip's end, the contact wrapping round).
@@ -24,10 +28,13 @@ pub struct Contact {
 /// Per-frame contact flags of `leg` on `track`; `scale` is the character's leg length.
 pub fn flags(track: &Track, leg: &Leg, scale: f64) -> Vec<bool> {
     let e = leg.end();
-    let floor = legs::floor(track.pos.iter().map(|p| p[e].y).collect());
+    let floor = local_floor(
+        &track.pos.iter().map(|p| p[e].y).collect::<Vec<_>>(),
+        track.dt,
+    );
     let mut f: Vec<bool> = (0..track.len())
         .map(|i| {
-            track.pos[i][e].y - floor <= HEIGHT_TOLERANCE * scale
+            track.pos[i][e].y - floor[i] <= HEIGHT_TOLERANCE * scale
                 && track.velocity(i, e).y.abs() <= SPEED_TOLERANCE * scale
         })
         .collect();
@@ -44,6 +51,36 @@ pub fn flags(track: &Track, leg: &Leg, scale: f64) -> Vec<bool> {
         }
     }
     f
+}
+
+/// The floor under a joint at each frame of `heights` (one every `dt` seconds): the
+/// [`legs::floor`] of the heights within [`FLOOR_WINDOW`] of it (the window kept inside the
+/// clip), taken every eighth of a window and linearly interpolated between.
+fn local_floor(heights: &[f64], dt: f64) -> Vec<f64> {
+    let n = heights.len();
+    let half = (FLOOR_WINDOW / dt).round() as usize;
+    if n <= 2 * half + 1 {
+        return vec![legs::floor(heights.to_vec()); n];
+    }
+    let step = (half / 4).max(1);
+    let at = |c: usize| {
+        let lo = c.saturating_sub(half).min(n - 1 - 2 * half);
+        legs::floor(heights[lo..=lo + 2 * half].to_vec())
+    };
+    let centres: Vec<usize> = (0..n).step_by(step).chain([n - 1]).collect();
+    let values: Vec<f64> = centres.iter().map(|&c| at(c)).collect();
+    (0..n)
+        .map(|i| {
+            let k = (i / step).min(centres.len() - 2);
+            let (c0, c1) = (centres[k], centres[k + 1]);
+            let u = if c1 > c0 {
+                (i - c0) as f64 / (c1 - c0) as f64
+            } else {
+                0.0
+            };
+            values[k] + u * (values[k + 1] - values[k])
+        })
+        .collect()
 }
 
 /// Runs of equal flags as (first frame, length); on a looping track a run may wrap.

@@ -13,6 +13,18 @@ use super::track::Track;
 use glam::DVec3;
 use serde::Serialize;
 
+/// The ground's velocity under planted feet whose mean velocity is `planted` while the root
+/// travels at `root_speed` (horizontal, same units): a clip in place (its root travels less
+/// than its planted feet) runs on a treadmill at `planted`; a clip with root motion on still
+/// ground. The clean-up pins feet to this ground and the measure measures sliding against it.
+pub fn ground_under(root_speed: f64, planted: DVec3) -> DVec3 {
+    if root_speed < planted.length() {
+        planted
+    } else {
+        DVec3::ZERO
+    }
+}
+
 /// Mean and 95th percentile of per-frame values.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct Spread {
@@ -94,12 +106,7 @@ pub fn figures(
     };
     let duration = (n.max(2) - 1) as f64 * dt;
     let root_speed = flat(track.pos[n - 1][root] - track.pos[0][root]).length() / duration;
-    let ground_speed = ground_step.length() / dt;
-    let ground = if root_speed < ground_speed {
-        ground_step
-    } else {
-        DVec3::ZERO
-    };
+    let ground = ground_under(root_speed * dt, ground_step);
     let sliding = Spread::of(
         planted_moves
             .iter()
@@ -118,11 +125,7 @@ pub fn figures(
     Figures {
         sliding,
         root_speed: root_speed / scale,
-        ground_speed: if root_speed < ground_speed {
-            ground_speed / scale
-        } else {
-            0.0
-        },
+        ground_speed: ground.length() / dt / scale,
         jerk: jerk / count.max(1) as f64 / (dt * dt * dt) / scale,
     }
 }

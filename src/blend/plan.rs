@@ -9,7 +9,7 @@ use super::cycles::CycleMethod;
 use super::legs::Side;
 use super::measure::{self, Figures};
 use super::mix::mix;
-use super::rig::{Clip, Pose, Rig};
+use super::rig::{flat, Clip, Pose, Rig};
 use super::timewarp::{self, Warp};
 use super::track::{pose_unwrapped, Track};
 use glam::DVec3;
@@ -354,6 +354,8 @@ impl Cleanup<'_> {
         let times: Vec<f64> = plan.iter().map(|f| f.0).collect();
         let before = self.before;
         let shift = before.pos[before.len() - 1][rig.root] - before.pos[0][rig.root];
+        let span = times[times.len() - 1] - times[0];
+        let root_speed = flat(shift).length() / span.max(MIN_DURATION);
         // Planted: where the sources plant the foot by vote, or the contact test finds it in
         // the blend (before, and after a first pass, so that every contact the test sees on the
         // result is pinned).
@@ -390,7 +392,8 @@ impl Cleanup<'_> {
                     target: t.clone(),
                 })
                 .collect();
-            let ground = cleanup::ground_velocity(&goals, &times);
+            let ground =
+                measure::ground_under(root_speed, cleanup::ground_velocity(&goals, &times));
             let goals: Vec<LegGoal> = goals
                 .into_iter()
                 .map(|g| {
