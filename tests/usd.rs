@@ -738,3 +738,49 @@ fn blender_imports_materials_and_colours() {
         );
     }
 }
+
+/// Textures USD cannot read, made by a real tool (`gltf-transform webp` on MorphStressTest:
+/// EXT_texture_webp, no PNG fallback): the .usdz is written, validator-clean, with the
+/// materials and no texture readers, and the summary warns once per texture, naming the image.
+#[test]
+fn webp_textures_are_left_out_with_a_warning() {
+    let Some(fx) = fixtures() else { return };
+    let Some(python) = python() else { return };
+    let bin = root().join("tools/node/node_modules/.bin/gltf-transform");
+    if !bin.exists() && missing_tool("gltf-transform (tools/node)") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let webp = dir.path().join("webp.glb");
+    let input = fx.join("morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf");
+    let made = std::process::Command::new(&bin)
+        .args(["webp", s(&input), s(&webp)])
+        .output()
+        .unwrap();
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let out = dir.path().join("webp.usdz");
+    let run = run_ok(&["tween", s(&webp), "-o", s(&out), "--fps", "2"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    for image in ["TinyGrid", "Base_AO", "ColorSwatches"] {
+        let line = format!("\"{image}\" is WEBP (USD reads PNG and JPEG), left out");
+        assert_eq!(stderr.matches(&line).count(), 1, "{image}: {stderr}");
+    }
+    let looks: serde_json::Value = serde_json::from_slice(&run_tool(
+        &python,
+        "usd_looks.py",
+        &[out.as_os_str()],
+        "webp",
+    ))
+    .unwrap();
+    assert_eq!(looks["validation"], serde_json::json!([]));
+    assert_eq!(looks["materials"].as_array().unwrap().len(), 2);
+    let readers = (looks["shaders"].as_array().unwrap())
+        .iter()
+        .filter(|s| s["id"] == "UsdUVTexture")
+        .count();
+    assert_eq!(readers, 0);
+}
