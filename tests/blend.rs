@@ -78,11 +78,18 @@ fn planted_feet_slide_less_than_the_sources_and_a_fifth_of_a_naive_blend() {
                 let planted = r["result"]["after_cleanup"]["sliding"]["count"]
                     .as_u64()
                     .unwrap();
+                let jerk = r["result"]["jerk_ratio"].as_f64().unwrap();
                 eprintln!(
-                    "{file} {a}+{bb} w={w}: sliding {after:.5} (before clean-up {:.5}; sources worse {worse:.5}; naive {naive:.5}; {planted} planted steps)",
+                    "{file} {a}+{bb} w={w}: sliding {after:.5} (before clean-up {:.5}; sources worse {worse:.5}; naive {naive:.5}; {planted} planted steps); jerk ratio {jerk:.2}",
                     sliding(&r["result"]["before_cleanup"])
                 );
                 assert!(planted > 0, "no planted foot measured on the blend");
+                // The clean-up eases each pin in and out (issue 17): Fox's jerk ratio went
+                // from 1.22-1.33 to 1.03-1.20; the goal of 1.15 is not met everywhere yet.
+                // Robot's blend is 1.49-1.97 before any clean-up, so it is not held to this.
+                if file.contains("Fox") {
+                    assert!(jerk <= 1.25, "jerk ratio {jerk}");
+                }
                 assert!(after <= worse, "{after} > worse source {worse}");
                 if r["naive"]["sliding"]["count"].as_u64().unwrap() == 0 {
                     // Robot w=0.75: the run's contacts last under two frames, so the naive
@@ -546,6 +553,8 @@ fn bvh_captures_blend_into_bvh() {
             "w {w}: before clean-up {before} >= naive {naive}"
         );
         assert!(after <= 1e-3, "w {w}: after clean-up {after}");
+        let jerk = res["jerk_ratio"].as_f64().unwrap();
+        assert!(jerk <= 1.15, "w {w}: jerk ratio {jerk}");
     }
     // Refusals.
     let odd = fx.join("bvh/bvh11_131_01_start_walk_stop.bvh");

@@ -1,7 +1,9 @@
 //! Foot clean-up: while a foot is planted in the blend, it is pinned to one spot of the ground
 //! (the spot where the sources' feet, blended, are on average during that contact; on an
 //! in-place clip the ground moves under it at the blend's treadmill speed) by analytic two-bone
-//! IK on the leg, eased in and out over [`EASE_FRAMES`] frames; where a leg cannot reach, the
+//! IK on the leg, eased in and out over [`EASE_FRAMES`] frames that already aim at the pinned
+//! spot (so the correction grows from nothing, with no jump at touchdown or lift-off); where a
+//! leg cannot reach, the
 //! root is lowered just enough (eased the same way). Joints outside the legs keep their
 //! rotations.
 
@@ -116,10 +118,56 @@ pub fn pin(
             done[j] = true;
         }
     }
+    // The frames easing in and out of a contact aim at its spot too (moving with the ground),
+    // so that the correction grows from nothing to the pin instead of jumping at touchdown.
+    let pinned = out.clone();
+    for (j, o) in out.iter_mut().enumerate().take(distinct) {
+        if planted[j] {
+            continue;
+        }
+        let Some((i, k)) = nearest_planted(planted, j, distinct, looping) else {
+            continue;
+        };
+        // `k` loops between frame `i` and frame `j` (-1, 0 or 1).
+        let dt = times[j] - (times[i] + k * loop_time);
+        let spot = flat(pinned[i] + k * loop_shift) + ground * dt;
+        *o = spot + UP * target[j].dot(UP);
+    }
     if looping && n > 1 {
         out[n - 1] = out[0] + loop_shift;
     }
     out
+}
+
+/// The planted frame nearest frame `j` within [`EASE_FRAMES`] (of `distinct` frames; on a loop
+/// distances wrap), and how many loops lie between them: -1 when it is one loop earlier, 1 one
+/// loop later.
+fn nearest_planted(
+    planted: &[bool],
+    j: usize,
+    distinct: usize,
+    looping: bool,
+) -> Option<(usize, f64)> {
+    let mut best: Option<(usize, usize, f64)> = None;
+    for d in 1..=EASE_FRAMES {
+        for (step, sign) in [(j.checked_sub(d), -1i64), (Some(j + d), 1)] {
+            let (i, k) = match step {
+                Some(i) if i < distinct => (i, 0.0),
+                _ if looping && distinct > 0 => {
+                    let i = (j as i64 + sign * d as i64).rem_euclid(distinct as i64) as usize;
+                    (i, sign as f64)
+                }
+                _ => continue,
+            };
+            if planted[i] && best.is_none_or(|b| d < b.1) {
+                best = Some((i, d, k));
+            }
+        }
+        if best.is_some() {
+            break;
+        }
+    }
+    best.map(|(i, _, k)| (i, k))
 }
 
 /// Influence of the correction per frame: 1 in contact, easing to 0 over [`EASE_FRAMES`].
