@@ -3,9 +3,8 @@
 //! in-place clip the ground moves under it at the blend's treadmill speed) by analytic two-bone
 //! IK on the leg, eased in and out over [`EASE_FRAMES`] frames that already aim at the pinned
 //! spot (so the correction grows from nothing, with no jump at touchdown or lift-off); where a
-//! leg cannot reach, the
-//! root is lowered just enough (eased the same way). Joints outside the legs keep their
-//! rotations.
+//! leg cannot reach, the root is lowered just enough (eased the same way). Joints outside the
+//! legs keep their rotations.
 
 use super::legs::Leg;
 use super::rig::{flat, Pose, Rig, UP};
