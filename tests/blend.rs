@@ -471,8 +471,8 @@ fn blend_cmu(fx: &Path, out: &Path, extra: &[&str]) {
 /// the output has the first capture's hierarchy text and channel order, its frame time, one
 /// frame per frame time of the blend, and read back it is the blend itself: every joint
 /// within 1e-3 scene units (centimetres) of the blended poses. The report is the glTF one's,
-/// valid against the schema. Different skeletons, a BVH-to-glTF request and --clips with BVH
-/// inputs are refused.
+/// valid against the schema. Different skeletons, a BVH-to-glTF request, --clips with BVH
+/// inputs and rotation channels BVH output cannot write are refused.
 #[test]
 fn bvh_captures_blend_into_bvh() {
     let Some(fx) = fixtures() else { return };
@@ -557,6 +557,22 @@ fn bvh_captures_blend_into_bvh() {
         assert!(jerk <= 1.15, "w {w}: jerk ratio {jerk}");
     }
     // Refusals.
+    // A joint whose rotation channels repeat an axis cannot be written back: said before any work.
+    let text = std::fs::read_to_string(&walk).unwrap();
+    let repeated = dir.path().join("repeated.bvh");
+    let zxy = "CHANNELS 3 Zrotation Xrotation Yrotation";
+    std::fs::write(
+        &repeated,
+        text.replacen(zxy, "CHANNELS 3 Zrotation Xrotation Zrotation", 1),
+    )
+    .unwrap();
+    let bad_out = dir.path().join("bad_out.bvh");
+    assert_refused(
+        &["blend", &s(&repeated), &s(&repeated), "-o", &s(&bad_out)],
+        "repeated.bvh",
+        "joint \"Abdomen\" has rotation channels BVH output cannot write",
+        &bad_out,
+    );
     let odd = fx.join("bvh/bvh11_131_01_start_walk_stop.bvh");
     let bad = dir.path().join("bad.bvh");
     let walk_s = s(&walk);

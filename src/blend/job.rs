@@ -315,6 +315,7 @@ fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
             b.rig.len()
         );
     }
+    super::write_bvh::orders(a).map_err(|e| gltf::at(inputs[0], e))?;
     let mut files = Outputs::new();
     let mut blends = Vec::new();
     for &w in &job.weights {

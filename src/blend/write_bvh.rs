@@ -41,13 +41,18 @@ pub fn resample(bvh: &Bvh, times: &[f64], poses: &[Pose], dt: f64) -> Vec<Pose> 
     (0..count).map(|k| clip.pose(rig, k as f64 * dt)).collect()
 }
 
-/// Write `poses` (one every `bvh.frame_time`) as BVH text with `bvh`'s skeleton and channels.
-pub fn write(bvh: &Bvh, poses: &[Pose], out: &mut dyn Write) -> Result<()> {
-    let orders: Vec<Option<EulerRot>> = bvh
-        .dofs
+/// The Euler order of every joint with channels of `bvh`, or why its skeleton cannot be
+/// written back (checked before any work).
+pub fn orders(bvh: &Bvh) -> Result<Vec<Option<EulerRot>>> {
+    bvh.dofs
         .iter()
         .map(|(j, list)| euler_order(list, &bvh.rig.names[*j]))
-        .collect::<Result<_>>()?;
+        .collect()
+}
+
+/// Write `poses` (one every `bvh.frame_time`) as BVH text with `bvh`'s skeleton and channels.
+pub fn write(bvh: &Bvh, poses: &[Pose], out: &mut dyn Write) -> Result<()> {
+    let orders = orders(bvh)?;
     let eol = if bvh.header.contains("\r\n") {
         "\r\n"
     } else {
