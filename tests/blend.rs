@@ -691,6 +691,23 @@ fn weight_lists_make_a_blend_space() {
             "w {w}"
         );
     }
+    // A weight listed twice would name two animations alike: refused.
+    let twice = dir.path().join("twice.glb");
+    let r = inbetween(&[
+        "blend",
+        &s(&fox),
+        "--clips",
+        "Walk",
+        "Run",
+        "--weight",
+        "0.5,0.25,0.5",
+        "-o",
+        &s(&twice),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(err.contains("--weight lists 0.5 twice"), "{err}");
+    assert!(!twice.exists());
     // BVH inputs: one file per weight, none at the plain output path.
     let (walk, _) = cmu_walk_and_run(&fx);
     let out = dir.path().join("jog.bvh");

@@ -217,6 +217,15 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
     if let Some(w) = job.weights.iter().find(|w| !(0.0..=1.0).contains(*w)) {
         bail!("--weight {w} is outside [0, 1]");
     }
+    if let Some((i, w)) =
+        (job.weights.iter().enumerate()).find(|(i, w)| job.weights[..*i].contains(w))
+    {
+        bail!(
+            "--weight lists {w} twice (at places {} and {})",
+            job.weights.iter().position(|x| x == w).unwrap_or(0) + 1,
+            i + 1
+        );
+    }
     let is_bvh = |p: &PathBuf| {
         p.extension()
             .and_then(|e| e.to_str())
