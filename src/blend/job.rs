@@ -29,6 +29,14 @@ pub struct BlendJob {
 }
 
 impl BlendJob {
+    /// What tells the blend at weight `w` apart: `@<w>` when the job has several weights.
+    fn tag(&self, w: f64) -> String {
+        match self.weights.len() {
+            1 => String::new(),
+            _ => format!("@{w}"),
+        }
+    }
+
     /// The blend options at weight `w`.
     fn options(&self, w: f64) -> BlendOptions {
         BlendOptions {
@@ -189,14 +197,6 @@ pub fn blend_clips(
     })
 }
 
-/// The name of the blend at weight `w`: `base`, with `@<w>` when the job has several weights.
-fn named(base: &str, w: f64, job: &BlendJob) -> String {
-    match job.weights.len() {
-        1 => base.to_owned(),
-        _ => format!("{base}@{w}"),
-    }
-}
-
 /// The report file: one blend's report, or the list of them for several weights.
 fn stage_report(job: &BlendJob, blends: &[BlendDone], files: &mut Outputs) -> Result<()> {
     let Some(path) = &job.report else {
@@ -269,7 +269,7 @@ fn run_gltf(job: &BlendJob, input: &std::path::Path) -> Result<BlendSummary> {
             names,
         } = blend_clips(&doc, clips, &opts)?;
         let base = (job.name.clone()).unwrap_or_else(|| format!("{}+{}", names[0], names[1]));
-        let name = named(&base, w, job);
+        let name = format!("{base}{}", job.tag(w));
         let channels = super::write::channels(&rig, &blended.poses, &animated);
         super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);
         blends.push(BlendDone {
@@ -332,20 +332,17 @@ fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
         let blended = blend(&a.rig, &a.clip, &b.clip, &opts).map_err(|e| gltf::at(inputs[0], e))?;
         let poses = super::write_bvh::resample(a, &blended.times, &blended.poses, a.frame_time);
         let base = (job.name.clone()).unwrap_or_else(|| format!("{}+{}", a.clip.name, b.clip.name));
-        let file = match job.weights.len() {
-            1 => job.output.clone(),
-            _ => {
-                let stem = job
-                    .output
-                    .file_stem()
-                    .and_then(|s| s.to_str())
-                    .unwrap_or("blend");
-                job.output.with_file_name(format!("{stem}@{w}.bvh"))
+        let file = match job.tag(w) {
+            tag if tag.is_empty() => job.output.clone(),
+            tag => {
+                let stem = job.output.file_stem().and_then(|s| s.to_str());
+                job.output
+                    .with_file_name(format!("{}{tag}.bvh", stem.unwrap_or("blend")))
             }
         };
         files.write_with(&file, |out| super::write_bvh::write(a, &poses, out))?;
         blends.push(BlendDone {
-            name: named(&base, w, job),
+            name: format!("{base}{}", job.tag(w)),
             file,
             report: blended.report,
         });

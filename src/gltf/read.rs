@@ -155,20 +155,24 @@ impl Document {
         read_image(&file).map_err(|why| uri_error(&self.path, &what, uri, why))
     }
 
+    /// The bytes of buffer view `v` (an error naming it when it reaches past its buffer).
+    pub fn view(&self, v: usize) -> Result<&[u8]> {
+        let bv = &self.json["bufferViews"][v];
+        let b = bv["buffer"].as_u64().unwrap_or(0) as usize;
+        let start = bv["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let len = bv["byteLength"].as_u64().unwrap_or(0) as usize;
+        self.buffers
+            .get(b)
+            .and_then(|d| d.get(start..start.checked_add(len)?))
+            .ok_or_else(|| self.err(format!("bufferView {v} reaches past the end of buffer {b}")))
+    }
+
     /// The bytes of image `i` wherever they are (a buffer view, a data URI or an external file)
     /// and their type as their first bytes say (`None` when they are none glTF allows).
     pub fn image(&self, i: usize) -> Result<(Vec<u8>, Option<&'static str>)> {
         let img = &self.json["images"][i];
         let data = if let Some(v) = img["bufferView"].as_u64() {
-            let view = &self.json["bufferViews"][v as usize];
-            let buffer = view["buffer"].as_u64().unwrap_or(0) as usize;
-            let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
-            let len = view["byteLength"].as_u64().unwrap_or(0) as usize;
-            self.buffers
-                .get(buffer)
-                .and_then(|b| b.get(start..start.checked_add(len)?))
-                .ok_or_else(|| self.err(format!("image {i}: buffer view {v} is out of range")))?
-                .to_vec()
+            self.view(v as usize)?.to_vec()
         } else {
             match img["uri"].as_str() {
                 Some(uri) if uri.starts_with("data:") => decode_data_uri(uri).ok_or_else(|| {

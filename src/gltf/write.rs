@@ -41,14 +41,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     let mut bin = BinBuilder::new();
     let mut copies = Vec::new();
     for (i, bv) in arr(&doc.json, "bufferViews").iter().enumerate() {
-        let b = bv["buffer"].as_u64().unwrap_or(0) as usize;
-        let start = bv["byteOffset"].as_u64().unwrap_or(0) as usize;
-        let len = bv["byteLength"].as_u64().unwrap_or(0) as usize;
-        let data = doc
-            .buffers
-            .get(b)
-            .and_then(|d| d.get(start..start.checked_add(len)?))
-            .ok_or_else(|| doc.err(format!("bufferView {i} reaches past the end of buffer {b}")))?;
+        let data = doc.view(i)?;
         let mut view = bv.clone();
         let idx = bin.push_view(data, None);
         let placed = bin.views[idx].clone();

@@ -482,14 +482,8 @@ impl<W: Write + Seek> Writer<W> {
             props.push("primvars:displayColor".into());
         }
         if let Some(alpha) = &m.opacity {
-            let interpolation = self.field("interpolation", Val::Token("vertex"))?;
             let v = self.field("default", Val::Floats(alpha))?;
-            self.attribute(
-                me,
-                "primvars:displayOpacity",
-                "float[]",
-                vec![interpolation, v],
-            )?;
+            self.attribute(me, "primvars:displayOpacity", "float[]", vec![vertex, v])?;
             props.push("primvars:displayOpacity".into());
         }
         for (name, st) in &m.st {
