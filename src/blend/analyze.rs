@@ -33,13 +33,13 @@ impl Analysis {
         self.track.looping
     }
 
-    /// Whether leg `leg` is planted at time `t` of the clip.
-    pub fn planted(&self, leg: usize, t: f64) -> bool {
+    /// Whether leg `leg` is planted within `half` seconds of time `t` of the clip.
+    pub fn planted(&self, leg: usize, t: f64, half: f64) -> bool {
         let period = self
             .track
             .looping
             .then(|| (self.track.start, self.track.duration()));
-        contacts::planted(&self.contacts[leg], t, period)
+        contacts::planted(&self.contacts[leg], t, half, period)
     }
 }
 

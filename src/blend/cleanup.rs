@@ -1,10 +1,12 @@
 //! Foot clean-up: while a foot is planted in the blend, it is pinned to one spot of the ground
 //! (the spot where the sources' feet, blended, are on average during that contact; on an
 //! in-place clip the ground moves under it at the blend's treadmill speed) by analytic two-bone
-//! IK on the leg, eased in and out over [`EASE_FRAMES`] frames that already aim at the pinned
-//! spot (so the correction grows from nothing, with no jump at touchdown or lift-off); where a
-//! leg cannot reach, the root is lowered just enough (eased the same way). Joints outside the
-//! legs keep their rotations.
+//! IK on the leg, the knee bending to the side it bends to over the clip. Around each contact
+//! the correction (pin minus the foot's own position) is carried on at the rate it was changing
+//! and faded out over [`EASE_SECONDS`] (a swing shorter than two eases gets one cubic from one
+//! contact's correction to the next), so the foot keeps its position and velocity where a pin
+//! starts or ends: no pop. Where a leg cannot reach, the root is lowered just enough, eased the
+//! same way. Joints outside the legs keep their rotations.
 
 use super::legs::Leg;
 use super::rig::{flat, Pose, Rig, UP};
@@ -13,11 +15,9 @@ use glam::{DMat4, DQuat, DVec3};
 /// A thigh or shin shorter than this (scene units) is not bent by the IK.
 const MIN_BONE: f64 = 1e-12;
 /// A knee whose bones' cross product is below this fraction of their lengths' product (the
-/// sine of the knee angle, unitless) is straight: it bends about the sideways axis.
+/// sine of the knee angle, unitless) is straight: it bends about the leg's knee axis.
 const STRAIGHT_LEG: f64 = 1e-9;
 
-/// Frames over which a contact's correction fades in before touchdown and out after lift-off.
-pub const EASE_FRAMES: usize = 3;
 /// A leg is stretched to at most this fraction of its hip-knee-ankle length.
 pub const MAX_STRETCH: f64 = 0.999;
 
@@ -117,86 +117,96 @@ pub fn pin(
             done[j] = true;
         }
     }
-    // The frames easing in and out of a contact aim at its spot too (moving with the ground),
-    // so that the correction grows from nothing to the pin instead of jumping at touchdown.
-    let pinned = out.clone();
-    for (j, o) in out.iter_mut().enumerate().take(distinct) {
-        if planted[j] {
-            continue;
-        }
-        let Some((i, k)) = nearest_planted(planted, j, distinct, looping) else {
-            continue;
-        };
-        // `k` loops between frame `i` and frame `j` (-1, 0 or 1).
-        let dt = times[j] - (times[i] + k * loop_time);
-        let spot = flat(pinned[i] + k * loop_shift) + ground * dt;
-        *o = spot + UP * target[j].dot(UP);
-    }
     if looping && n > 1 {
         out[n - 1] = out[0] + loop_shift;
     }
     out
 }
 
-/// The planted frame nearest frame `j` within [`EASE_FRAMES`] (of `distinct` frames; on a loop
-/// distances wrap), and how many loops lie between them: -1 when it is one loop earlier, 1 one
-/// loop later.
-fn nearest_planted(
-    planted: &[bool],
-    j: usize,
-    distinct: usize,
-    looping: bool,
-) -> Option<(usize, f64)> {
-    let mut best: Option<(usize, usize, f64)> = None;
-    for d in 1..=EASE_FRAMES {
-        for (step, sign) in [(j.checked_sub(d), -1i64), (Some(j + d), 1)] {
-            let (i, k) = match step {
-                Some(i) if i < distinct => (i, 0.0),
-                _ if looping && distinct > 0 => {
-                    let i = (j as i64 + sign * d as i64).rem_euclid(distinct as i64) as usize;
-                    (i, sign as f64)
-                }
-                _ => continue,
-            };
-            if planted[i] && best.is_none_or(|b| d < b.1) {
-                best = Some((i, d, k));
-            }
-        }
-        if best.is_some() {
-            break;
-        }
-    }
-    best.map(|(i, _, k)| (i, k))
-}
+/// Longest ease (seconds) of a contact's correction into the swing before and after it: at most
+/// half the gap to the neighbouring contact.
+pub const EASE_SECONDS: f64 = 0.125;
 
-/// Influence of the correction per frame: 1 in contact, easing to 0 over [`EASE_FRAMES`].
-/// On a looping clip (last frame = first) distances wrap.
-pub fn influence(planted: &[bool], looping: bool) -> Vec<f64> {
+/// The correction (target minus the foot's own position `ends`) per frame: in contact, what
+/// moves the foot onto its target; in the swing around it, the contact's first or last correction
+/// carried on at the rate it was changing and faded out with a smoothstep over the ease window,
+/// so the foot's path keeps its position and velocity where a pin starts or ends (no pop).
+/// `None` where no correction applies. On a looping clip (last frame = first) gaps wrap.
+pub fn corrections(
+    planted: &[bool],
+    target: &[DVec3],
+    ends: &[DVec3],
+    dt: f64,
+    looping: bool,
+) -> Vec<Option<DVec3>> {
     let n = planted.len();
-    let period = if looping && n > 1 { n - 1 } else { 0 };
-    (0..n)
-        .map(|j| {
-            let d = (0..n)
+    let distinct = if looping && n > 1 { n - 1 } else { n };
+    let off = |j: usize| target[j] - ends[j];
+    let at = |j: usize, d: i64| -> Option<usize> {
+        let i = j as i64 + d;
+        if (0..distinct as i64).contains(&i) {
+            Some(i as usize)
+        } else if looping {
+            Some(i.rem_euclid(distinct as i64) as usize)
+        } else {
+            None
+        }
+    };
+    // The nearest planted frame in direction `dir` from `j`, and its distance in frames.
+    let nearest = |j: usize, dir: i64| -> Option<(usize, usize)> {
+        (1..distinct).find_map(|d| {
+            at(j, dir * d as i64)
                 .filter(|&i| planted[i])
-                .map(|i| {
-                    let d = i.abs_diff(j);
-                    if period > 0 {
-                        d.min(period - d % period)
-                    } else {
-                        d
-                    }
-                })
-                .min();
-            match d {
-                Some(0) => 1.0,
-                Some(d) if d <= EASE_FRAMES => {
-                    let x = 1.0 - d as f64 / (EASE_FRAMES + 1) as f64;
-                    x * x * (3.0 - 2.0 * x)
-                }
-                _ => 0.0,
-            }
+                .map(|i| (i, d))
         })
-        .collect()
+    };
+    let ease = (EASE_SECONDS / dt).max(1.0);
+    // The rate (per frame, going away from the contact) at which a contact's correction was
+    // changing at its end frame `i`, one-sided (zero for a contact of one frame).
+    let rate = |i: usize, inward: i64| {
+        at(i, inward)
+            .filter(|&k| planted[k])
+            .map_or(DVec3::ZERO, |k| off(i) - off(k))
+    };
+    let mut out: Vec<Option<DVec3>> = (0..distinct)
+        .map(|j| {
+            if planted[j] {
+                return Some(off(j));
+            }
+            let (back, ahead) = (nearest(j, -1), nearest(j, 1));
+            if let (Some((i0, d0)), Some((i1, d1))) = (back, ahead) {
+                let gap = (d0 + d1) as f64;
+                if gap <= 2.0 * ease {
+                    // A short swing: one cubic from the last correction to the next, matching
+                    // both corrections and their rates.
+                    let t = d0 as f64 / gap;
+                    let (t2, t3) = (t * t, t * t * t);
+                    return Some(
+                        off(i0) * (2.0 * t3 - 3.0 * t2 + 1.0)
+                            + rate(i0, -1) * gap * (t3 - 2.0 * t2 + t)
+                            + off(i1) * (3.0 * t2 - 2.0 * t3)
+                            - rate(i1, 1) * gap * (t3 - t2),
+                    );
+                }
+            }
+            // A long swing: each neighbouring contact's correction, carried on at its rate,
+            // fades out over the ease window.
+            let mut sum = None;
+            for (found, inward) in [(back, -1i64), (ahead, 1)] {
+                let Some((i, d)) = found else { continue };
+                let x = d as f64 / ease;
+                if x < 1.0 {
+                    let fade = 1.0 - x * x * (3.0 - 2.0 * x);
+                    *sum.get_or_insert(DVec3::ZERO) += (off(i) + rate(i, inward) * d as f64) * fade;
+                }
+            }
+            sum
+        })
+        .collect();
+    if looping && n > 1 {
+        out.push(out[0]);
+    }
+    out
 }
 
 /// Apply the clean-up to `frames` in place. Returns the root drop per frame (world units).
@@ -206,23 +216,35 @@ pub fn clean(
     goals: &[LegGoal],
     frames: &mut [Pose],
     forward: DVec3,
+    dt: f64,
     looping: bool,
 ) -> Vec<f64> {
     let n = frames.len();
-    let alphas: Vec<Vec<f64>> = goals
+    let ends: Vec<Vec<DVec3>> = frames.iter().map(|p| rig.positions(p)).collect();
+    let wants: Vec<Vec<Option<DVec3>>> = legs
         .iter()
-        .map(|g| influence(&g.planted, looping))
+        .zip(goals)
+        .map(|(leg, g)| {
+            let own: Vec<DVec3> = ends.iter().map(|p| p[leg.end()]).collect();
+            corrections(&g.planted, &g.target, &own, dt, looping)
+                .into_iter()
+                .zip(&own)
+                .map(|(c, e)| c.map(|c| *e + c))
+                .collect()
+        })
+        .collect();
+    let bend: Vec<DVec3> = legs
+        .iter()
+        .map(|leg| knee_axis(leg, &ends, forward))
         .collect();
     // Root drop where a planted leg cannot reach its target, spread with a tent over the ease.
     let mut need = vec![0.0f64; n];
-    for (j, pose) in frames.iter().enumerate() {
-        let p = rig.positions(pose);
-        for ((leg, goal), alpha) in legs.iter().zip(goals).zip(&alphas) {
-            let (Some([a, b, c]), true) = (leg.ik, alpha[j] > 0.0) else {
+    for (j, p) in ends.iter().enumerate() {
+        for (leg, want) in legs.iter().zip(&wants) {
+            let (Some([a, b, c]), Some(want)) = (leg.ik, want[j]) else {
                 continue;
             };
             let reach = MAX_STRETCH * ((p[b] - p[a]).length() + (p[c] - p[b]).length());
-            let want = p[leg.end()].lerp(goal.target[j], alpha[j]);
             let ankle = want - (p[leg.end()] - p[c]);
             let d = p[a] - ankle;
             if d.length() <= reach {
@@ -234,12 +256,22 @@ pub fn clean(
             need[j] = need[j].max(drop.max(0.0));
         }
     }
+    // Spread over the ease window with the same smoothstep, so the root sinks and rises without
+    // a kink (on a loop, across its seam).
+    let ease = (EASE_SECONDS / dt).max(1.0) + 1.0;
+    let period = if looping && n > 1 { n - 1 } else { 0 };
     let drop: Vec<f64> = (0..n)
         .map(|j| {
             (0..n)
                 .map(|i| {
-                    let d = i.abs_diff(j) as f64;
-                    need[i] * (1.0 - d / (EASE_FRAMES + 1) as f64).max(0.0)
+                    let d = i.abs_diff(j);
+                    let d = if period > 0 {
+                        d.min(period - d % period)
+                    } else {
+                        d
+                    };
+                    let x = (d as f64 / ease).min(1.0);
+                    need[i] * (1.0 - x * x * (3.0 - 2.0 * x))
                 })
                 .fold(0.0, f64::max)
         })
@@ -248,16 +280,33 @@ pub fn clean(
         if drop[j] > 0.0 {
             super::align::move_skeleton(rig, pose, &DMat4::from_translation(-UP * drop[j]));
         }
-        for ((leg, goal), alpha) in legs.iter().zip(goals).zip(&alphas) {
-            if alpha[j] > 0.0 {
+        for (l, (leg, want)) in legs.iter().zip(&wants).enumerate() {
+            if let Some(want) = want[j] {
                 let world = rig.world(pose);
-                let end = world[leg.end()].w_axis.truncate();
-                let want = end.lerp(goal.target[j], alpha[j]);
-                reach(rig, leg, pose, &world, want, forward);
+                reach(rig, leg, pose, &world, want, bend[l]);
             }
         }
     }
     drop
+}
+
+/// The side a leg's knee bends to over the clip (unit axis of the thigh-to-shin turn, weighted
+/// by how far the knee bends in each frame of `positions`); sideways of `forward` for a leg
+/// that never bends.
+fn knee_axis(leg: &Leg, positions: &[Vec<DVec3>], forward: DVec3) -> DVec3 {
+    let Some([a, b, c]) = leg.ik else {
+        return UP.cross(forward);
+    };
+    let sum: DVec3 = positions
+        .iter()
+        .map(|p| (p[a] - p[b]).cross(p[c] - p[b]))
+        .sum();
+    let axis = sum.normalize_or_zero();
+    if axis == DVec3::ZERO {
+        UP.cross(forward).normalize()
+    } else {
+        axis
+    }
 }
 
 fn rotation_of(m: &DMat4) -> DQuat {
@@ -273,7 +322,7 @@ fn turn(rig: &Rig, pose: &mut Pose, world: &[DMat4], j: usize, r: DQuat) {
 
 /// Two-bone IK: bend the knee for the hip-ankle distance, swing the hip to the target, and keep
 /// the ankle's world orientation (so the foot below it moves rigidly).
-fn reach(rig: &Rig, leg: &Leg, pose: &mut Pose, world: &[DMat4], want: DVec3, forward: DVec3) {
+fn reach(rig: &Rig, leg: &Leg, pose: &mut Pose, world: &[DMat4], want: DVec3, bend: DVec3) {
     let pos = |j: usize| world[j].w_axis.truncate();
     let Some([a, b, c]) = leg.ik else {
         return;
@@ -300,11 +349,17 @@ fn reach(rig: &Rig, leg: &Leg, pose: &mut Pose, world: &[DMat4], want: DVec3, fo
     let wanted = ((lab * lab + lcb * lcb - lat * lat) / (2.0 * lab * lcb))
         .clamp(-1.0, 1.0)
         .acos();
-    let mut axis = (pa - pb).cross(pc - pb);
-    if axis.length() < STRAIGHT_LEG * lab * lcb {
-        axis = UP.cross(forward);
-    }
-    let r1 = DQuat::from_axis_angle(axis.normalize(), wanted - current);
+    // Bend about the leg's own knee axis: a knee the source passes through straight (its bend
+    // axis flipping for a frame) is measured round that axis past 180 degrees, not flipped.
+    let cross = (pa - pb).cross(pc - pb);
+    let (axis, current) = if cross.length() < STRAIGHT_LEG * lab * lcb {
+        (bend, current)
+    } else if cross.dot(bend) < 0.0 {
+        (-cross.normalize(), std::f64::consts::TAU - current)
+    } else {
+        (cross.normalize(), current)
+    };
+    let r1 = DQuat::from_axis_angle(axis, wanted - current);
     turn(rig, pose, world, b, r1);
     let pc1 = pb + r1 * (pc - pb);
     // Hip: swing the ankle onto the target direction.
@@ -320,4 +375,38 @@ fn reach(rig: &Rig, leg: &Leg, pose: &mut Pose, world: &[DMat4], want: DVec3, fo
     let new_world = rig.world(pose);
     let parent = rotation_of(&rig.parent_world(&new_world, c));
     pose.local[c].r = (parent.inverse() * ankle_world).normalize();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Corrections of a foot standing at the origin whose target on frame `j` is `j` units along x.
+    fn ramp(planted: &[bool]) -> Vec<Option<DVec3>> {
+        let n = planted.len();
+        let target: Vec<DVec3> = (0..n).map(|j| DVec3::X * j as f64).collect();
+        corrections(planted, &target, &vec![DVec3::ZERO; n], 1.0 / 24.0, false)
+    }
+
+    #[test]
+    fn corrections_carry_on_and_fade_without_a_jump() {
+        // A long swing after frames 0-4: the correction goes on rising by 1 a frame, faded by a
+        // smoothstep over 3 frames (0.125 s at 24 fps), and is gone after it.
+        let mut planted = vec![false; 12];
+        planted[..5].fill(true);
+        let c: Vec<f64> = ramp(&planted)
+            .iter()
+            .map(|c| c.map_or(0.0, |v| v.x))
+            .collect();
+        assert_eq!(&c[..5], &[0.0, 1.0, 2.0, 3.0, 4.0]);
+        let fade = |x: f64| 1.0 - x * x * (3.0 - 2.0 * x);
+        for d in 1..3 {
+            assert!((c[4 + d] - (4.0 + d as f64) * fade(d as f64 / 3.0)).abs() < 1e-12);
+        }
+        assert!(c[7..].iter().all(|&x| x == 0.0));
+        // A swing of one frame between two contacts: the cubic through both, matching rates.
+        let planted = [true, true, true, false, true, true];
+        let c = ramp(&planted);
+        assert!((c[3].unwrap().x - 3.0).abs() < 1e-12);
+    }
 }

@@ -127,13 +127,15 @@ pub fn intervals(track: &Track, f: &[bool]) -> Vec<Contact> {
     out
 }
 
-/// Whether `t` lies in one of `contacts` (on a looping clip of period `period`, modulo it).
-pub fn planted(contacts: &[Contact], t: f64, period: Option<(f64, f64)>) -> bool {
+/// Whether one of `contacts` comes within `half` of time `t` (on a looping clip of period
+/// `period`, modulo it).
+pub fn planted(contacts: &[Contact], t: f64, half: f64, period: Option<(f64, f64)>) -> bool {
+    let near = |c: &Contact, x: f64| c.start - half <= x && x <= c.end + half;
     contacts.iter().any(|c| match period {
         Some((start, dur)) => {
             let x = start + (t - start).rem_euclid(dur);
-            (c.start <= x && x <= c.end) || (c.start <= x + dur && x + dur <= c.end)
+            near(c, x) || near(c, x + dur)
         }
-        None => c.start <= t && t <= c.end,
+        None => near(c, t),
     })
 }

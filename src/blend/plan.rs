@@ -409,7 +409,7 @@ impl Cleanup<'_> {
                 })
                 .collect();
             *frames = unclean.clone();
-            let drop = cleanup::clean(rig, &ch.legs, &goals, frames, ch.forward, looping);
+            let drop = cleanup::clean(rig, &ch.legs, &goals, frames, ch.forward, dt, looping);
             max_drop = drop.iter().copied().fold(0.0, f64::max);
             let after = positions_track(rig, frames, dt, looping);
             let mut grew = false;
@@ -426,6 +426,29 @@ impl Cleanup<'_> {
         }
         max_drop
     }
+}
+
+/// Whether the sources plant leg `l` by weighted vote (the source of more weight decides, either
+/// at 0.5) at their times `t`, a frame standing for `half` (source seconds) either side of it
+/// so that a contact shorter than a frame still plants the frame nearest it. The clean-up pins
+/// these frames and the figures measure sliding there too (a naive blend's feet may never
+/// settle enough for the contact test).
+fn planted_by_vote(an: [&Analysis; 2], w: f64, l: usize, t: [f64; 2], half: [f64; 2]) -> bool {
+    let x = |p: bool| if p { 1.0 } else { 0.0 };
+    (1.0 - w) * x(an[0].planted(l, t[0], half[0])) + w * x(an[1].planted(l, t[1], half[1])) >= 0.5
+}
+
+/// `vote` per frame of the phase plan, each frame standing for half the way to its neighbours.
+fn voted_on(plan: &[(f64, f64, f64)], vote: impl Fn([f64; 2], [f64; 2]) -> bool) -> Vec<bool> {
+    (0..plan.len())
+        .map(|j| {
+            let (p, q) = (plan[j.saturating_sub(1)], plan[(j + 1).min(plan.len() - 1)]);
+            vote(
+                [plan[j].1, plan[j].2],
+                [0.25 * (q.1 - p.1), 0.25 * (q.2 - p.2)],
+            )
+        })
+        .collect()
 }
 
 /// Refuse a clip without a stride cycle, saying why.
@@ -471,15 +494,9 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     let dt = 1.0 / phase.fps;
     let before = positions_track(rig, &frames, dt, false);
     let before_loop = track_of(before.pos.clone(), dt, phase.looping);
-    // Where the sources plant each foot by weighted vote (the source of more weight decides,
-    // either at 0.5), per output frame: the clean-up pins these and the figures measure
-    // sliding there too (a naive blend's feet may never settle enough for the contact test).
-    let vote = |l: usize, ta: f64, tb: f64| {
-        let x = |p: bool| if p { 1.0 } else { 0.0 };
-        (1.0 - w) * x(an_a.planted(l, ta)) + w * x(an_b.planted(l, tb)) >= 0.5
-    };
+    let vote = |l: usize, t: [f64; 2], half: [f64; 2]| planted_by_vote([an_a, an_b], w, l, t, half);
     let voted: Vec<Vec<bool>> = (0..ch.legs.len())
-        .map(|l| phase.frames.iter().map(|p| vote(l, p.1, p.2)).collect())
+        .map(|l| voted_on(&phase.frames, |t, half| vote(l, t, half)))
         .collect();
     let mut max_drop: f64 = 0.0;
     if opts.cleanup && !ch.legs.is_empty() && cleanup_strength(w) > 0.0 {
@@ -607,7 +624,7 @@ impl Measured<'_> {
         a: &Clip,
         b: &Clip,
         looping: bool,
-        vote: &dyn Fn(usize, f64, f64) -> bool,
+        vote: &dyn Fn(usize, [f64; 2], [f64; 2]) -> bool,
     ) -> Figures {
         let w = self.w;
         let dur = (1.0 - w) * a.duration() + w * b.duration();
@@ -620,7 +637,14 @@ impl Measured<'_> {
             .map(|i| mix(&a.pose(self.rig, at(i).0), &b.pose(self.rig, at(i).1), w))
             .collect();
         let expected: Vec<Vec<bool>> = (0..self.ch.legs.len())
-            .map(|l| (0..=n).map(|i| vote(l, at(i).0, at(i).1)).collect())
+            .map(|l| {
+                (0..=n)
+                    .map(|i| {
+                        let half = [0.5 * a.duration() / n as f64, 0.5 * b.duration() / n as f64];
+                        vote(l, [at(i).0, at(i).1], half)
+                    })
+                    .collect()
+            })
             .collect();
         self.of(
             &positions_track(self.rig, &poses, dur.max(MIN_DURATION) / n as f64, looping),

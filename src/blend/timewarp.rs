@@ -1,9 +1,18 @@
 //! Time warp by contact events: within a cycle, each foot's touchdown and lift-off in one clip is
 //! matched with the same event of the same foot in the other, and the phase map is piecewise
-//! linear between the matched events (keytimes), so feet land together in the blend. The
-//! blended cycle places each event at the weighted blend of its two phases.
+//! linear between the matched events (keytimes), so feet land together in the blend, as long as
+//! no segment plays a clip faster than [`MAX_WARP_SLOPE`]. The blended cycle places each event at
+//! the weighted blend of its two phases.
 
 use super::contacts::Contact;
+
+/// Steepest phase map allowed (unitless: phase of a source per blended phase): within a cycle
+/// no source plays faster than twice its cycle's rate nor slower than half, as registration
+/// curves bound their slope. Matching every contact event of a walk (long stances) with a run's
+/// (stances of one or two frames) otherwise nearly freezes one clip and races the other: on
+/// RobotExpressive the rates ran from 0.05 to 3.6 and the blend's jerk was 1.5-2.0 times the
+/// sources'.
+pub const MAX_WARP_SLOPE: f64 = 2.0;
 
 /// Events closer than this (in phase) to each other or to a cycle end are not used as knots.
 pub const MIN_KNOT_GAP: f64 = 1e-3;
@@ -101,6 +110,21 @@ impl Warp {
             }
         }
         knots.push([1.0, 1.0, 1.0]);
+        // Knots that would play a clip faster than MAX_WARP_SLOPE times its cycle's own rate (or
+        // slower than its inverse) are dropped, the one whose loss evens the map most first.
+        while knots.len() > 2 && steepest(&knots) > MAX_WARP_SLOPE.ln() {
+            let best = (1..knots.len() - 1)
+                .min_by(|&i, &j| {
+                    let without = |k: usize| {
+                        let mut v = knots.clone();
+                        v.remove(k);
+                        steepest(&v)
+                    };
+                    without(i).total_cmp(&without(j))
+                })
+                .unwrap();
+            knots.remove(best);
+        }
         Warp { knots }
     }
 
@@ -120,6 +144,17 @@ impl Warp {
         };
         (p[1] + f * (q[1] - p[1]), p[2] + f * (q[2] - p[2]))
     }
+}
+
+/// The largest |ln slope| of A's or B's phase against the blended phase over `knots`.
+fn steepest(knots: &[[f64; 3]]) -> f64 {
+    knots
+        .windows(2)
+        .flat_map(|k| {
+            let du = k[1][0] - k[0][0];
+            [1, 2].map(|c| ((k[1][c] - k[0][c]) / du).ln().abs())
+        })
+        .fold(0.0, f64::max)
 }
 
 /// The longest subsequence of `pairs` (sorted by their first value) whose second values
@@ -164,5 +199,29 @@ mod tests {
         let half = Warp::new(&a, &b, 0.5);
         let (pa, pb) = half.map(0.35);
         assert!((pa - 0.3).abs() < 1e-12 && (pb - 0.4).abs() < 1e-12);
+    }
+
+    #[test]
+    fn no_segment_is_steeper_than_the_limit() {
+        let ev = |leg, kind, phase| Event { leg, kind, phase };
+        // A walk's lift-off at 0.3 (a long stance) against a run's at 0.05 (a stance of a frame
+        // or two): matching them would play B at 0.29 times its rate, then A at 0.62.
+        let a = [ev(0, Kind::Liftoff, 0.3), ev(1, Kind::Touchdown, 0.5)];
+        let b = [ev(0, Kind::Liftoff, 0.05), ev(1, Kind::Touchdown, 0.5)];
+        let warp = Warp::new(&a, &b, 0.5);
+        assert!(steepest(&warp.knots) <= MAX_WARP_SLOPE.ln() + 1e-12);
+        assert_eq!(warp.knots.len(), 3);
+        // The touchdowns still meet; the lift-offs do not.
+        let u = warp
+            .knots
+            .iter()
+            .find(|k| (k[1] - 0.5).abs() < 1e-12)
+            .unwrap()[0];
+        let (pa, pb) = warp.map(u);
+        assert!((pa - 0.5).abs() < 1e-12 && (pb - 0.5).abs() < 1e-12);
+        // Gentle warps keep every matched event.
+        let b = [ev(1, Kind::Touchdown, 0.45), ev(1, Kind::Liftoff, 0.15)];
+        let a = [ev(1, Kind::Touchdown, 0.5), ev(1, Kind::Liftoff, 0.1)];
+        assert_eq!(Warp::new(&a, &b, 0.5).knots.len(), 4);
     }
 }
