@@ -123,8 +123,9 @@ pub fn pin(
     out
 }
 
-/// Longest ease (seconds) of a contact's correction into the swing before and after it: at most
-/// half the gap to the neighbouring contact.
+/// How long (seconds) a contact's correction takes to fade out into the swing before and after
+/// it; a swing shorter than two of these gets one cubic from one contact's correction to the
+/// next instead.
 pub const EASE_SECONDS: f64 = 0.125;
 
 /// The correction (target minus the foot's own position `ends`) per frame: in contact, what
@@ -237,7 +238,7 @@ pub fn clean(
         .iter()
         .map(|leg| knee_axis(leg, &ends, forward))
         .collect();
-    // Root drop where a planted leg cannot reach its target, spread with a tent over the ease.
+    // Root drop where a leg cannot reach its target (in a contact or its ease).
     let mut need = vec![0.0f64; n];
     for (j, p) in ends.iter().enumerate() {
         for (leg, want) in legs.iter().zip(&wants) {
