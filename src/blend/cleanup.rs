@@ -295,19 +295,15 @@ pub fn clean(
 /// by how far the knee bends in each frame of `positions`); sideways of `forward` for a leg
 /// that never bends.
 fn knee_axis(leg: &Leg, positions: &[Vec<DVec3>], forward: DVec3) -> DVec3 {
+    let sideways = UP.cross(forward).try_normalize().unwrap_or(DVec3::X);
     let Some([a, b, c]) = leg.ik else {
-        return UP.cross(forward);
+        return sideways;
     };
     let sum: DVec3 = positions
         .iter()
         .map(|p| (p[a] - p[b]).cross(p[c] - p[b]))
         .sum();
-    let axis = sum.normalize_or_zero();
-    if axis == DVec3::ZERO {
-        UP.cross(forward).normalize()
-    } else {
-        axis
-    }
+    sum.try_normalize().unwrap_or(sideways)
 }
 
 fn rotation_of(m: &DMat4) -> DQuat {
