@@ -19,7 +19,7 @@ fn main() -> ExitCode {
         Command::Blend(args) => {
             let quiet = args.quiet;
             let job = args.job();
-            finish(blend::run_blend(&job), |s| summary(quiet, s.line(&job)))
+            finish(blend::run_blend(&job), |s| summary(quiet, s.line()))
         }
         Command::Inspect(args) => {
             let found = inspect::inspect(&args.input, &args.access());

@@ -105,12 +105,11 @@ fn planted_feet_slide_less_than_the_sources_and_a_fifth_of_a_naive_blend() {
                 if w == 0.5 {
                     assert_no_new_issues(&src, &out);
                     if let Some(py) = &python {
-                        let schema = root().join("schemas/blend-report.schema.json");
                         let rep = out.with_extension("json");
-                        run_tool(
+                        check_schema(
                             py,
-                            "check_schema.py",
-                            &[schema.as_os_str(), rep.as_os_str()],
+                            "blend-report.schema.json",
+                            &rep,
                             "the blend report against its schema",
                         );
                     }
@@ -486,13 +485,7 @@ fn bvh_captures_blend_into_bvh() {
     let rep = dir.path().join("jog.json");
     let s = |p: &Path| p.to_str().unwrap().to_owned();
     blend_cmu(&fx, &out, &["--report", &s(&rep)]);
-    let schema = root().join("schemas/blend-report.schema.json");
-    run_tool(
-        &python,
-        "check_schema.py",
-        &[schema.as_os_str(), rep.as_os_str()],
-        "blend report",
-    );
+    check_schema(&python, "blend-report.schema.json", &rep, "blend report");
     let report: Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
     let a = blend::load_bvh(&walk).unwrap();
     let b = blend::load_bvh(&run).unwrap();

@@ -140,13 +140,7 @@ fn compressed_fixtures_tween_to_the_frames_of_the_uncompressed_files() {
             if let Some(py) = python() {
                 let json = dir.path().join("inspect.json");
                 std::fs::write(&json, v.to_string()).unwrap();
-                let schema = root().join("schemas/inspect.schema.json");
-                run_tool(
-                    &py,
-                    "check_schema.py",
-                    &[schema.as_os_str(), json.as_os_str()],
-                    name,
-                );
+                check_schema(&py, "inspect.schema.json", &json, name);
             }
             let diag = {
                 let (_, f) = world_frames(&plain, 0, 0);

@@ -23,11 +23,10 @@ fn report(input: &Path, method: &str) -> serde_json::Value {
         "-q",
     ]);
     if let Some(python) = python() {
-        let schema = root().join("schemas/report.schema.json");
-        run_tool(
+        check_schema(
             &python,
-            "check_schema.py",
-            &[schema.as_os_str(), rep.as_os_str()],
+            "report.schema.json",
+            &rep,
             "the report against its schema",
         );
     }

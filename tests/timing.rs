@@ -224,13 +224,7 @@ fn inspect_describes_every_fixture_by_its_schema() {
         let json = dir.path().join("inspect.json");
         std::fs::write(&json, &out.stdout).unwrap();
         if let Some(py) = &python {
-            let schema = root().join("schemas/inspect.schema.json");
-            run_tool(
-                py,
-                "check_schema.py",
-                &[schema.as_os_str(), json.as_os_str()],
-                s(f),
-            );
+            check_schema(py, "inspect.schema.json", &json, s(f));
         }
         let text = run_ok(&["inspect", s(f)]);
         assert!(

@@ -128,6 +128,16 @@ pub fn pin(
 /// next instead.
 pub const EASE_SECONDS: f64 = 0.125;
 
+/// [`EASE_SECONDS`] in frames of `dt` seconds (at least one).
+fn ease_frames(dt: f64) -> f64 {
+    (EASE_SECONDS / dt).max(1.0)
+}
+
+/// 0 at 0, 1 at 1, with zero slope at both ends (`x` in [0, 1]).
+pub fn smoothstep(x: f64) -> f64 {
+    x * x * (3.0 - 2.0 * x)
+}
+
 /// The correction (target minus the foot's own position `ends`) per frame: in contact, what
 /// moves the foot onto its target; in the swing around it, the contact's first or last correction
 /// carried on at the rate it was changing and faded out with a smoothstep over the ease window,
@@ -161,7 +171,7 @@ pub fn corrections(
                 .map(|i| (i, d))
         })
     };
-    let ease = (EASE_SECONDS / dt).max(1.0);
+    let ease = ease_frames(dt);
     // The rate (per frame, going away from the contact) at which a contact's correction was
     // changing at its end frame `i`, one-sided (zero for a contact of one frame).
     let rate = |i: usize, inward: i64| {
@@ -197,7 +207,7 @@ pub fn corrections(
                 let Some((i, d)) = found else { continue };
                 let x = d as f64 / ease;
                 if x < 1.0 {
-                    let fade = 1.0 - x * x * (3.0 - 2.0 * x);
+                    let fade = 1.0 - smoothstep(x);
                     *sum.get_or_insert(DVec3::ZERO) += (off(i) + rate(i, inward) * d as f64) * fade;
                 }
             }
@@ -259,7 +269,7 @@ pub fn clean(
     }
     // Spread over the ease window with the same smoothstep, so the root sinks and rises without
     // a kink (on a loop, across its seam).
-    let ease = (EASE_SECONDS / dt).max(1.0) + 1.0;
+    let ease = ease_frames(dt) + 1.0;
     let period = if looping && n > 1 { n - 1 } else { 0 };
     let drop: Vec<f64> = (0..n)
         .map(|j| {
@@ -272,7 +282,7 @@ pub fn clean(
                         d
                     };
                     let x = (d as f64 / ease).min(1.0);
-                    need[i] * (1.0 - x * x * (3.0 - 2.0 * x))
+                    need[i] * (1.0 - smoothstep(x))
                 })
                 .fold(0.0, f64::max)
         })
@@ -396,9 +406,9 @@ mod tests {
             .map(|c| c.map_or(0.0, |v| v.x))
             .collect();
         assert_eq!(&c[..5], &[0.0, 1.0, 2.0, 3.0, 4.0]);
-        let fade = |x: f64| 1.0 - x * x * (3.0 - 2.0 * x);
         for d in 1..3 {
-            assert!((c[4 + d] - (4.0 + d as f64) * fade(d as f64 / 3.0)).abs() < 1e-12);
+            let fade = 1.0 - smoothstep(d as f64 / 3.0);
+            assert!((c[4 + d] - (4.0 + d as f64) * fade).abs() < 1e-12);
         }
         assert!(c[7..].iter().all(|&x| x == 0.0));
         // A swing of one frame between two contacts: the cubic through both, matching rates.

@@ -37,6 +37,12 @@ impl BlendJob {
         }
     }
 
+    /// The new animation's name at weight `w`, the clips being named `clips`.
+    fn name_at(&self, w: f64, clips: [&str; 2]) -> String {
+        let base = (self.name.clone()).unwrap_or_else(|| format!("{}+{}", clips[0], clips[1]));
+        format!("{base}{}", self.tag(w))
+    }
+
     /// The blend options at weight `w`.
     fn options(&self, w: f64) -> BlendOptions {
         BlendOptions {
@@ -60,7 +66,7 @@ pub struct BlendSummary {
 
 impl BlendSummary {
     /// One line per blend.
-    pub fn line(&self, _job: &BlendJob) -> String {
+    pub fn line(&self) -> String {
         let lines: Vec<String> = self.blends.iter().map(BlendDone::line).collect();
         lines.join("\n")
     }
@@ -197,6 +203,13 @@ pub fn blend_clips(
     })
 }
 
+/// Whether `p` names a BVH file (by its extension, any case).
+fn is_bvh(p: &std::path::Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
+}
+
 /// The report file: one blend's report, or the list of them for several weights.
 fn stage_report(job: &BlendJob, blends: &[BlendDone], files: &mut Outputs) -> Result<()> {
     let Some(path) = &job.report else {
@@ -226,11 +239,6 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
             i + 1
         );
     }
-    let is_bvh = |p: &PathBuf| {
-        p.extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
-    };
     match &job.inputs[..] {
         [a, b] if is_bvh(a) && is_bvh(b) => run_bvh(job, [a, b]),
         [input] if !is_bvh(input) => run_gltf(job, input),
@@ -268,8 +276,7 @@ fn run_gltf(job: &BlendJob, input: &std::path::Path) -> Result<BlendSummary> {
             animated,
             names,
         } = blend_clips(&doc, clips, &opts)?;
-        let base = (job.name.clone()).unwrap_or_else(|| format!("{}+{}", names[0], names[1]));
-        let name = format!("{base}{}", job.tag(w));
+        let name = job.name_at(w, [&names[0], &names[1]]);
         let channels = super::write::channels(&rig, &blended.poses, &animated);
         super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);
         blends.push(BlendDone {
@@ -289,12 +296,7 @@ fn run_gltf(job: &BlendJob, input: &std::path::Path) -> Result<BlendSummary> {
 /// capture's hierarchy and channels: to the output, or with several weights to
 /// `<output stem>@<weight>.bvh` beside it.
 fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
-    let ext = job
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("");
-    if !ext.eq_ignore_ascii_case("bvh") {
+    if !is_bvh(&job.output) {
         bail!(
             "{}: two .bvh inputs are blended into a .bvh output",
             job.output.display()
@@ -331,7 +333,6 @@ fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
         let opts = job.options(w);
         let blended = blend(&a.rig, &a.clip, &b.clip, &opts).map_err(|e| gltf::at(inputs[0], e))?;
         let poses = super::write_bvh::resample(a, &blended.times, &blended.poses, a.frame_time);
-        let base = (job.name.clone()).unwrap_or_else(|| format!("{}+{}", a.clip.name, b.clip.name));
         let file = match job.tag(w) {
             tag if tag.is_empty() => job.output.clone(),
             tag => {
@@ -342,7 +343,7 @@ fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
         };
         files.write_with(&file, |out| super::write_bvh::write(a, &poses, out))?;
         blends.push(BlendDone {
-            name: format!("{base}{}", job.tag(w)),
+            name: job.name_at(w, [&a.clip.name, &b.clip.name]),
             file,
             report: blended.report,
         });

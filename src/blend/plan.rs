@@ -125,8 +125,7 @@ pub const CLEANUP_PASSES: usize = 4;
 
 /// Strength of the clean-up at weight `w`: 1 inside [`CLEANUP_FADE`], 1 - w, smoothly to 0.
 pub fn cleanup_strength(w: f64) -> f64 {
-    let x = (w.min(1.0 - w) / CLEANUP_FADE).clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
+    cleanup::smoothstep((w.min(1.0 - w) / CLEANUP_FADE).clamp(0.0, 1.0))
 }
 
 /// Shortest duration (seconds) a clip is given where it divides: a clip of a single key time
@@ -636,15 +635,9 @@ impl Measured<'_> {
         let poses: Vec<Pose> = (0..=n)
             .map(|i| mix(&a.pose(self.rig, at(i).0), &b.pose(self.rig, at(i).1), w))
             .collect();
+        let half = [0.5 * a.duration() / n as f64, 0.5 * b.duration() / n as f64];
         let expected: Vec<Vec<bool>> = (0..self.ch.legs.len())
-            .map(|l| {
-                (0..=n)
-                    .map(|i| {
-                        let half = [0.5 * a.duration() / n as f64, 0.5 * b.duration() / n as f64];
-                        vote(l, [at(i).0, at(i).1], half)
-                    })
-                    .collect()
-            })
+            .map(|l| (0..=n).map(|i| vote(l, [at(i).0, at(i).1], half)).collect())
             .collect();
         self.of(
             &positions_track(self.rig, &poses, dur.max(MIN_DURATION) / n as f64, looping),

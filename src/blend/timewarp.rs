@@ -113,15 +113,14 @@ impl Warp {
         // Knots that would play a clip faster than MAX_WARP_SLOPE times its cycle's own rate (or
         // slower than its inverse) are dropped, the one whose loss evens the map most first.
         while knots.len() > 2 && steepest(&knots) > MAX_WARP_SLOPE.ln() {
-            let best = (1..knots.len() - 1)
-                .min_by(|&i, &j| {
-                    let without = |k: usize| {
-                        let mut v = knots.clone();
-                        v.remove(k);
-                        steepest(&v)
-                    };
-                    without(i).total_cmp(&without(j))
-                })
+            let without = |k: usize| {
+                let mut v = knots.clone();
+                v.remove(k);
+                steepest(&v)
+            };
+            let (_, best) = (1..knots.len() - 1)
+                .map(|k| (without(k), k))
+                .min_by(|p, q| p.0.total_cmp(&q.0))
                 .unwrap();
             knots.remove(best);
         }
@@ -187,9 +186,12 @@ fn increasing(pairs: &[(f64, f64)]) -> Vec<(f64, f64)> {
 mod tests {
     use super::*;
 
+    fn ev(leg: usize, kind: Kind, phase: f64) -> Event {
+        Event { leg, kind, phase }
+    }
+
     #[test]
     fn weight_zero_is_identity_on_a_and_events_meet() {
-        let ev = |leg, kind, phase| Event { leg, kind, phase };
         let a = [ev(0, Kind::Liftoff, 0.3), ev(1, Kind::Touchdown, 0.5)];
         let b = [ev(0, Kind::Liftoff, 0.4), ev(1, Kind::Touchdown, 0.55)];
         let w0 = Warp::new(&a, &b, 0.0);
@@ -203,7 +205,6 @@ mod tests {
 
     #[test]
     fn no_segment_is_steeper_than_the_limit() {
-        let ev = |leg, kind, phase| Event { leg, kind, phase };
         // A walk's lift-off at 0.3 (a long stance) against a run's at 0.05 (a stance of a frame
         // or two): matching them would play B at 0.29 times its rate, then A at 0.62.
         let a = [ev(0, Kind::Liftoff, 0.3), ev(1, Kind::Touchdown, 0.5)];

@@ -201,6 +201,18 @@ pub fn run_tool(python: &Path, script: &str, args: &[&std::ffi::OsStr], what: &s
     out.stdout
 }
 
+/// Check the JSON file `json` against `schemas/<schema>` with tools/check_schema.py (`what`
+/// names it in a failure).
+pub fn check_schema(python: &Path, schema: &str, json: &Path, what: &str) {
+    let schema = root().join("schemas").join(schema);
+    run_tool(
+        python,
+        "check_schema.py",
+        &[schema.as_os_str(), json.as_os_str()],
+        what,
+    );
+}
+
 /// The morph meshes of a file, keys chosen as `--keys auto` does.
 pub fn morph_meshes(path: &Path) -> Vec<inbetween::tween::MorphMesh> {
     let doc = inbetween::gltf::Document::open(path).unwrap();
