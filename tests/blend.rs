@@ -10,17 +10,33 @@ use inbetween::gltf::{self, Container};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-/// `file` with one more animation: clip `name` started half its duration later (looping).
+/// `file` with one more animation: clip `name` started half its duration later (looping),
+/// rounded to one of its keys, with the clip's own keys rotated round the loop so that the
+/// motion is exactly the same (resampling it on a new grid would smooth it: Fox's run, keyed
+/// unevenly, lost a quarter of its jerk).
 fn with_shifted_clip(file: &Path, name: &str, dir: &Path) -> (PathBuf, String) {
     let doc = Document::open(file).unwrap();
     let (rig, clips) = blend::load_gltf(&doc).unwrap();
     let clip = clips.iter().find(|c| c.name == name).unwrap();
     let dur = clip.duration();
-    let n = (dur * clip.key_rate).round() as usize;
-    let times: Vec<f64> = (0..=n).map(|j| j as f64 * dur / n as f64).collect();
+    let mut keys: Vec<f64> = clip
+        .channels
+        .iter()
+        .flat_map(|c| c.times.iter().map(|t| t - clip.start))
+        .filter(|&t| t < dur - 1e-6)
+        .collect();
+    keys.sort_by(f64::total_cmp);
+    keys.dedup_by(|a, b| *a - *b < 1e-6);
+    let shift = *keys
+        .iter()
+        .min_by(|a, b| (*a - 0.5 * dur).abs().total_cmp(&(*b - 0.5 * dur).abs()))
+        .unwrap();
+    let mut times: Vec<f64> = keys.iter().map(|t| (t - shift).rem_euclid(dur)).collect();
+    times.sort_by(f64::total_cmp);
+    times.push(dur);
     let poses: Vec<blend::Pose> = times
         .iter()
-        .map(|t| blend::pose_unwrapped(&rig, clip, true, clip.start + 0.5 * dur + t))
+        .map(|t| blend::pose_unwrapped(&rig, clip, true, clip.start + shift + t))
         .collect();
     let shifted = format!("{name}_shifted");
     let out_path = dir.join("shifted.glb");
@@ -80,19 +96,29 @@ fn planted_feet_slide_less_than_the_sources_and_a_fifth_of_a_naive_blend() {
                     .unwrap();
                 let jerk = r["result"]["jerk_ratio"].as_f64().unwrap();
                 eprintln!(
-                    "{file} {a}+{bb} w={w}: sliding {after:.5} (before clean-up {:.5}; sources worse {worse:.5}; naive {naive:.5}; {planted} planted steps); jerk ratio {jerk:.2}",
-                    sliding(&r["result"]["before_cleanup"])
+                    "{file} {a}+{bb} w={w}: sliding {after:.5} (before clean-up {:.5} on {} steps; sources worse {worse:.5}; naive {naive:.5} on {} steps; {planted} planted steps); jerk ratio {jerk:.2}",
+                    sliding(&r["result"]["before_cleanup"]),
+                    r["result"]["before_cleanup"]["sliding"]["count"],
+                    r["naive"]["sliding"]["count"],
                 );
                 assert!(planted > 0, "no planted foot measured on the blend");
-                // Issue 17's goal is 1.15. The warp's slope limit (Robot was 1.49-1.97 before
-                // any clean-up) and the C1 ease with the knee kept on its side (Fox was up to
-                // 1.33) bring every case to 0.45-1.02 but Fox re-phased at 0.5: 1.18.
-                let goal = if file.contains("Fox") && bb.ends_with("shifted") && w == 0.5 {
-                    1.2
+                // Issue 17's goal. The warp's slope limit (Robot was 1.49-1.97 before any
+                // clean-up) and the C1 ease with the knee kept on its side (Fox was up to 1.33)
+                // bring every case to 0.71-1.03.
+                assert!(jerk <= 1.15, "jerk ratio {jerk} > 1.15");
+                // Before clean-up the warped, aligned blend slides less than the naive one, but
+                // on Robot where its run leads: the run's contacts last 0.03-0.06 s (one or two
+                // frames), so at 0.75 both figures rest on 2-3 frame steps, and at 0.25 the
+                // naive blend's figure swings with the run's phase (0.034-0.055) while the
+                // warped one's stays 0.038.
+                let before = sliding(&r["result"]["before_cleanup"]);
+                let robot_miss =
+                    file.contains("Robot") && (w == 0.75 || (w == 0.25 && bb.ends_with("shifted")));
+                if robot_miss {
+                    eprintln!("  not asserted: before clean-up {before:.5} vs naive {naive:.5}");
                 } else {
-                    1.15
-                };
-                assert!(jerk <= goal, "jerk ratio {jerk} > {goal}");
+                    assert!(before < naive, "before clean-up {before} >= naive {naive}");
+                }
                 assert!(after <= worse, "{after} > worse source {worse}");
                 if r["naive"]["sliding"]["count"].as_u64().unwrap() == 0 {
                     // Robot w=0.75: the run's contacts last under two frames, so the naive
@@ -240,10 +266,10 @@ fn contact_strides(track: &blend::Track, end: usize, leg: f64) -> Vec<(f64, f64)
             _ => {}
         }
     }
+    // A foot already on its spot at the first frame began that stance before the capture.
     let downs: Vec<f64> = stances
         .iter()
-        .skip(1)
-        .map(|&(f, e)| {
+        .filter_map(|&(f, e)| {
             let median = |mut v: Vec<f64>| {
                 v.sort_by(f64::total_cmp);
                 v[v.len() / 2]
@@ -260,7 +286,7 @@ fn contact_strides(track: &blend::Track, end: usize, leg: f64) -> Vec<(f64, f64)
                 }
                 k -= 1;
             }
-            track.time(k)
+            (k > 0).then(|| track.time(k))
         })
         .collect();
     downs
@@ -276,9 +302,9 @@ fn stride_periods_of_motion_capture_match_foot_contacts() {
     for file in [
         "bvh/kevinxie4c_walk.bvh",
         "bvh/bvh11_131_01_start_walk_stop.bvh",
-        // kevinxie4c_cmu_run_filtered (a run, not a walk) has one touchdown per foot after its
-        // first stance: no contact stride to compare with (its cycle, from the feet's forward
-        // offsets, is 0.771 s).
+        // kevinxie4c_cmu_run_filtered (a run, 1.4 s): this reference's raw foot speed finds one
+        // stance of the first foot (0.48-0.87 s), so no contact stride; its cycle, from
+        // touchdowns against the ground's speed, is 0.8 s.
     ] {
         let (rig, clip) = blend::read_bvh(&fx.join(file)).unwrap();
         let (ch, an) = blend::analyze(&rig, &[&clip], CycleMethod::Legs);
@@ -469,6 +495,48 @@ fn blend_cmu(fx: &Path, out: &Path, extra: &[&str]) {
     run_ok(&args);
 }
 
+/// The BVH capture at `path` without its first `skip` frames.
+fn bvh_from_frame(path: &Path, skip: usize) -> String {
+    let text = std::fs::read_to_string(path).unwrap().replace("\r\n", "\n");
+    let (head, motion) = text.split_once("MOTION\n").unwrap();
+    let mut lines = motion.lines();
+    let count: usize = lines.next().unwrap()["Frames:".len()..]
+        .trim()
+        .parse()
+        .unwrap();
+    let frame_time = lines.next().unwrap();
+    let frames: Vec<&str> = lines.filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(frames.len(), count);
+    format!(
+        "{head}MOTION\nFrames: {}\n{frame_time}\n{}\n",
+        count - skip,
+        frames[skip..].join("\n")
+    )
+}
+
+/// The CMU blend's figures per weight (`what` names the case): before clean-up below the
+/// naive blend, after it at most 1e-3 leg per frame, jerk ratio at most 1.15.
+fn check_cmu_figures(reports: &Value, what: &str) {
+    for r in reports.as_array().unwrap() {
+        let w = r["weight"].as_f64().unwrap();
+        let (naive, res) = (sliding(&r["naive"]), &r["result"]);
+        let (before, after) = (
+            sliding(&res["before_cleanup"]),
+            sliding(&res["after_cleanup"]),
+        );
+        let jerk = res["jerk_ratio"].as_f64().unwrap();
+        eprintln!(
+            "CMU{what} w {w}: naive {naive:.4}, before clean-up {before:.4}, after {after:.1e}, jerk ratio {jerk:.2}"
+        );
+        assert!(
+            before < naive,
+            "{what} w {w}: before clean-up {before} >= naive {naive}"
+        );
+        assert!(after <= 1e-3, "{what} w {w}: after clean-up {after}");
+        assert!(jerk <= 1.15, "{what} w {w}: jerk ratio {jerk}");
+    }
+}
+
 /// Two CMU captures (walk and run, 120 fps, joint names differing) blended into BVH (issue 17):
 /// the output has the first capture's hierarchy text and channel order, its frame time, one
 /// frame per frame time of the blend, and read back it is the blend itself: every joint
@@ -529,28 +597,26 @@ fn bvh_captures_blend_into_bvh() {
     // Planted feet: before clean-up the time-warped, aligned blend slides less than the naive
     // one; after it at most 1e-3 leg per frame (the capture's ground rises 0.05 leg over the
     // walk: contacts are found against a floor that follows it).
-    let rep3 = dir.path().join("three.json");
-    blend_cmu(
-        &fx,
-        &dir.path().join("three.bvh"),
-        &["--weight", "0.25,0.5,0.75", "--report", &s(&rep3)],
-    );
-    let three: Value = serde_json::from_slice(&std::fs::read(&rep3).unwrap()).unwrap();
-    for r in three.as_array().unwrap() {
-        let w = r["weight"].as_f64().unwrap();
-        let (naive, res) = (sliding(&r["naive"]), &r["result"]);
-        let (before, after) = (
-            sliding(&res["before_cleanup"]),
-            sliding(&res["after_cleanup"]),
-        );
-        eprintln!("CMU w {w}: naive {naive:.4}, before clean-up {before:.4}, after {after:.1e}");
-        assert!(
-            before < naive,
-            "w {w}: before clean-up {before} >= naive {naive}"
-        );
-        assert!(after <= 1e-3, "w {w}: after clean-up {after}");
-        let jerk = res["jerk_ratio"].as_f64().unwrap();
-        assert!(jerk <= 1.15, "w {w}: jerk ratio {jerk}");
+    // Each also re-phased: the run capture started half its stride (0.38 s) later.
+    let run_later = dir.path().join("run_later.bvh");
+    std::fs::write(&run_later, bvh_from_frame(&run, 46)).unwrap();
+    for (name, second) in [("", run.clone()), (" re-phased", run_later)] {
+        let rep3 = dir.path().join("three.json");
+        let (three_bvh, walk, second) = (dir.path().join("three.bvh"), s(&walk), s(&second));
+        run_ok(&[
+            "blend",
+            &walk,
+            &second,
+            "-o",
+            &s(&three_bvh),
+            "-q",
+            "--weight",
+            "0.25,0.5,0.75",
+            "--report",
+            &s(&rep3),
+        ]);
+        let three: Value = serde_json::from_slice(&std::fs::read(&rep3).unwrap()).unwrap();
+        check_cmu_figures(&three, name);
     }
     // Refusals.
     // A joint whose rotation channels repeat an axis cannot be written back: said before any work.

@@ -211,10 +211,10 @@ fn ground_velocity(track: &Track, legs: &[Leg]) -> DVec3 {
 /// Touchdowns of the foot `end` on a clip that does not loop (seconds). A stance lasts from the
 /// foot's horizontal speed over the ground (moving at `ground`, see [`ground_velocity`])
 /// falling below [`STANCE_SPEED`] until it passes [`SWING_SPEED`], at least [`MIN_STANCE`];
-/// every stance but the first has a touchdown (the first may have begun before the clip, and
-/// its first frames are often caught mid-swing). Its touchdown is the first moment from which
-/// the foot stays within [`LANDING`] of the stance's spot (median position): from positions,
-/// so a capture's jitter in speed does not move it. `scale` is the leg scale.
+/// a stance's touchdown is the first moment from which the foot stays within [`LANDING`] of the
+/// stance's spot (median position): from positions, so a capture's jitter in speed does not
+/// move it. A foot already on its spot at the clip's first frame began that stance before the
+/// clip: no touchdown. `scale` is the leg scale.
 pub fn touchdowns(track: &Track, end: usize, ground: DVec3, scale: f64) -> Vec<f64> {
     let n = track.len();
     let at = |i: usize| flat(track.pos[i][end]) - ground * track.time(i);
@@ -244,13 +244,15 @@ pub fn touchdowns(track: &Track, end: usize, ground: DVec3, scale: f64) -> Vec<f
     let min_run = ((MIN_STANCE / track.dt).ceil() as usize).max(1);
     runs.retain(|&(f, e)| e - f >= min_run);
     let mut downs = Vec::new();
-    for &(first, last) in runs.iter().skip(1) {
+    for &(first, last) in &runs {
         let spot = flat_median(&(first..last).map(at).collect::<Vec<_>>());
         let mut k = first;
         while k > 0 && (at(k - 1) - spot).length() < LANDING * scale {
             k -= 1;
         }
-        downs.push(track.time(k));
+        if k > 0 {
+            downs.push(track.time(k));
+        }
     }
     downs
 }

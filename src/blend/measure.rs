@@ -87,15 +87,23 @@ pub fn figures(
             f
         })
         .collect();
-    // On a looping track the step from the last frame back to the first is left out: with root
-    // motion the feet jump back there by a loop's travel.
-    let steps = n.saturating_sub(1);
+    // A looping track's step from its last frame back to the first counts too, so that the
+    // figures do not depend on where the loop starts; there the feet come back by the loop's
+    // travel, taken as the root's mean step times the frame count.
+    let wraps = track.looping && n > 2;
+    let travel = if wraps {
+        flat(track.pos[n - 1][root] - track.pos[0][root]) * (n as f64 / (n - 1) as f64)
+    } else {
+        DVec3::ZERO
+    };
+    let steps = if wraps { n } else { n.saturating_sub(1) };
     let mut planted_moves = Vec::new();
     for (leg, f) in legs.iter().zip(&flags) {
         for i in 0..steps {
-            let k = i + 1;
+            let k = (i + 1) % n;
             if f[i] && f[k] {
-                planted_moves.push(flat(track.pos[k][leg.end()] - track.pos[i][leg.end()]));
+                let seam = if k == 0 { travel } else { DVec3::ZERO };
+                planted_moves.push(flat(track.pos[k][leg.end()] - track.pos[i][leg.end()]) + seam);
             }
         }
     }
@@ -127,5 +135,62 @@ pub fn figures(
         root_speed: root_speed / scale,
         ground_speed: ground.length() / dt / scale,
         jerk: jerk / count.max(1) as f64 / (dt * dt * dt) / scale,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blend::legs::Side;
+
+    /// A looping walk on a treadmill: joint 0 the root (still), joint 1 a foot that steps back
+    /// on the floor for half the loop, a little unevenly, and swings forward above it.
+    fn treadmill(start: usize) -> Track {
+        let n = 24;
+        let pos = (0..n)
+            .map(|k| {
+                let i = (k + start) % n;
+                let u = i as f64 / n as f64;
+                let foot = if u < 0.5 {
+                    DVec3::new(0.02 * (i as f64).sin(), 0.0, 0.5 - 2.0 * u)
+                } else {
+                    DVec3::new(0.0, 0.3, -0.5 + 2.0 * (u - 0.5))
+                };
+                vec![DVec3::new(0.0, 1.0, 0.0), foot]
+            })
+            .collect();
+        Track {
+            start: 0.0,
+            dt: 1.0 / 24.0,
+            looping: true,
+            pos,
+        }
+    }
+
+    #[test]
+    fn sliding_of_a_loop_does_not_depend_on_where_it_starts() {
+        let leg = Leg {
+            chain: vec![1],
+            ik: None,
+            side: Side::Left,
+            length: 1.0,
+            name: "foot".into(),
+        };
+        let figures =
+            |start: usize| figures(&treadmill(start), 0, &[0, 1], &[leg.clone()], 1.0, &[]);
+        let first = figures(0);
+        // The stance's steps but where the foot starts to rise; start 6 puts the loop's seam
+        // mid-stance, 17 puts the stance inside the loop.
+        assert!(first.sliding.count >= 8, "{:?}", first.sliding);
+        assert!(first.sliding.mean > 0.0);
+        for start in [5, 6, 17] {
+            let other = figures(start);
+            assert_eq!(other.sliding.count, first.sliding.count, "start {start}");
+            assert!(
+                (other.sliding.mean - first.sliding.mean).abs() < 1e-12,
+                "start {start}"
+            );
+            assert!((other.ground_speed - first.ground_speed).abs() < 1e-12);
+        }
     }
 }
