@@ -13,7 +13,7 @@
 
 use super::synth;
 use crate::memory::peak_rss_mib;
-use crate::tween::{KeyTrack, Method, Pattern, Segment};
+use crate::tween::{KeyTrack, Method, Pattern, Segment, MAX_BLOCK};
 use anyhow::{Context, Result};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -43,6 +43,9 @@ pub struct BenchRow {
     pub seed_frame_ms: f64,
     /// Fastest single seed frame (the VM's noise only ever adds time).
     pub seed_frame_min_ms: f64,
+    /// Seed milliseconds per frame where frames are solved [`MAX_BLOCK`] at a time (one pass
+    /// over the factor for the block; 1 thread, median over blocks).
+    pub seed_block_frame_ms: f64,
     /// Set-up of a spline segment in the middle of 8 keys (the two keys alternating): the
     /// polar decompositions of its whole window plus the numeric factorization.
     pub spline_setup_s: f64,
@@ -155,6 +158,19 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
             (median(times), min)
         };
         (row.seed_frame_ms, row.seed_frame_min_ms) = time_frames(&seed);
+        let per_block: Vec<f64> = ts
+            .chunks_exact(MAX_BLOCK)
+            .map(|block| {
+                let start = Instant::now();
+                std::hint::black_box(seed.frames(block));
+                start.elapsed().as_secs_f64() * 1e3 / block.len() as f64
+            })
+            .collect();
+        row.seed_block_frame_ms = if per_block.is_empty() {
+            f64::NAN
+        } else {
+            median(per_block)
+        };
         let linear = Segment::new(Method::Linear, x0.clone(), x1.clone(), None, &triangles)?;
         row.linear_frame_ms = time_frames(&linear).0;
         {
@@ -289,14 +305,14 @@ fn run_peer(
 /// A markdown table of the rows.
 pub fn table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| triangles | vertices | nnz(L) | symbolic s | set-up s | spline set-up s (8 keys) | seed ms/frame (1 thread, median / min) | spline ms/frame (median / min) | spline / seed (min; paired median) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| triangles | vertices | nnz(L) | symbolic s | set-up s | spline set-up s (8 keys) | seed ms/frame (1 thread, median / min) | seed ms/frame, 4 solved at once | spline ms/frame (median / min) | spline / seed (min; paired median) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let opt = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));
         let ratio =
             |p: Option<f64>, ours: f64| p.map_or("-".to_string(), |p| format!("{:.0}x", p / ours));
         s += &format!(
-            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} / {:.2} | {:.2} / {:.2} | {:.2}x; {:.2}x | {:.3} | {:.0} ({} threads) | {:.0} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} / {:.2} | {:.2} | {:.2} / {:.2} | {:.2}x; {:.2}x | {:.3} | {:.0} ({} threads) | {:.0} | {} | {} | {} | {} |\n",
             r.triangles,
             r.vertices,
             r.factor_nonzeros,
@@ -305,6 +321,7 @@ pub fn table(rows: &[BenchRow]) -> String {
             r.spline_setup_s,
             r.seed_frame_ms,
             r.seed_frame_min_ms,
+            r.seed_block_frame_ms,
             r.spline_frame_ms,
             r.spline_frame_min_ms,
             r.spline_frame_min_ms / r.seed_frame_min_ms,

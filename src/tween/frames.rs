@@ -137,16 +137,15 @@ impl<'a> MeshTween<'a> {
         }
     }
 
-    /// Frame `f` of segment `segment` (keys a and b of `keys`): its per-primitive deltas, and
-    /// its figures when a report is asked for.
+    /// The frame `f` of `keys` whose welded positions its segment gave as `w`: its
+    /// per-primitive deltas, and its figures when a report is asked for.
     fn frame(
         &self,
         keys: &TrackKeys,
-        segment: &Segment,
         f: &FrameAt,
+        w: Vec<DVec3>,
     ) -> (Vec<PrimitiveDelta>, Option<FrameReport>) {
         let (a, b) = (f.key_a, f.key_b);
-        let w = segment.frame(f.t);
         let figures = self.shape.as_ref().map(|shape| {
             let (mean, max, area, volume, inverted) =
                 shape.measure(&w, &keys.welded[a], &keys.welded[b], f.t);
@@ -228,18 +227,28 @@ impl<'a> MeshTween<'a> {
             }
             .segment(self.opts.method, self.opts.wrap, a, b)?;
             stats.setup += t0.elapsed();
-            let chunk = 2 * rayon::current_num_threads().max(1);
+            let threads = rayon::current_num_threads().max(1);
+            let block = segment.block(j - i, threads);
+            // Two frames a thread at a time, or one block a thread.
+            let chunk = threads * if block > 1 { block } else { 2 };
             for start in (i..j).step_by(chunk) {
                 let t0 = Instant::now();
-                let computed: Vec<(Vec<PrimitiveDelta>, Option<FrameReport>)> = frames
+                let computed: Vec<Vec<(Vec<PrimitiveDelta>, Option<FrameReport>)>> = frames
                     [start..(start + chunk).min(j)]
-                    .par_iter()
-                    .map(|f| {
-                        let done = self.frame(&keys, &segment, f);
-                        progress();
-                        done
+                    .par_chunks(block)
+                    .map(|fs| {
+                        let ts: Vec<f64> = fs.iter().map(|f| f.t).collect();
+                        fs.iter()
+                            .zip(segment.frames(&ts))
+                            .map(|(f, w)| {
+                                let done = self.frame(&keys, f, w);
+                                progress();
+                                done
+                            })
+                            .collect()
                     })
                     .collect();
+                let computed = computed.into_iter().flatten();
                 stats.solve += t0.elapsed();
                 for (frame, figures) in computed {
                     if let (Some(r), Some(mut fig)) = (out.report.as_mut(), figures) {

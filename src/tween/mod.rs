@@ -39,6 +39,6 @@ pub use timegrid::{grid_of, Grid};
 pub use weld::bbox_diagonal;
 
 pub(crate) use segment::{KeyTrack, Segment};
-pub(crate) use solve::Pattern;
+pub(crate) use solve::{Pattern, MAX_BLOCK};
 pub(crate) use spline::is_loop;
 pub(crate) use weld::{rms_rel, Welded};

@@ -91,6 +91,21 @@ impl SeedSegment {
     }
 
     pub fn frame(&self, t: f64) -> Vec<DVec3> {
+        let (rhs, centroids) = self.system(t);
+        self.placement
+            .place(rhs, &centroids, |v| self.x0[v].lerp(self.x1[v], t))
+    }
+
+    /// The frames at `ts`, their solves sharing passes over the factor (see
+    /// [`Placement::place_block`]): the same positions as [`SeedSegment::frame`] at each.
+    pub fn frames(&self, ts: &[f64]) -> Vec<Vec<DVec3>> {
+        let (rhs, centroids): (Vec<_>, Vec<_>) = ts.iter().map(|&t| self.system(t)).unzip();
+        self.placement
+            .place_block(rhs, &centroids, |f, v| self.x0[v].lerp(self.x1[v], ts[f]))
+    }
+
+    /// The right-hand side of frame `t` and its components' centroids.
+    fn system(&self, t: f64) -> (Vec<[f64; 3]>, Vec<DVec3>) {
         let mut rhs = vec![[0.0f64; 3]; self.x0.len()];
         for tri in &self.triangles {
             let r = axis_angle_matrix(tri.axis, tri.angle * t);
@@ -106,7 +121,6 @@ impl SeedSegment {
             .zip(&self.centroid1)
             .map(|(a, b)| a.lerp(*b, t))
             .collect();
-        self.placement
-            .place(rhs, &centroids, |v| self.x0[v].lerp(self.x1[v], t))
+        (rhs, centroids)
     }
 }

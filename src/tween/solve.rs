@@ -130,6 +130,10 @@ impl Pattern {
 /// 16M nonzeros then takes 190 MiB instead of 380 MiB, and no second buffer is ever allocated.
 pub const TWO_COPIES_MAX_NONZEROS: usize = 16_000_000;
 
+/// Most frames solved in one pass over the factor ([`Placement::place_block`]); 12 right-hand
+/// sides of 8 bytes fill a 96-byte row, one and a half cache lines.
+pub const MAX_BLOCK: usize = 4;
+
 /// A numeric factorization for one reference pose: `P A P^T = L L^T`, with L kept as its
 /// diagonal plus a strictly-lower CSC copy (explicit zeros of the supernodal blocks dropped) so
 /// a frame's three right-hand sides are solved together in one pass over L per direction.
@@ -271,6 +275,14 @@ impl Factor {
 
     /// Solve `A x = b` in place for three right-hand sides stored as rows `[x, y, z]`.
     pub fn solve(&self, b: &mut [[f64; 3]]) {
+        self.solve_block(b);
+    }
+
+    /// Solve `A x = b` in place for `M` right-hand sides stored as rows (x, y and z of several
+    /// frames side by side): one pass over the factor serves them all, where a solve per frame
+    /// streams the whole factor from memory each time. Each column comes out exactly as a
+    /// solve of its own would give it (same operations in the same order).
+    pub fn solve_block<const M: usize>(&self, b: &mut [[f64; M]]) {
         let n = self.diag.len();
         assert_eq!(b.len(), n);
         assert_eq!(self.col_ptr.len(), n + 1);
@@ -285,7 +297,7 @@ impl Factor {
             assert!(self.row_ptr[n] <= self.cols.len() && self.cols.len() == self.row_vals.len());
             assert!(self.cols.iter().all(|&c| (c as usize) < n));
         }
-        let mut y: Vec<[f64; 3]> = self.perm.iter().map(|&p| b[p as usize]).collect();
+        let mut y: Vec<[f64; M]> = self.perm.iter().map(|&p| b[p as usize]).collect();
         // SAFETY (all unchecked accesses below): row_ptr and col_ptr are non-decreasing and
         // bounded by their index arrays' lengths, which equal their value arrays' lengths, and
         // every index is below n (checked above; the arrays are immutable after construction).
@@ -308,14 +320,14 @@ impl Factor {
                 for j in 0..n {
                     let d = 1.0 / *self.diag.get_unchecked(j);
                     let v = *y.get_unchecked(j);
-                    let w = [v[0] * d, v[1] * d, v[2] * d];
+                    let w: [f64; M] = std::array::from_fn(|c| v[c] * d);
                     *y.get_unchecked_mut(j) = w;
                     for k in *self.col_ptr.get_unchecked(j)..*self.col_ptr.get_unchecked(j + 1) {
                         let l = *self.vals.get_unchecked(k);
                         let t = y.get_unchecked_mut(*self.rows.get_unchecked(k) as usize);
-                        t[0] -= l * w[0];
-                        t[1] -= l * w[1];
-                        t[2] -= l * w[2];
+                        for c in 0..M {
+                            t[c] -= l * w[c];
+                        }
                     }
                 }
             }
@@ -403,8 +415,8 @@ fn walk_lower(symbolic: &SymbolicCholesky<u32>, n: usize, f: &mut dyn FnMut(usiz
 /// # Safety
 /// `i + 1 < ptr.len()`, `i < diag.len()`, and as for [`gather_dot`].
 #[inline(always)]
-unsafe fn gather_step(
-    y: &mut [[f64; 3]],
+unsafe fn gather_step<const M: usize>(
+    y: &mut [[f64; M]],
     i: usize,
     idx: &[u32],
     vals: &[f64],
@@ -420,44 +432,42 @@ unsafe fn gather_step(
     );
     let b = *y.get_unchecked(i);
     let d = 1.0 / *diag.get_unchecked(i);
-    *y.get_unchecked_mut(i) = [(b[0] - s[0]) * d, (b[1] - s[1]) * d, (b[2] - s[2]) * d];
+    *y.get_unchecked_mut(i) = std::array::from_fn(|c| (b[c] - s[c]) * d);
 }
 
-/// `sum_k vals[k] * y[idx[k]]` over `start..end`, for three right-hand sides at once, with two
+/// `sum_k vals[k] * y[idx[k]]` over `start..end`, for `M` right-hand sides at once, with two
 /// accumulators per component to halve the floating-point add latency chain.
 ///
 /// # Safety
 /// `start..end` must lie within `idx` and `vals`, and every `idx[k]` within `y`.
 #[inline(always)]
-unsafe fn gather_dot(
-    y: &[[f64; 3]],
+unsafe fn gather_dot<const M: usize>(
+    y: &[[f64; M]],
     idx: &[u32],
     vals: &[f64],
     start: usize,
     end: usize,
-) -> [f64; 3] {
-    let (mut a, mut b) = ([0.0f64; 3], [0.0f64; 3]);
+) -> [f64; M] {
+    let (mut a, mut b) = ([0.0f64; M], [0.0f64; M]);
     let mut k = start;
     while k + 1 < end {
         let (v0, v1) = (*vals.get_unchecked(k), *vals.get_unchecked(k + 1));
-        let t0 = *y.get_unchecked(*idx.get_unchecked(k) as usize);
-        let t1 = *y.get_unchecked(*idx.get_unchecked(k + 1) as usize);
-        a[0] += v0 * t0[0];
-        a[1] += v0 * t0[1];
-        a[2] += v0 * t0[2];
-        b[0] += v1 * t1[0];
-        b[1] += v1 * t1[1];
-        b[2] += v1 * t1[2];
+        let t0 = y.get_unchecked(*idx.get_unchecked(k) as usize);
+        let t1 = y.get_unchecked(*idx.get_unchecked(k + 1) as usize);
+        for c in 0..M {
+            a[c] += v0 * t0[c];
+            b[c] += v1 * t1[c];
+        }
         k += 2;
     }
     if k < end {
         let v = *vals.get_unchecked(k);
-        let t = *y.get_unchecked(*idx.get_unchecked(k) as usize);
-        a[0] += v * t[0];
-        a[1] += v * t[1];
-        a[2] += v * t[2];
+        let t = y.get_unchecked(*idx.get_unchecked(k) as usize);
+        for c in 0..M {
+            a[c] += v * t[c];
+        }
     }
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+    std::array::from_fn(|c| a[c] + b[c])
 }
 
 /// Connected components of `triangles` over `n` vertices (union-find); vertices touched by no
@@ -581,7 +591,76 @@ impl Placement {
             }
         }
         self.factor.solve(&mut rhs);
-        let mut out: Vec<DVec3> = rhs.iter().map(|b| DVec3::from_array(*b)).collect();
+        self.centre(
+            rhs.iter().map(|b| DVec3::from_array(*b)).collect(),
+            centroid,
+            loose,
+        )
+    }
+
+    /// [`Placement::place`] for several frames (`rhs`, `centroids` and `loose` per frame), up to
+    /// [`MAX_BLOCK`] solved in one pass over the factor; the same positions, bit for bit.
+    pub fn place_block(
+        &self,
+        rhs: Vec<Vec<[f64; 3]>>,
+        centroids: &[Vec<DVec3>],
+        loose: impl Fn(usize, usize) -> DVec3,
+    ) -> Vec<Vec<DVec3>> {
+        let mut solved = Vec::with_capacity(rhs.len());
+        let mut rest = rhs.into_iter().peekable();
+        while rest.peek().is_some() {
+            let part: Vec<Vec<[f64; 3]>> = rest.by_ref().take(MAX_BLOCK).collect();
+            solved.extend(match part.len() {
+                1 => self.solve_packed::<3>(part),
+                2 => self.solve_packed::<6>(part),
+                3 => self.solve_packed::<9>(part),
+                _ => self.solve_packed::<12>(part),
+            });
+        }
+        solved
+            .into_iter()
+            .zip(centroids)
+            .enumerate()
+            .map(|(f, (x, c))| self.centre(x, c, |v| loose(f, v)))
+            .collect()
+    }
+
+    /// Solve the frames of `rhs` (M / 3 of them) side by side; pinned rows are zero. `rhs` is
+    /// dropped once packed.
+    fn solve_packed<const M: usize>(&self, rhs: Vec<Vec<[f64; 3]>>) -> Vec<Vec<DVec3>> {
+        let frames = M / 3;
+        debug_assert_eq!(rhs.len(), frames);
+        let n = self.factor.pinned.len();
+        let mut b: Vec<[f64; M]> = (0..n)
+            .map(|v| {
+                let mut row = [0.0; M];
+                if !self.factor.pinned[v] {
+                    for (f, r) in rhs.iter().enumerate() {
+                        row[3 * f..3 * f + 3].copy_from_slice(&r[v]);
+                    }
+                }
+                row
+            })
+            .collect();
+        drop(rhs);
+        self.factor.solve_block(&mut b);
+        (0..frames)
+            .map(|f| {
+                b.iter()
+                    .map(|row| DVec3::new(row[3 * f], row[3 * f + 1], row[3 * f + 2]))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Move component c of the solved positions `out` so its centroid is `centroid[c]`; a vertex
+    /// no valid triangle touches goes to `loose(v)`.
+    fn centre(
+        &self,
+        mut out: Vec<DVec3>,
+        centroid: &[DVec3],
+        loose: impl Fn(usize) -> DVec3,
+    ) -> Vec<DVec3> {
         let shift: Vec<DVec3> = self
             .centroids(&out)
             .iter()
@@ -656,6 +735,61 @@ fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
 mod tests {
     use super::*;
     use crate::tween::gradient::{frame, gradient_operator};
+
+    #[test]
+    fn a_block_of_frames_solves_exactly_as_each_frame_alone() {
+        let s = crate::dev::synth::tube(12, 9, 3.0, 0.5, 0.4);
+        let pattern = Pattern::new(s.positions.len(), &s.triangles).unwrap();
+        let grads: Vec<Option<[DVec3; 3]>> = s
+            .triangles
+            .iter()
+            .map(|t| {
+                frame(
+                    s.positions[t[0] as usize],
+                    s.positions[t[1] as usize],
+                    s.positions[t[2] as usize],
+                )
+                .map(|v| gradient_operator(&v.inverse()))
+            })
+            .collect();
+        let mut pinned = vec![false; s.positions.len()];
+        pinned[0] = true;
+        let mut factor = Factor::new(&pattern, grads, pinned).unwrap();
+        let n = s.positions.len();
+        let frames: Vec<Vec<[f64; 3]>> = (0..4)
+            .map(|f| {
+                (0..n)
+                    .map(|i| {
+                        [
+                            (i * (f + 3) % 7) as f64 - 3.0,
+                            f as f64 + 0.25,
+                            (i % 5) as f64,
+                        ]
+                    })
+                    .collect()
+            })
+            .collect();
+        // Both copies of L (gathering forward pass), then the column copy only (scattering).
+        for columns_only in [false, true] {
+            if columns_only {
+                factor.keep_columns_only();
+            }
+            let mut block: Vec<[f64; 12]> = (0..n)
+                .map(|i| std::array::from_fn(|c| frames[c / 3][i][c % 3]))
+                .collect();
+            factor.solve_block(&mut block);
+            for (f, rhs) in frames.iter().enumerate() {
+                let mut alone = rhs.clone();
+                factor.solve(&mut alone);
+                for (i, x) in alone.iter().enumerate() {
+                    for c in 0..3 {
+                        let y = block[i][3 * f + c];
+                        assert_eq!(x[c].to_bits(), y.to_bits(), "frame {f}, {columns_only}");
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn column_only_solve_matches_two_copy_solve() {

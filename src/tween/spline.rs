@@ -788,6 +788,22 @@ impl SplineSegment {
     }
 
     pub fn frame(&self, u: f64) -> Vec<DVec3> {
+        let (rhs, centroids) = self.system(u);
+        self.placement
+            .place(rhs, &centroids, |v| self.x[0][v].lerp(self.x[1][v], u))
+    }
+
+    /// The frames at `us`, their solves sharing passes over the factor (see
+    /// [`Placement::place_block`]): the same positions as [`SplineSegment::frame`] at each.
+    pub fn frames(&self, us: &[f64]) -> Vec<Vec<DVec3>> {
+        let (rhs, centroids): (Vec<_>, Vec<_>) = us.iter().map(|&u| self.system(u)).unzip();
+        self.placement.place_block(rhs, &centroids, |f, v| {
+            self.x[0][v].lerp(self.x[1][v], us[f])
+        })
+    }
+
+    /// The right-hand side of frame `u` and its components' centroids.
+    fn system(&self, u: f64) -> (Vec<[f64; 3]>, Vec<DVec3>) {
         let w = hermite(u);
         let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
         for tri in &self.tris {
@@ -820,8 +836,7 @@ impl SplineSegment {
                 spline.lerp(p + rot * (path.centroid - path.pivot[0]), path.rigid)
             })
             .collect();
-        self.placement
-            .place(rhs, &centroids, |v| self.x[0][v].lerp(self.x[1][v], u))
+        (rhs, centroids)
     }
 }
 
