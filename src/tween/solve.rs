@@ -736,8 +736,8 @@ mod tests {
     use super::*;
     use crate::tween::gradient::{frame, gradient_operator};
 
-    #[test]
-    fn a_block_of_frames_solves_exactly_as_each_frame_alone() {
+    /// The factor of a small tube's system (vertex 0 pinned), and the tube.
+    fn tube_factor() -> (Factor, crate::dev::synth::Surface) {
         let s = crate::dev::synth::tube(12, 9, 3.0, 0.5, 0.4);
         let pattern = Pattern::new(s.positions.len(), &s.triangles).unwrap();
         let grads: Vec<Option<[DVec3; 3]>> = s
@@ -754,7 +754,12 @@ mod tests {
             .collect();
         let mut pinned = vec![false; s.positions.len()];
         pinned[0] = true;
-        let mut factor = Factor::new(&pattern, grads, pinned).unwrap();
+        (Factor::new(&pattern, grads, pinned).unwrap(), s)
+    }
+
+    #[test]
+    fn a_block_of_frames_solves_exactly_as_each_frame_alone() {
+        let (mut factor, s) = tube_factor();
         let n = s.positions.len();
         let frames: Vec<Vec<[f64; 3]>> = (0..4)
             .map(|f| {
@@ -793,23 +798,7 @@ mod tests {
 
     #[test]
     fn column_only_solve_matches_two_copy_solve() {
-        let s = crate::dev::synth::tube(12, 9, 3.0, 0.5, 0.4);
-        let pattern = Pattern::new(s.positions.len(), &s.triangles).unwrap();
-        let grads: Vec<Option<[DVec3; 3]>> = s
-            .triangles
-            .iter()
-            .map(|t| {
-                frame(
-                    s.positions[t[0] as usize],
-                    s.positions[t[1] as usize],
-                    s.positions[t[2] as usize],
-                )
-                .map(|v| gradient_operator(&v.inverse()))
-            })
-            .collect();
-        let mut pinned = vec![false; s.positions.len()];
-        pinned[0] = true;
-        let mut factor = Factor::new(&pattern, grads, pinned).unwrap();
+        let (mut factor, s) = tube_factor();
         let rhs: Vec<[f64; 3]> = (0..s.positions.len())
             .map(|i| [i as f64 % 3.0 - 1.0, (i * 7 % 5) as f64, 0.5])
             .collect();
