@@ -283,8 +283,24 @@ impl Factor {
     /// streams the whole factor from memory each time. Each column comes out exactly as a
     /// solve of its own would give it (same operations in the same order).
     pub fn solve_block<const M: usize>(&self, b: &mut [[f64; M]]) {
+        let mut y: Vec<[f64; M]> = self.perm.iter().map(|&p| b[p as usize]).collect();
+        self.solve_permuted(&mut y);
+        for (i, &p) in self.perm.iter().enumerate() {
+            b[p as usize] = y[i];
+        }
+    }
+
+    /// The fill-reducing order of the factor: row `i` of [`Factor::solve_permuted`]'s
+    /// argument is vertex `order()[i]`.
+    pub fn order(&self) -> &[u32] {
+        &self.perm
+    }
+
+    /// [`Factor::solve_block`] on right-hand sides already in the factor's order (see
+    /// [`Factor::order`]), in place: no copy of the block.
+    pub fn solve_permuted<const M: usize>(&self, y: &mut [[f64; M]]) {
         let n = self.diag.len();
-        assert_eq!(b.len(), n);
+        assert_eq!(y.len(), n);
         assert_eq!(self.col_ptr.len(), n + 1);
         assert!(self.col_ptr[n] <= self.rows.len() && self.rows.len() == self.vals.len());
         assert!(
@@ -297,7 +313,6 @@ impl Factor {
             assert!(self.row_ptr[n] <= self.cols.len() && self.cols.len() == self.row_vals.len());
             assert!(self.cols.iter().all(|&c| (c as usize) < n));
         }
-        let mut y: Vec<[f64; M]> = self.perm.iter().map(|&p| b[p as usize]).collect();
         // SAFETY (all unchecked accesses below): row_ptr and col_ptr are non-decreasing and
         // bounded by their index arrays' lengths, which equal their value arrays' lengths, and
         // every index is below n (checked above; the arrays are immutable after construction).
@@ -306,14 +321,7 @@ impl Factor {
             if by_rows {
                 // Gather along each row of L.
                 for i in 0..n {
-                    gather_step(
-                        &mut y,
-                        i,
-                        &self.cols,
-                        &self.row_vals,
-                        &self.row_ptr,
-                        &self.diag,
-                    );
+                    gather_step(y, i, &self.cols, &self.row_vals, &self.row_ptr, &self.diag);
                 }
             } else {
                 // Only the column copy is kept: scatter each finished value down its column.
@@ -333,11 +341,8 @@ impl Factor {
             }
             // L^T w = z: gather along each column of L.
             for j in (0..n).rev() {
-                gather_step(&mut y, j, &self.rows, &self.vals, &self.col_ptr, &self.diag);
+                gather_step(y, j, &self.rows, &self.vals, &self.col_ptr, &self.diag);
             }
-        }
-        for (i, &p) in self.perm.iter().enumerate() {
-            b[p as usize] = y[i];
         }
     }
 }
@@ -630,9 +635,12 @@ impl Placement {
     fn solve_packed<const M: usize>(&self, rhs: Vec<Vec<[f64; 3]>>) -> Vec<Vec<DVec3>> {
         let frames = M / 3;
         debug_assert_eq!(rhs.len(), frames);
-        let n = self.factor.pinned.len();
-        let mut b: Vec<[f64; M]> = (0..n)
-            .map(|v| {
+        let order = self.factor.order();
+        // Packed straight in the factor's order, solved in place.
+        let mut y: Vec<[f64; M]> = order
+            .iter()
+            .map(|&v| {
+                let v = v as usize;
                 let mut row = [0.0; M];
                 if !self.factor.pinned[v] {
                     for (f, r) in rhs.iter().enumerate() {
@@ -643,12 +651,14 @@ impl Placement {
             })
             .collect();
         drop(rhs);
-        self.factor.solve_block(&mut b);
+        self.factor.solve_permuted(&mut y);
         (0..frames)
             .map(|f| {
-                b.iter()
-                    .map(|row| DVec3::new(row[3 * f], row[3 * f + 1], row[3 * f + 2]))
-                    .collect()
+                let mut out = vec![DVec3::ZERO; y.len()];
+                for (row, &v) in y.iter().zip(order) {
+                    out[v as usize] = DVec3::new(row[3 * f], row[3 * f + 1], row[3 * f + 2]);
+                }
+                out
             })
             .collect()
     }
