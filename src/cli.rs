@@ -269,9 +269,9 @@ pub struct TweenArgs {
     /// --compact changes nothing there.
     #[arg(long)]
     compact: bool,
-    /// With --compact or its parts: RMS deviation per frame allowed, relative to the
-    /// bounding-box diagonal (no vertex more than 3x it; normals within 100x it) [default:
-    /// 1e-4].
+    /// With --compact or its parts: RMS deviation per frame (and primitive) allowed, relative
+    /// to the bounding-box diagonal (no vertex more than 3x it; normals within 100x it; with
+    /// meshopt, texture coordinates within 1x it of their values) [default: 1e-4].
     #[arg(long, value_name = "T")]
     tolerance: Option<f64>,
     /// Basis targets: `auto` (as few as the tolerance allows; the default of --compact), a
@@ -285,7 +285,8 @@ pub struct TweenArgs {
     #[arg(long)]
     sparse: bool,
     /// Compress vertex, index, target and animation data with EXT_meshopt_compression (float
-    /// targets through its exponential filter, within the tolerance).
+    /// targets, and the processed meshes' own positions, normals, tangents and texture
+    /// coordinates, through its exponential filter, within the tolerance).
     #[arg(long)]
     meshopt: bool,
     /// Interpolation method.

@@ -80,6 +80,19 @@ impl Storage {
     }
 }
 
+/// Per component, the smallest and largest of `data` (elements of `ncomp` values).
+pub fn min_max(data: &[f32], ncomp: usize) -> (Vec<f32>, Vec<f32>) {
+    let mut lo = vec![f32::INFINITY; ncomp];
+    let mut hi = vec![f32::NEG_INFINITY; ncomp];
+    for e in data.chunks_exact(ncomp) {
+        for c in 0..ncomp {
+            lo[c] = lo[c].min(e[c]);
+            hi[c] = hi[c].max(e[c]);
+        }
+    }
+    (lo, hi)
+}
+
 /// The output document under construction.
 pub struct Output {
     pub json: Value,
@@ -117,14 +130,7 @@ impl Output {
         let mut acc =
             json!({ "bufferView": view, "componentType": 5126, "count": count, "type": ty });
         if bounds && count > 0 {
-            let mut lo = vec![f32::INFINITY; ncomp];
-            let mut hi = vec![f32::NEG_INFINITY; ncomp];
-            for e in data.chunks_exact(ncomp) {
-                for c in 0..ncomp {
-                    lo[c] = lo[c].min(e[c]);
-                    hi[c] = hi[c].max(e[c]);
-                }
-            }
+            let (lo, hi) = min_max(data, ncomp);
             acc["min"] = json!(lo);
             acc["max"] = json!(hi);
         }

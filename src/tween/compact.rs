@@ -17,7 +17,7 @@
 //! * **Meshopt** compression of every view on write (`gltf::encode`).
 //!
 //! Tolerances (relative to the bounding-box diagonal of the mesh's base): positions within
-//! `tolerance` RMS per frame and no vertex farther than [`MAX_FACTOR`] x `tolerance`; normals and tangents
+//! `tolerance` RMS per frame (each primitive on its own) and no vertex farther than [`MAX_FACTOR`] x `tolerance`; normals and tangents
 //! (unit vectors, so absolute) within [`NORMAL_FACTOR`] x `tolerance` RMS per frame. The
 //! deviation is measured on the values as a reader decodes them.
 
@@ -57,6 +57,17 @@ pub const TRUNCATION_SHARE: f64 = 0.7;
 /// ... and the rounding of the stored values (quantization, the exponential filter); the
 /// measured deviation of the decoded frames has the last word.
 pub const QUANT_SHARE: f64 = 1.5;
+
+/// Share of the tolerance the rounding of the base (the exponential filter on the primitive's own
+/// POSITION, NORMAL and TANGENT, with meshopt) may take at its worst vertex: 2.5e-5 of the
+/// diagonal at the default, about 15 bits over the mesh's extent. It adds to every frame's
+/// deviation, which is measured with it.
+pub const BASE_SHARE: f64 = 0.25;
+
+/// Texture coordinates (with meshopt, through the exponential filter) stay within this many
+/// times the tolerance of their values, in texture widths: 1e-4 at the default, 0.4 texel of a
+/// 4096 texture (gltfpack's default 12 bits over a unit range: 1.2e-4).
+pub const UV_FACTOR: f64 = 1.0;
 
 /// Most frames a basis is looked for over (the Gram matrix is frames x frames).
 pub const MAX_BASIS_FRAMES: usize = 8192;
@@ -104,8 +115,28 @@ pub struct NewTarget {
     pub tangent: Option<Vec<Stored>>,
 }
 
+/// Mantissa bits of the exponential filter for a primitive's own (base) attributes; `None`
+/// leaves one as it is (not a plain f32 accessor, or no meshopt).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BaseBits {
+    pub position: Option<i32>,
+    pub normal: Option<i32>,
+    pub tangent: Option<i32>,
+}
+
+/// Which of a primitive's own POSITION, NORMAL and TANGENT the writer can store again (plain
+/// f32 accessors).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Restorable {
+    pub position: bool,
+    pub normal: bool,
+    pub tangent: bool,
+}
+
 /// The compacted frames of one mesh.
 pub struct Compacted {
+    /// For each processed primitive, how its own attributes are filtered.
+    pub base: Vec<BaseBits>,
     /// The basis targets (scaled for storage).
     pub targets: Vec<NewTarget>,
     /// For each frame, the weights of the basis targets (scales folded in).
@@ -128,10 +159,10 @@ pub struct CompactFigures {
     /// Authored targets kept beside them.
     pub authored: usize,
     /// Deviation from the dense frames, relative to the bounding-box diagonal: the worst
-    /// per-frame RMS, and the worst vertex.
+    /// RMS of a primitive in a frame, and the worst vertex.
     pub rms_deviation: f64,
     pub max_deviation: f64,
-    /// Worst per-frame RMS deviation of the normals (absolute), when the frames carry them.
+    /// Worst RMS deviation of a primitive's normals in a frame (absolute), when the frames carry them.
     pub normal_rms_deviation: f64,
     /// Targets stored as SHORT, BYTE, float, and sparse.
     pub short_targets: usize,
@@ -311,12 +342,14 @@ fn smallest_k(f: &Factors, norms2: &[f64], budget2: f64) -> usize {
 
 /// Compact the frames of one mesh (`frames` computed from `mesh`), keeping the authored targets
 /// when `authored` gives each frame's authored weights (rig layout); `own` lists the frames
-/// that have targets of their own without a basis (the frames between keys in the rig layout).
+/// that have targets of their own without a basis (the frames between keys in the rig layout);
+/// `restorable` says which of each primitive's own attributes the writer can filter.
 pub fn compact(
     frames: &MeshFrames,
     mesh: &MorphMesh,
     authored: Vec<Vec<f64>>,
     own: Vec<usize>,
+    restorable: &[Restorable],
     opts: &CompactOptions,
 ) -> Result<Compacted> {
     let rig = authored.iter().any(|w| !w.is_empty());
@@ -364,6 +397,7 @@ pub fn compact(
         }
     }
     let vertices: usize = mesh.primitives.iter().map(|p| p.base.len()).sum();
+    let (base, base_error) = base_rounding(mesh, &blocks, restorable, opts, (tol, ntol));
     let mut rows = Rows {
         frames,
         mesh,
@@ -382,6 +416,8 @@ pub fn compact(
         ntol,
         vertices,
         rig,
+        base,
+        base_error,
     };
     plan.run(own)
 }
@@ -453,6 +489,9 @@ struct Plan<'a> {
     ntol: f64,
     vertices: usize,
     rig: bool,
+    /// How each primitive's own attributes are filtered, and what that moves each block by.
+    base: Vec<BaseBits>,
+    base_error: Vec<Option<Vec<f32>>>,
 }
 
 impl Plan<'_> {
@@ -635,6 +674,7 @@ impl Plan<'_> {
             .collect();
         self.measure(&targets, &weights, authored, &mut figures);
         Ok(Compacted {
+            base: self.base.clone(),
             targets,
             weights,
             authored_weights: rows.authored.clone(),
@@ -769,13 +809,19 @@ impl Plan<'_> {
             })
             .collect();
         let authored_decoded = self.authored_decoded(authored);
-        let mut pos2 = vec![0.0f64; rows.count()];
-        let mut nrm2 = vec![0.0f64; rows.count()];
-        let mut nrm_n = 0usize;
+        // Squared deviations per primitive and frame: a small primitive (an eye) must not hide
+        // in a large one's average.
+        let prims = rows.frames.primitives.len();
+        let mut pos2 = vec![vec![0.0f64; rows.count()]; prims];
+        let mut nrm2 = vec![vec![0.0f64; rows.count()]; prims];
+        let mut pos_n = vec![0usize; prims];
+        let mut nrm_n = vec![0usize; prims];
         let mut worst = 0.0f64;
         for (bi, b) in rows.blocks.iter().enumerate() {
-            if b.attr != Attr::Position {
-                nrm_n += b.vertices;
+            if b.attr == Attr::Position {
+                pos_n[b.prim] += b.vertices;
+            } else {
+                nrm_n[b.prim] += b.vertices;
             }
             let mut row = vec![0.0; 3 * b.vertices];
             for (f, w) in weights.iter().enumerate() {
@@ -783,6 +829,11 @@ impl Plan<'_> {
                 let unweighted = 1.0 / b.weight;
                 for (v, r) in row.chunks_exact(3).enumerate() {
                     let mut e = [r[0] * unweighted, r[1] * unweighted, r[2] * unweighted];
+                    if let Some(be) = &self.base_error[bi] {
+                        for i in 0..3 {
+                            e[i] -= be[3 * v + i] as f64;
+                        }
+                    }
                     for (c, t) in decoded.iter().enumerate() {
                         let wc = w[c] as f64;
                         for i in 0..3 {
@@ -804,22 +855,23 @@ impl Plan<'_> {
                     }
                     let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
                     if b.attr == Attr::Position {
-                        pos2[f] += d2;
+                        pos2[b.prim][f] += d2;
                         worst = worst.max(d2);
                     } else {
-                        nrm2[f] += d2;
+                        nrm2[b.prim][f] += d2;
                     }
                 }
             }
         }
-        let rms = |sum: f64, n: usize| (sum / n.max(1) as f64).sqrt();
-        figures.rms_deviation = pos2
-            .iter()
-            .map(|s| rms(*s, self.vertices))
-            .fold(0.0, f64::max)
-            / (self.tol / self.opts.tolerance);
+        let worst_rms = |sums: &[Vec<f64>], n: &[usize]| {
+            sums.iter()
+                .zip(n)
+                .flat_map(|(s, &n)| s.iter().map(move |x| (x / n.max(1) as f64).sqrt()))
+                .fold(0.0, f64::max)
+        };
+        figures.rms_deviation = worst_rms(&pos2, &pos_n) / (self.tol / self.opts.tolerance);
         figures.max_deviation = worst.sqrt() / (self.tol / self.opts.tolerance);
-        figures.normal_rms_deviation = nrm2.iter().map(|s| rms(*s, nrm_n)).fold(0.0, f64::max);
+        figures.normal_rms_deviation = worst_rms(&nrm2, &nrm_n);
     }
 
     /// The authored targets as a reader decodes them after the EXPONENTIAL filter, per block
@@ -881,6 +933,109 @@ impl Plan<'_> {
     }
 }
 
+/// The fewest mantissa bits of the exponential filter (as the writer applies it to a view of
+/// these values alone) that keep every element of `values` (`components` each) within `within`
+/// (Euclidean), or `None` when even 24 bits do not.
+pub fn fewest_bits(values: &[f32], components: usize, within: f64) -> Option<i32> {
+    let fits = |bits: i32| {
+        let decoded = exp_roundtrip(values, components, bits);
+        values
+            .chunks_exact(components)
+            .zip(decoded.chunks_exact(components))
+            .all(|(a, b)| {
+                let d2: f64 = a
+                    .iter()
+                    .zip(b)
+                    .map(|(x, y)| (*x as f64 - *y as f64).powi(2))
+                    .sum();
+                d2 <= within * within
+            })
+    };
+    // The rounding step halves with every bit: the first that fits, by bisection.
+    let (mut lo, mut hi) = (1, 24);
+    if !fits(hi) {
+        return None;
+    }
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if fits(mid) {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    Some(hi)
+}
+
+/// A primitive's own attribute as f32, `components` per vertex.
+fn flat<const N: usize>(values: &[[f64; N]]) -> Vec<f32> {
+    values.iter().flatten().map(|&x| x as f32).collect()
+}
+
+/// How the base of each primitive is filtered (with meshopt: each attribute the writer can
+/// store again, at the fewest bits within [`BASE_SHARE`] of the tolerance), and what that
+/// does to each block of the frames matrix (decoded less exact, 3 per vertex, unweighted).
+fn base_rounding(
+    mesh: &MorphMesh,
+    blocks: &[Block],
+    restorable: &[Restorable],
+    opts: &CompactOptions,
+    (tol, ntol): (f64, f64),
+) -> (Vec<BaseBits>, Vec<Option<Vec<f32>>>) {
+    let mut bits = vec![BaseBits::default(); mesh.primitives.len()];
+    let mut errors = vec![None; blocks.len()];
+    if !opts.meshopt {
+        return (bits, errors);
+    }
+    let rounded = |values: Vec<f32>, n: usize, within: f64| -> Option<(i32, Vec<f32>)> {
+        let b = fewest_bits(&values, n, within)?;
+        let decoded = exp_roundtrip(&values, n, b);
+        let error = values
+            .chunks_exact(n)
+            .zip(decoded.chunks_exact(n))
+            .flat_map(|(x, y)| (0..3).map(move |i| y[i] - x[i]))
+            .collect();
+        Some((b, error))
+    };
+    for (bi, block) in blocks.iter().enumerate() {
+        let p = &mesh.primitives[block.prim];
+        let r = restorable.get(block.prim).copied().unwrap_or_default();
+        let base = &mut bits[block.prim];
+        let (slot, done) = match block.attr {
+            Attr::Position if r.position => (
+                &mut base.position,
+                rounded(
+                    flat(&p.base.iter().map(|v| v.to_array()).collect::<Vec<_>>()),
+                    3,
+                    BASE_SHARE * tol,
+                ),
+            ),
+            Attr::Normal if r.normal => (
+                &mut base.normal,
+                p.normals.as_ref().and_then(|n| {
+                    rounded(
+                        flat(&n.iter().map(|v| v.to_array()).collect::<Vec<_>>()),
+                        3,
+                        BASE_SHARE * ntol,
+                    )
+                }),
+            ),
+            Attr::Tangent if r.tangent => (
+                &mut base.tangent,
+                p.tangents
+                    .as_ref()
+                    .and_then(|t| rounded(flat(t), 4, BASE_SHARE * ntol)),
+            ),
+            _ => continue,
+        };
+        if let Some((b, error)) = done {
+            *slot = Some(b);
+            errors[bi] = Some(error);
+        }
+    }
+    (bits, errors)
+}
+
 /// Whether a sparse accessor stores `values` (x, y, z per vertex) in fewer bytes than a dense
 /// one, counting the vertices whose stored value is not zero.
 pub fn sparse_pays(values: &[f32], storage: Storage, meshopt: bool) -> bool {
@@ -912,5 +1067,45 @@ fn decode(s: &Stored) -> Vec<f32> {
             exp_bits: Some(bits),
         } => exp_roundtrip(&s.values, 3, bits),
         storage => s.values.iter().map(|&x| storage.stored(x)).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fewest_bits_keep_every_element_within_and_one_less_does_not() {
+        // UV-like values over [0, 1] and positions far from the origin.
+        let uv: Vec<f32> = (0..1000)
+            .map(|i| ((i * 37) % 1000) as f32 / 999.0)
+            .collect();
+        let far: Vec<f32> = (0..999)
+            .map(|i| 100.0 + ((i * 7919) % 997) as f32 * 1e-3)
+            .collect();
+        for (values, n, within) in [(&uv, 2, 1e-4), (&far, 3, 1e-3), (&uv, 2, 0.2)] {
+            let bits = fewest_bits(values, n, within).expect("24 bits are enough");
+            let err = |b: i32| {
+                values
+                    .chunks_exact(n)
+                    .zip(exp_roundtrip(values, n, b).chunks_exact(n))
+                    .map(|(a, d)| {
+                        a.iter()
+                            .zip(d)
+                            .map(|(x, y)| (*x as f64 - *y as f64).powi(2))
+                            .sum::<f64>()
+                            .sqrt()
+                    })
+                    .fold(0.0, f64::max)
+            };
+            assert!(err(bits) <= within, "{bits} bits: {} > {within}", err(bits));
+            assert!(
+                bits == 1 || err(bits - 1) > within,
+                "{bits} bits are not the fewest"
+            );
+        }
+        // Positions near 100 need about 17 bits for 1e-3 (100 / 2^17 = 7.6e-4).
+        assert!((16..=18).contains(&fewest_bits(&far, 3, 1e-3).unwrap()));
+        assert_eq!(fewest_bits(&far, 3, 1e-9), None);
     }
 }

@@ -14,6 +14,7 @@
 //! others have, it refers to one shared accessor of zeros. Accessors the new targets and
 //! samplers replaced are dropped when nothing else refers to them.
 
+use super::base;
 use super::compact::{compact, sparse_pays, CompactFigures, CompactOptions, Compacted, Stored};
 use super::frames::{MeshFrames, PrimitiveFrames, TrackFrames};
 use super::keys::{MorphMesh, Primitive, TrackOrigin};
@@ -204,7 +205,8 @@ pub fn apply_frames(
                 .filter(|(_, p)| matches!(p, Played::Target(_)))
                 .map(|(g, _)| g)
                 .collect();
-            let c = compact(m, mesh, w.authored_rows(), own, opts)?;
+            let restorable = base::restorable(&out.json, m);
+            let c = compact(m, mesh, w.authored_rows(), own, &restorable, opts)?;
             applied
                 .compacted
                 .push((mesh.name.clone(), c.figures.clone()));
@@ -217,6 +219,11 @@ pub fn apply_frames(
             applied.most_targets = Some((mesh.name.clone(), first, count));
         }
         set_targets(out, &w, &plays, &mut edits.replaced);
+        if let (Some(c), Some(opts @ CompactOptions { meshopt: true, .. })) =
+            (&w.compact, compact_opts)
+        {
+            base::reencode(out, doc, m, &c.base, opts.tolerance, &mut edits.replaced)?;
+        }
         name_targets(out, &w, &plays, new, shift);
         for (track, plays) in m.tracks.iter().zip(&plays) {
             animate_track(out, &w, track, plays, new, shift, &mut edits);
