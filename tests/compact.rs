@@ -55,6 +55,35 @@ fn deviation(out: &Path, dense: &Path) -> (f64, f64) {
     (rms / diag, max / diag)
 }
 
+/// The largest difference of any TEXCOORD_n value of mesh 0 between `out` and `dense`, as our
+/// decoders read them (the vertex order is the same in both).
+fn uv_deviation(out: &Path, dense: &Path) -> f64 {
+    let (a, b) = (Document::open(out).unwrap(), Document::open(dense).unwrap());
+    let mut worst = 0.0f64;
+    let prims = b.json["meshes"][0]["primitives"].as_array().unwrap();
+    for (p, prim) in prims.iter().enumerate() {
+        for set in 0.. {
+            let name = format!("TEXCOORD_{set}");
+            let Some(i) = prim["attributes"][&name].as_u64() else {
+                break;
+            };
+            let j = a.json["meshes"][0]["primitives"][p]["attributes"][&name]
+                .as_u64()
+                .unwrap_or_else(|| panic!("{}: {name} lost", out.display()));
+            let (x, y) = (
+                b.read_f64(i as usize).unwrap().0,
+                a.read_f64(j as usize).unwrap().0,
+            );
+            assert_eq!(x.len(), y.len());
+            worst = x
+                .iter()
+                .zip(&y)
+                .fold(worst, |w, (u, v)| w.max((u - v).abs()));
+        }
+    }
+    worst
+}
+
 fn gltfpack(input: &Path, output: &Path) {
     let bin = root().join("tools/node/node_modules/.bin/gltfpack");
     let r = Command::new(bin)
@@ -192,6 +221,11 @@ fn compact_table() {
             tween_quietly(input, &out, &args);
             assert_valid(&out);
             read_back_by_others(&out);
+            let uv = uv_deviation(&out, &dense);
+            assert!(
+                uv <= tol * 1.001,
+                "{name} {label}: texture coordinates {uv:.2e} off"
+            );
             let (r, m) = deviation(&out, &dense);
             assert!(
                 r <= tol * 1.001 && m <= 3.0 * tol * 1.001,
