@@ -18,7 +18,7 @@ use serde_json::{json, Value};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Whether accessor `a` of `json` is plain f32 data in a buffer view (no sparse part).
-fn plain(json: &Value, a: Option<u64>) -> bool {
+pub(super) fn plain(json: &Value, a: Option<u64>) -> bool {
     let Some(a) = a else { return false };
     let acc = &json["accessors"][a as usize];
     acc["componentType"] == 5126 && acc["bufferView"].is_u64() && acc.get("sparse").is_none()
@@ -83,7 +83,7 @@ pub fn reencode(
                 "NORMAL" => b.normal,
                 "TANGENT" => b.tangent,
                 t if t.starts_with("TEXCOORD_") && n == 2 => {
-                    fewest_bits(&values, 2, UV_FACTOR * tolerance)
+                    fewest_bits(&values, 2, UV_FACTOR * tolerance).map(|(b, _)| b)
                 }
                 _ => None,
             };

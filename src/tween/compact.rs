@@ -17,8 +17,8 @@
 //! * **Meshopt** compression of every view on write (`gltf::encode`).
 //!
 //! Tolerances (relative to the bounding-box diagonal of the mesh's base): positions within
-//! `tolerance` RMS per frame (each primitive on its own) and no vertex farther than [`MAX_FACTOR`] x `tolerance`; normals and tangents
-//! (unit vectors, so absolute) within [`NORMAL_FACTOR`] x `tolerance` RMS per frame. The
+//! `tolerance` RMS per frame (each primitive on its own) and no vertex farther than
+//! [`MAX_FACTOR`] x `tolerance`; normals and tangents (unit vectors, so absolute) within [`NORMAL_FACTOR`] x `tolerance` RMS per frame. The
 //! deviation is measured on the values as a reader decodes them.
 
 use super::frames::{MeshFrames, PrimitiveFrames};
@@ -162,7 +162,8 @@ pub struct CompactFigures {
     /// RMS of a primitive in a frame, and the worst vertex.
     pub rms_deviation: f64,
     pub max_deviation: f64,
-    /// Worst RMS deviation of a primitive's normals in a frame (absolute), when the frames carry them.
+    /// Worst RMS deviation of a primitive's normals in a frame (absolute), when the frames
+    /// carry them.
     pub normal_rms_deviation: f64,
     /// Targets stored as SHORT, BYTE, float, and sparse.
     pub short_targets: usize,
@@ -935,11 +936,12 @@ impl Plan<'_> {
 
 /// The fewest mantissa bits of the exponential filter (as the writer applies it to a view of
 /// these values alone) that keep every element of `values` (`components` each) within `within`
-/// (Euclidean), or `None` when even 24 bits do not.
-pub fn fewest_bits(values: &[f32], components: usize, within: f64) -> Option<i32> {
+/// (Euclidean), with the values as a reader decodes them at those bits; `None` when even 24
+/// bits do not.
+pub fn fewest_bits(values: &[f32], components: usize, within: f64) -> Option<(i32, Vec<f32>)> {
     let fits = |bits: i32| {
         let decoded = exp_roundtrip(values, components, bits);
-        values
+        let ok = values
             .chunks_exact(components)
             .zip(decoded.chunks_exact(components))
             .all(|(a, b)| {
@@ -949,27 +951,25 @@ pub fn fewest_bits(values: &[f32], components: usize, within: f64) -> Option<i32
                     .map(|(x, y)| (*x as f64 - *y as f64).powi(2))
                     .sum();
                 d2 <= within * within
-            })
+            });
+        ok.then_some(decoded)
     };
     // The rounding step halves with every bit: the first that fits, by bisection.
     let (mut lo, mut hi) = (1, 24);
-    if !fits(hi) {
-        return None;
-    }
+    let mut best = fits(hi)?;
     while lo < hi {
         let mid = (lo + hi) / 2;
-        if fits(mid) {
-            hi = mid;
-        } else {
-            lo = mid + 1;
+        match fits(mid) {
+            Some(decoded) => (hi, best) = (mid, decoded),
+            None => lo = mid + 1,
         }
     }
-    Some(hi)
+    Some((hi, best))
 }
 
-/// A primitive's own attribute as f32, `components` per vertex.
-fn flat<const N: usize>(values: &[[f64; N]]) -> Vec<f32> {
-    values.iter().flatten().map(|&x| x as f32).collect()
+/// A primitive's own attribute as f32, `N` components per vertex.
+fn flat<const N: usize>(values: impl Iterator<Item = [f64; N]>) -> Vec<f32> {
+    values.flatten().map(|x| x as f32).collect()
 }
 
 /// How the base of each primitive is filtered (with meshopt: each attribute the writer can
@@ -988,8 +988,7 @@ fn base_rounding(
         return (bits, errors);
     }
     let rounded = |values: Vec<f32>, n: usize, within: f64| -> Option<(i32, Vec<f32>)> {
-        let b = fewest_bits(&values, n, within)?;
-        let decoded = exp_roundtrip(&values, n, b);
+        let (b, decoded) = fewest_bits(&values, n, within)?;
         let error = values
             .chunks_exact(n)
             .zip(decoded.chunks_exact(n))
@@ -1005,7 +1004,7 @@ fn base_rounding(
             Attr::Position if r.position => (
                 &mut base.position,
                 rounded(
-                    flat(&p.base.iter().map(|v| v.to_array()).collect::<Vec<_>>()),
+                    flat(p.base.iter().map(|v| v.to_array())),
                     3,
                     BASE_SHARE * tol,
                 ),
@@ -1013,18 +1012,14 @@ fn base_rounding(
             Attr::Normal if r.normal => (
                 &mut base.normal,
                 p.normals.as_ref().and_then(|n| {
-                    rounded(
-                        flat(&n.iter().map(|v| v.to_array()).collect::<Vec<_>>()),
-                        3,
-                        BASE_SHARE * ntol,
-                    )
+                    rounded(flat(n.iter().map(|v| v.to_array())), 3, BASE_SHARE * ntol)
                 }),
             ),
             Attr::Tangent if r.tangent => (
                 &mut base.tangent,
                 p.tangents
                     .as_ref()
-                    .and_then(|t| rounded(flat(t), 4, BASE_SHARE * ntol)),
+                    .and_then(|t| rounded(flat(t.iter().copied()), 4, BASE_SHARE * ntol)),
             ),
             _ => continue,
         };
@@ -1084,7 +1079,8 @@ mod tests {
             .map(|i| 100.0 + ((i * 7919) % 997) as f32 * 1e-3)
             .collect();
         for (values, n, within) in [(&uv, 2, 1e-4), (&far, 3, 1e-3), (&uv, 2, 0.2)] {
-            let bits = fewest_bits(values, n, within).expect("24 bits are enough");
+            let (bits, decoded) = fewest_bits(values, n, within).expect("24 bits are enough");
+            assert_eq!(decoded, exp_roundtrip(values, n, bits));
             let err = |b: i32| {
                 values
                     .chunks_exact(n)
@@ -1105,7 +1101,7 @@ mod tests {
             );
         }
         // Positions near 100 need about 17 bits for 1e-3 (100 / 2^17 = 7.6e-4).
-        assert!((16..=18).contains(&fewest_bits(&far, 3, 1e-3).unwrap()));
+        assert!((16..=18).contains(&fewest_bits(&far, 3, 1e-3).unwrap().0));
         assert_eq!(fewest_bits(&far, 3, 1e-9), None);
     }
 }

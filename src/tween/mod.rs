@@ -5,8 +5,9 @@
 //! [`segment`] per pair of keys: [`seed`] or [`spline`] (with [`gradient`]: deformation
 //! gradients, polar decomposition, rotation logs; and [`solve`]: the sparse Poisson system) ->
 //! [`normals`] -> [`report`] (shape figures) -> [`frames`] (a mesh's frames, streamed) ->
-//! [`morph_targets`] (glTF morph animation; with `--compact`, [`compact`] and [`base`]) or the USD writer; [`job`] runs it from file to
-//! file, with [`options`] holding what the user asked for.
+//! [`morph_targets`] (glTF morph animation; with `--compact`, [`compact`] and [`base`]) or the
+//! USD writer; [`job`] runs it from file to file, with [`options`] holding what the user asked
+//! for.
 
 mod base;
 mod clock;

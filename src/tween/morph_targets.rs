@@ -415,10 +415,6 @@ fn reencode_authored(
     else {
         return old;
     };
-    let plain = |json: &Value, a: u64| {
-        let acc = &json["accessors"][a as usize];
-        acc["componentType"] == 5126 && acc["bufferView"].is_u64() && acc.get("sparse").is_none()
-    };
     // Attribute by attribute, so that each attribute's targets share one filtered view (the
     // compaction measured them so): the dense ones first, then the sparse ones, so that nothing
     // comes between the dense ones.
@@ -435,7 +431,7 @@ fn reencode_authored(
             let (Some(values), Some(a)) = (values, t.get(name).and_then(Value::as_u64)) else {
                 continue;
             };
-            if !plain(&out.json, a) {
+            if !base::plain(&out.json, Some(a)) {
                 continue;
             }
             replaced.insert(a as usize);
