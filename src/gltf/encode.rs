@@ -22,6 +22,22 @@ pub const FILTER_MARK: &str = "inbetweenExpBits";
 /// Removed from every view on write.
 pub const FILTER_GROUP: &str = "inbetweenExpGroup";
 
+/// The private key a writer puts on a buffer view of scalars read as rows (a weights
+/// animation's output: one row of targets per key) to have meshopt's codec (and the
+/// EXPONENTIAL filter, one exponent per component) take elements of this many bytes; removed
+/// from every view on write. See [`row_components`].
+pub const ELEMENT_MARK: &str = "inbetweenElement";
+
+/// How many scalars of a row of `width` (a weights animation's targets per key) make one
+/// element of a view marked with [`ELEMENT_MARK`]: the whole row where the codec allows (at
+/// most 64 four-byte components), else the largest divisor of it that fits.
+pub fn row_components(width: usize) -> usize {
+    (1..=width.clamp(1, 64))
+        .rev()
+        .find(|d| width.is_multiple_of(*d))
+        .unwrap_or(1)
+}
+
 /// How a buffer view is read, as far as the accessors that use it say.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Use {
@@ -306,7 +322,12 @@ pub fn meshopt(out: &mut Output) -> usize {
             .get(FILTER_MARK)
             .and_then(Value::as_i64)
             .map(|b| b as i32);
-        let u = uses.get(&i).copied().unwrap_or(Use::Other);
+        let mut u = uses.get(&i).copied().unwrap_or(Use::Other);
+        if let (Use::Attributes { .. }, Some(e)) =
+            (u, view.get(ELEMENT_MARK).and_then(Value::as_u64))
+        {
+            u = Use::Attributes { stride: e as usize };
+        }
         while !bytes.len().is_multiple_of(4) {
             bytes.push(0);
         }
@@ -340,6 +361,7 @@ pub fn clear_marks(out: &mut Output) {
         if let Some(o) = view.as_object_mut() {
             o.remove(FILTER_MARK);
             o.remove(FILTER_GROUP);
+            o.remove(ELEMENT_MARK);
         }
     }
 }

@@ -20,7 +20,7 @@ mod write;
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{min_max, BinBuilder, Output, Storage};
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
-pub use encode::{exp_roundtrip, FILTER_GROUP, FILTER_MARK};
+pub use encode::{exp_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK};
 pub use read::{arr, at, Document};
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

@@ -69,6 +69,11 @@ pub const BASE_SHARE: f64 = 0.25;
 /// 4096 texture (gltfpack's default 12 bits over a unit range: 1.2e-4).
 pub const UV_FACTOR: f64 = 1.0;
 
+/// Share of the tolerance the rounding of the weights animation (with meshopt, through the
+/// EXPONENTIAL filter, one exponent per target) may take, bounded as if every target's rounding
+/// added up at every vertex; the measured deviation includes it.
+pub const WEIGHT_SHARE: f64 = 0.25;
+
 /// Most frames a basis is looked for over (the Gram matrix is frames x frames).
 pub const MAX_BASIS_FRAMES: usize = 8192;
 
@@ -148,6 +153,8 @@ pub struct Compacted {
     pub authored: Option<Storage>,
     /// Store sparse accessors where they pay.
     pub sparse: bool,
+    /// Mantissa bits of the EXPONENTIAL filter on the weights animation (with meshopt).
+    pub weight_bits: Option<i32>,
     pub figures: CompactFigures,
 }
 
@@ -673,7 +680,7 @@ impl Plan<'_> {
             .iter()
             .map(|w| w.iter().map(|&x| x as f32).collect())
             .collect();
-        self.measure(&targets, &weights, authored, &mut figures);
+        let weight_bits = self.measure(&targets, &weights, authored, &mut figures);
         Ok(Compacted {
             base: self.base.clone(),
             targets,
@@ -681,6 +688,7 @@ impl Plan<'_> {
             authored_weights: rows.authored.clone(),
             authored,
             sparse: self.opts.sparse,
+            weight_bits,
             figures,
         })
     }
@@ -779,14 +787,15 @@ impl Plan<'_> {
         )
     }
 
-    /// The deviation of the frames as a reader decodes them from the dense frames.
+    /// The deviation of the frames as a reader decodes them from the dense frames; with meshopt
+    /// the weights go through the EXPONENTIAL filter first, at the bits returned.
     fn measure(
         &self,
         targets: &[NewTarget],
         weights: &[Vec<f32>],
         authored: Option<Storage>,
         figures: &mut CompactFigures,
-    ) {
+    ) -> Option<i32> {
         let rows = self.rows;
         let decoded: Vec<Vec<Vec<f32>>> = targets
             .iter()
@@ -810,6 +819,11 @@ impl Plan<'_> {
             })
             .collect();
         let authored_decoded = self.authored_decoded(authored);
+        // The weights as a reader decodes them: (authored, basis) of each frame.
+        let (weight_bits, authored_w, weights) = match self.opts.meshopt {
+            true => self.filtered_weights(&decoded, authored_decoded.as_ref(), weights),
+            false => (None, rows.authored.clone(), weights.to_vec()),
+        };
         // Squared deviations per primitive and frame: a small primitive (an eye) must not hide
         // in a large one's average.
         let prims = rows.frames.primitives.len();
@@ -841,17 +855,19 @@ impl Plan<'_> {
                             e[i] -= wc * t[bi][3 * v + i] as f64;
                         }
                     }
-                    if let Some(ad) = &authored_decoded {
-                        for (i, &wa) in rows.authored[f].iter().enumerate() {
-                            if wa != 0.0 {
-                                if let (Some(exact), Some(dec)) =
-                                    (rows.authored_values(b.prim, b.attr, i), &ad[bi][i])
-                                {
-                                    e[0] -= wa * (dec[3 * v] as f64 - exact[v].x);
-                                    e[1] -= wa * (dec[3 * v + 1] as f64 - exact[v].y);
-                                    e[2] -= wa * (dec[3 * v + 2] as f64 - exact[v].z);
-                                }
-                            }
+                    // The fill took the exact weights times the exact targets; a reader
+                    // blends the decoded ones.
+                    for (i, (&wa, &wd)) in rows.authored[f].iter().zip(&authored_w[f]).enumerate() {
+                        if wa == 0.0 && wd == 0.0 {
+                            continue;
+                        }
+                        let Some(exact) = rows.authored_values(b.prim, b.attr, i) else {
+                            continue;
+                        };
+                        let dec = authored_decoded.as_ref().and_then(|ad| ad[bi][i].as_ref());
+                        for (j, x) in exact[v].to_array().into_iter().enumerate() {
+                            let d = dec.map_or(x, |d| d[3 * v + j] as f64);
+                            e[j] -= wd * d - wa * x;
                         }
                     }
                     let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
@@ -873,6 +889,110 @@ impl Plan<'_> {
         figures.rms_deviation = worst_rms(&pos2, &pos_n) / (self.tol / self.opts.tolerance);
         figures.max_deviation = worst.sqrt() / (self.tol / self.opts.tolerance);
         figures.normal_rms_deviation = worst_rms(&nrm2, &nrm_n);
+        weight_bits
+    }
+
+    /// The fewest mantissa bits of the EXPONENTIAL filter on the weights animation (each
+    /// track's view of rows `[authored, basis]`, as the writer lays it out) whose rounding, added
+    /// up over the targets as if it never cancelled, stays within [`WEIGHT_SHARE`] of the
+    /// tolerances; and the weights (authored, basis) a reader then decodes. `decoded` holds the
+    /// basis targets per block, `authored` the authored ones where they are filtered.
+    #[allow(clippy::type_complexity)]
+    fn filtered_weights(
+        &self,
+        decoded: &[Vec<Vec<f32>>],
+        authored: Option<&Vec<Vec<Option<Vec<f32>>>>>,
+        weights: &[Vec<f32>],
+    ) -> (Option<i32>, Vec<Vec<f64>>, Vec<Vec<f32>>) {
+        let rows = self.rows;
+        let a = if self.rig { rows.mesh.target_count } else { 0 };
+        let width = a + decoded.len();
+        let exact = || (None, rows.authored.clone(), weights.to_vec());
+        if width == 0 || weights.is_empty() {
+            return exact();
+        }
+        // Each column's target: per primitive RMS and worst length of its positions, and the
+        // RMS of its normals and tangents.
+        let mut pos_rms = vec![0.0f64; width];
+        let mut pos_max = vec![0.0f64; width];
+        let mut nrm_rms = vec![0.0f64; width];
+        for (bi, b) in rows.blocks.iter().enumerate() {
+            for c in 0..width {
+                let flat: Option<Vec<f32>> = if c < a {
+                    let dec = authored.and_then(|ad| ad[bi][c].clone());
+                    dec.or_else(|| {
+                        let v = rows.authored_values(b.prim, b.attr, c)?;
+                        Some(v.iter().flat_map(|d| d.as_vec3().to_array()).collect())
+                    })
+                } else {
+                    Some(decoded[c - a][bi].clone())
+                };
+                let Some(flat) = flat else { continue };
+                let (mut sum2, mut worst) = (0.0f64, 0.0f64);
+                for d in flat.chunks_exact(3) {
+                    let l2: f64 = d.iter().map(|&x| (x as f64) * (x as f64)).sum();
+                    sum2 += l2;
+                    worst = worst.max(l2);
+                }
+                let rms = (sum2 / b.vertices.max(1) as f64).sqrt();
+                if b.attr == Attr::Position {
+                    pos_rms[c] = pos_rms[c].max(rms);
+                    pos_max[c] = pos_max[c].max(worst.sqrt());
+                } else {
+                    nrm_rms[c] = nrm_rms[c].max(rms);
+                }
+            }
+        }
+        // The rows as written, track by track (each track is a view of its own).
+        let n = rows.count();
+        let mut spans: Vec<usize> = rows.frames.tracks.iter().map(|t| t.frames.len()).collect();
+        if spans.iter().sum::<usize>() != n {
+            spans = vec![n];
+        }
+        let written: Vec<f32> = (0..n)
+            .flat_map(|f| {
+                let authored = rows.authored[f].iter().map(|&x| x as f32);
+                authored
+                    .chain(weights[f].iter().copied())
+                    .collect::<Vec<f32>>()
+            })
+            .collect();
+        let comps = crate::gltf::row_components(width);
+        let roundtrip = |bits: i32| -> Vec<f32> {
+            let mut out = Vec::with_capacity(written.len());
+            let mut start = 0;
+            for span in &spans {
+                out.extend(exp_roundtrip(
+                    &written[start * width..(start + span) * width],
+                    comps,
+                    bits,
+                ));
+                start += span;
+            }
+            out
+        };
+        let fits = |decoded: &[f32]| {
+            let mut worst = vec![0.0f64; width];
+            for (i, (x, d)) in written.iter().zip(decoded).enumerate() {
+                let c = i % width;
+                worst[c] = worst[c].max((*x as f64 - *d as f64).abs());
+            }
+            let sum = |norms: &[f64]| worst.iter().zip(norms).map(|(d, t)| d * t).sum::<f64>();
+            sum(&pos_rms) <= WEIGHT_SHARE * self.tol
+                && sum(&pos_max) <= WEIGHT_SHARE * MAX_FACTOR * self.tol
+                && sum(&nrm_rms) <= WEIGHT_SHARE * self.ntol
+        };
+        let Some((bits, decoded)) = (1..=24).map(|b| (b, roundtrip(b))).find(|(_, d)| fits(d))
+        else {
+            return exact();
+        };
+        let authored_w = (0..n)
+            .map(|f| (0..a).map(|i| decoded[f * width + i] as f64).collect())
+            .collect();
+        let basis_w = (0..n)
+            .map(|f| decoded[f * width + a..(f + 1) * width].to_vec())
+            .collect();
+        (Some(bits), authored_w, basis_w)
     }
 
     /// The authored targets as a reader decodes them after the EXPONENTIAL filter, per block
@@ -1031,8 +1151,15 @@ fn base_rounding(
     (bits, errors)
 }
 
+/// What a sparse accessor adds to the JSON beside a dense one, in bytes: its indices' view and
+/// the `sparse` object; with meshopt also its values' view (a dense target's values join its
+/// neighbours' compressed view), whose extension object is most of it.
+const SPARSE_JSON: usize = 150;
+const SPARSE_JSON_MESHOPT: usize = 340;
+
 /// Whether a sparse accessor stores `values` (x, y, z per vertex) in fewer bytes than a dense
-/// one, counting the vertices whose stored value is not zero.
+/// one, counting the vertices whose stored value is not zero and the JSON it adds (a target that
+/// moves nothing needs no data at all).
 pub fn sparse_pays(values: &[f32], storage: Storage, meshopt: bool) -> bool {
     let elem = match storage {
         Storage::Float { .. } => 12,
@@ -1045,13 +1172,16 @@ pub fn sparse_pays(values: &[f32], storage: Storage, meshopt: bool) -> bool {
         .count();
     let n = values.len() / 3;
     let index = if n <= 65_536 { 2 } else { 4 };
-    if meshopt {
+    if nonzero == 0 {
+        // No data at all: an accessor of zeros without a view.
+        true
+    } else if meshopt {
         // meshopt's attribute codec stores a run of zero deltas in about 2 bits per byte
         // column: a dense accessor costs its moving vertices plus about a quarter byte for
         // each still one, while the sparse indices go uncompressed.
-        nonzero * index + 64 < (n - nonzero) / 4
+        nonzero * index + SPARSE_JSON_MESHOPT < (n - nonzero) / 4
     } else {
-        nonzero * (index + elem) + 64 < n * elem
+        nonzero * (index + elem) + SPARSE_JSON < n * elem
     }
 }
 

@@ -20,7 +20,10 @@ use super::frames::{MeshFrames, PrimitiveFrames, TrackFrames};
 use super::keys::{MorphMesh, Primitive, TrackOrigin};
 use super::options::Layout;
 use super::schedule::FrameAt;
-use crate::gltf::{arr, compact as drop_unused, drop_channels, Document, Output, FILTER_GROUP};
+use crate::gltf::{
+    arr, compact as drop_unused, drop_channels, row_components, Document, Output, ELEMENT_MARK,
+    FILTER_GROUP, FILTER_MARK,
+};
 use anyhow::Result;
 use glam::DVec3;
 use serde_json::{json, Map, Value};
@@ -178,6 +181,8 @@ pub fn apply_frames(
     compact_opts: Option<&CompactOptions>,
 ) -> Result<Applied> {
     let mut applied = Applied::default();
+    // Set first: the writers below decide sparse accessors by it, as the compaction did.
+    out.meshopt = compact_opts.is_some_and(|o| o.meshopt);
     // glTF key times cannot be negative: a motion extended before 0 s shifts every written
     // timeline by the same amount.
     let earliest = frames
@@ -244,7 +249,6 @@ pub fn apply_frames(
             }),
         );
     }
-    out.meshopt = compact_opts.is_some_and(|o| o.meshopt);
     drop_unused(out, &edits.replaced);
     Ok(applied)
 }
@@ -523,6 +527,18 @@ fn animate_track(
     let weights = w.weights(track, plays, new);
     let input = out.push_f32(&times, "SCALAR", 1, true, None);
     let output = out.push_f32(&weights, "SCALAR", 1, false, None);
+    if out.meshopt {
+        // The codec takes a key's row of weights as one element (and the filter, where the
+        // compaction chose one, gives each target its own exponent, as it measured).
+        let view = out.json["accessors"][output]["bufferView"]
+            .as_u64()
+            .unwrap_or(0) as usize;
+        let width = w.kept() + new;
+        out.bin.views[view][ELEMENT_MARK] = json!(4 * row_components(width));
+        if let Some(bits) = w.compact.as_ref().and_then(|c| c.weight_bits) {
+            out.bin.views[view][FILTER_MARK] = json!(bits);
+        }
+    }
     match &track.origin {
         TrackOrigin::Animation {
             animation, sampler, ..
