@@ -261,7 +261,7 @@ impl Accessor {
     }
 }
 
-fn comp_size(ty: u32) -> Option<usize> {
+pub(super) fn comp_size(ty: u32) -> Option<usize> {
     match ty {
         5120 | 5121 => Some(1),
         5122 | 5123 => Some(2),

@@ -80,6 +80,23 @@ impl Storage {
     }
 }
 
+/// f32 values as JSON numbers written as short as they read back exactly as f32 (serde_json
+/// would write each as the f64 it widens to: `0.04999995231628418` for `0.049999952`), whole
+/// ones without a fraction (`2`, not `2.0`).
+pub fn f32_json(values: &[f32]) -> Value {
+    Value::Array(
+        values
+            .iter()
+            .map(|x| match format!("{x}").parse::<f64>() {
+                // Whole numbers (a normalized integer accessor's bounds) without a fraction.
+                Ok(v) if v.fract() == 0.0 && v.abs() < 1e15 => json!(v as i64),
+                Ok(v) if x.is_finite() => json!(v),
+                _ => json!(*x),
+            })
+            .collect(),
+    )
+}
+
 /// Per component, the smallest and largest of `data` (elements of `ncomp` values).
 pub fn min_max(data: &[f32], ncomp: usize) -> (Vec<f32>, Vec<f32>) {
     let mut lo = vec![f32::INFINITY; ncomp];
@@ -131,8 +148,17 @@ impl Output {
             json!({ "bufferView": view, "componentType": 5126, "count": count, "type": ty });
         if bounds && count > 0 {
             let (lo, hi) = min_max(data, ncomp);
-            acc["min"] = json!(lo);
-            acc["max"] = json!(hi);
+            acc["min"] = f32_json(&lo);
+            acc["max"] = f32_json(&hi);
+        }
+        // A target that moves nothing has no data: one such accessor serves every target alike.
+        if acc.get("bufferView").is_none() && acc.get("sparse").is_none() {
+            if let Some(same) = super::read::arr(&self.json, "accessors")
+                .iter()
+                .position(|a| *a == acc)
+            {
+                return same;
+            }
         }
         self.push_accessor(acc)
     }
@@ -176,12 +202,12 @@ impl Output {
                 .iter()
                 .flat_map(|&r| values[3 * r..3 * r + 3].to_vec())
                 .collect();
-            let indices = self.bin.push_view(&index_bytes, None);
-            let data = self.bin.push_view(&storage.bytes(&picked, packed), None);
-            if let (Storage::Float { exp_bits: Some(b) }, false) = (storage, picked.is_empty()) {
-                self.bin.views[data][super::encode::FILTER_MARK] = json!(b);
-            }
             if !rows.is_empty() {
+                let indices = self.bin.push_view(&index_bytes, None);
+                let data = self.bin.push_view(&storage.bytes(&picked, packed), None);
+                if let Storage::Float { exp_bits: Some(b) } = storage {
+                    self.bin.views[data][super::encode::FILTER_MARK] = json!(b);
+                }
                 acc["sparse"] = json!({
                     "count": rows.len(),
                     "indices": { "bufferView": indices, "componentType": if count <= 65_536 { 5123 } else { 5125 } },
@@ -222,8 +248,17 @@ impl Output {
                 bound(f32::INFINITY, f32::min),
                 bound(f32::NEG_INFINITY, f32::max),
             );
-            acc["min"] = json!(lo);
-            acc["max"] = json!(hi);
+            acc["min"] = f32_json(&lo);
+            acc["max"] = f32_json(&hi);
+        }
+        // A target that moves nothing has no data: one such accessor serves every target alike.
+        if acc.get("bufferView").is_none() && acc.get("sparse").is_none() {
+            if let Some(same) = super::read::arr(&self.json, "accessors")
+                .iter()
+                .position(|a| *a == acc)
+            {
+                return same;
+            }
         }
         self.push_accessor(acc)
     }

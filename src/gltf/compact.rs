@@ -210,7 +210,7 @@ fn pointer_mut<'a>(v: &'a mut Value, path: &[&str]) -> Option<&'a mut Value> {
 }
 
 /// Call `f` on every accessor index the core spec (and EXT_mesh_gpu_instancing) refers to.
-fn visit_accessor_refs(json: &mut Value, f: &mut dyn FnMut(&mut usize)) {
+pub(super) fn visit_accessor_refs(json: &mut Value, f: &mut dyn FnMut(&mut usize)) {
     let mut visit = |v: &mut Value| {
         if let Some(i) = v.as_u64() {
             let mut i = i as usize;

@@ -22,6 +22,12 @@ pub const FILTER_MARK: &str = "inbetweenExpBits";
 /// Removed from every view on write.
 pub const FILTER_GROUP: &str = "inbetweenExpGroup";
 
+/// The private key a writer puts on a buffer view of unit vectors stored as normalized SHORT
+/// (x, y, z and w or padding: 8-byte elements) to have it encoded with meshopt's OCTAHEDRAL
+/// filter at this many bits (2 to 16); removed from every view on write. See
+/// [`oct_roundtrip`].
+pub const OCT_MARK: &str = "inbetweenOctBits";
+
 /// The private key a writer puts on a buffer view of scalars read as rows (a weights
 /// animation's output: one row of targets per key) to have meshopt's codec (and the
 /// EXPONENTIAL filter, one exponent per component) take elements of this many bytes; removed
@@ -36,6 +42,14 @@ pub fn row_components(width: usize) -> usize {
         .rev()
         .find(|d| width.is_multiple_of(*d))
         .unwrap_or(1)
+}
+
+/// The filter a view is marked for.
+#[derive(Clone, Copy)]
+enum Filter {
+    None,
+    Exp(i32),
+    Oct(i32),
 }
 
 /// How a buffer view is read, as far as the accessors that use it say.
@@ -113,7 +127,7 @@ fn uses(json: &Value, views: &[Value]) -> BTreeMap<usize, Use> {
 
 /// The compressed form of view data `data` used as `u`, with its extension object (less the
 /// buffer offset and length, which the caller sets), if it can be compressed.
-fn compress(data: &[u8], u: Use, exp_bits: Option<i32>) -> Option<(Vec<u8>, Value)> {
+fn compress(data: &[u8], u: Use, filter: Filter) -> Option<(Vec<u8>, Value)> {
     match u {
         Use::Attributes { stride } => {
             if stride == 0
@@ -125,8 +139,20 @@ fn compress(data: &[u8], u: Use, exp_bits: Option<i32>) -> Option<(Vec<u8>, Valu
             }
             let count = data.len() / stride;
             let mut data = data.to_vec();
-            let filter = match exp_bits {
-                Some(bits) => {
+            let filter = match filter {
+                Filter::Oct(bits) if stride == 8 => {
+                    let ints: Vec<i16> = data
+                        .chunks_exact(2)
+                        .map(|c| i16::from_le_bytes([c[0], c[1]]))
+                        .collect();
+                    data = oct_encode(&ints, bits)
+                        .iter()
+                        .flat_map(|v| v.to_le_bytes())
+                        .collect();
+                    "OCTAHEDRAL"
+                }
+                Filter::Oct(_) => return None,
+                Filter::Exp(bits) => {
                     let floats: Vec<f32> = data
                         .chunks_exact(4)
                         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
@@ -135,7 +161,7 @@ fn compress(data: &[u8], u: Use, exp_bits: Option<i32>) -> Option<(Vec<u8>, Valu
                     data = encoded.iter().flat_map(|v| v.to_le_bytes()).collect();
                     "EXPONENTIAL"
                 }
-                None => "NONE",
+                Filter::None => "NONE",
             };
             let bound = unsafe { meshopt::ffi::meshopt_encodeVertexBufferBound(count, stride) };
             let mut out = vec![0u8; bound];
@@ -226,7 +252,8 @@ fn coalesce(out: &mut Output) {
                     // The EXPONENTIAL filter shares one exponent per component over a view:
                     // merged, a small target would lose the precision it was marked for, unless
                     // its writer grouped it with the others knowingly.
-                    && (v.get(FILTER_MARK).is_none() || v.get(FILTER_GROUP).is_some()) =>
+                    && (v.get(FILTER_MARK).is_none() || v.get(FILTER_GROUP).is_some())
+                    && v.get(OCT_MARK).is_none() =>
             {
                 Some((
                     *stride,
@@ -318,10 +345,12 @@ pub fn meshopt(out: &mut Output) -> usize {
         let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
         let len = view["byteLength"].as_u64().unwrap_or(0) as usize;
         let data = &out.bin.bytes[start..start + len];
-        let bits = view
-            .get(FILTER_MARK)
-            .and_then(Value::as_i64)
-            .map(|b| b as i32);
+        let mark = |key: &str| view.get(key).and_then(Value::as_i64).map(|b| b as i32);
+        let filter = match (mark(FILTER_MARK), mark(OCT_MARK)) {
+            (Some(b), _) => Filter::Exp(b),
+            (_, Some(b)) => Filter::Oct(b),
+            _ => Filter::None,
+        };
         let mut u = uses.get(&i).copied().unwrap_or(Use::Other);
         if let (Use::Attributes { .. }, Some(e)) =
             (u, view.get(ELEMENT_MARK).and_then(Value::as_u64))
@@ -331,7 +360,7 @@ pub fn meshopt(out: &mut Output) -> usize {
         while !bytes.len().is_multiple_of(4) {
             bytes.push(0);
         }
-        match compress(data, u, bits).filter(|(c, _)| c.len() < len) {
+        match compress(data, u, filter).filter(|(c, _)| c.len() < len) {
             Some((compressed, mut ext)) => {
                 ext["buffer"] = json!(0);
                 ext["byteOffset"] = json!(bytes.len());
@@ -362,6 +391,7 @@ pub fn clear_marks(out: &mut Output) {
             o.remove(FILTER_MARK);
             o.remove(FILTER_GROUP);
             o.remove(ELEMENT_MARK);
+            o.remove(OCT_MARK);
         }
     }
 }
@@ -398,4 +428,37 @@ pub fn exp_roundtrip(values: &[f32], components: usize, bits: i32) -> Vec<f32> {
         meshopt::ffi::meshopt_decodeFilterExp(encoded.as_mut_ptr().cast(), count, stride);
     }
     encoded.iter().map(|&b| f32::from_bits(b)).collect()
+}
+
+/// Unit vectors (x, y, z, w: normalized i16, 4 per element) through meshopt's OCTAHEDRAL filter
+/// at `bits`, as the encoder stores them.
+fn oct_encode(ints: &[i16], bits: i32) -> Vec<i16> {
+    let floats: Vec<f32> = ints
+        .iter()
+        .map(|&i| (i as f32 / 32767.0).max(-1.0))
+        .collect();
+    let mut out = vec![0i16; ints.len() / 4 * 4];
+    // SAFETY: `out` and `floats` hold count * 4 values; the encoder writes 8 bytes an element.
+    unsafe {
+        meshopt::ffi::meshopt_encodeFilterOct(
+            out.as_mut_ptr().cast(),
+            out.len() / 4,
+            8,
+            bits,
+            floats.as_ptr(),
+        );
+    }
+    out
+}
+
+/// Unit vectors stored as normalized i16 (x, y, z, w, 4 per element) as a reader decodes them
+/// after the OCTAHEDRAL filter at `bits` (2 to 16), as the encoder applies it to a view marked
+/// with [`OCT_MARK`].
+pub fn oct_roundtrip(ints: &[i16], bits: i32) -> Vec<i16> {
+    let mut e = oct_encode(ints, bits);
+    // SAFETY: `e` holds count elements of 8 bytes, decoded in place.
+    unsafe {
+        meshopt::ffi::meshopt_decodeFilterOct(e.as_mut_ptr().cast(), e.len() / 4, 8);
+    }
+    e
 }

@@ -4,7 +4,7 @@
 //! container, buffers; [`uri`] says what external files it may read) -> [`decode`] (meshopt
 //! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles) ... the
 //! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`]) ->
-//! [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`] (meshopt
+//! [`reorder`] (with meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`] (meshopt
 //! compression, when asked for) -> [`write`] (`.glb` or `.gltf` with its `.bin` and images,
 //! staged as one all-or-nothing set of files).
 
@@ -14,13 +14,17 @@ mod compact;
 mod decode;
 mod encode;
 mod read;
+mod reorder;
 mod uri;
 mod write;
 
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
-pub use build::{min_max, BinBuilder, Output, Storage};
+pub use build::{f32_json, min_max, BinBuilder, Output, Storage};
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
-pub use encode::{exp_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK};
+pub use encode::{
+    exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,
+};
 pub use read::{arr, at, Document};
+pub use reorder::reorder;
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

@@ -10,9 +10,9 @@
 //! inbetween tween face.glb -o face_small.glb --compact   # base, targets and animation compressed
 //! ```
 
-use super::compact::{fewest_bits, BaseBits, Restorable, UV_FACTOR};
+use super::compact::{fewest_bits, snorm16, BaseBits, Restorable, UV_FACTOR};
 use super::frames::MeshFrames;
-use crate::gltf::{exp_roundtrip, min_max, Document, Output, FILTER_MARK};
+use crate::gltf::{exp_roundtrip, f32_json, min_max, Document, Output, FILTER_MARK, OCT_MARK};
 use anyhow::Result;
 use serde_json::{json, Value};
 use std::collections::{BTreeMap, BTreeSet};
@@ -89,12 +89,14 @@ pub fn reencode(
             };
             let Some(bits) = chosen else { continue };
             let old = out.json["accessors"][a as usize].clone();
+            let oct = b.octahedral && matches!(name.as_str(), "NORMAL" | "TANGENT");
             let same = stored
                 .iter()
                 .find(|(v, b, ty, _)| *b == bits && *ty == old["type"] && *v == values);
             let new = match same {
-                Some(&(.., new)) => new,
-                None => {
+                Some(&(.., new)) if !oct => new,
+                _ if oct => push_octahedral(out, &values, n, bits, &old) as u64,
+                _ => {
                     let new = push_filtered(out, &values, n, bits, &old) as u64;
                     stored.push((values, bits, old["type"].clone(), new));
                     new
@@ -131,8 +133,37 @@ fn push_filtered(out: &mut Output, values: &[f32], n: usize, bits: i32, old: &Va
     }
     if bounds && !values.is_empty() {
         let (lo, hi) = min_max(&exp_roundtrip(values, n, bits), n);
-        acc["min"] = json!(lo);
-        acc["max"] = json!(hi);
+        acc["min"] = f32_json(&lo);
+        acc["max"] = f32_json(&hi);
     }
     new
+}
+
+/// A new accessor like `old` (a NORMAL or TANGENT: type, name) holding the unit vectors
+/// `values` (`n` components each) as normalized SHORT, 8-byte elements, in a view of its own
+/// marked for the OCTAHEDRAL filter at `bits` (`KHR_mesh_quantization`).
+fn push_octahedral(out: &mut Output, values: &[f32], n: usize, bits: i32, old: &Value) -> usize {
+    let bytes: Vec<u8> = values
+        .chunks_exact(n)
+        .flat_map(|v| {
+            let w = if n == 4 { v[3] } else { 0.0 };
+            [v[0], v[1], v[2], w].map(|x| snorm16(x as f64).to_le_bytes())
+        })
+        .flatten()
+        .collect();
+    let view = out.bin.push_view(&bytes, Some(34962));
+    out.bin.views[view]["byteStride"] = json!(8);
+    out.bin.views[view][OCT_MARK] = json!(bits);
+    let mut acc = json!({
+        "bufferView": view,
+        "componentType": 5122,
+        "normalized": true,
+        "count": values.len() / n.max(1),
+        "type": old["type"].clone(),
+    });
+    if let Some(name) = old.get("name") {
+        acc["name"] = name.clone();
+    }
+    out.require("KHR_mesh_quantization");
+    out.push_accessor(acc)
 }

@@ -23,7 +23,7 @@
 
 use super::frames::{MeshFrames, PrimitiveFrames};
 use super::keys::MorphMesh;
-use crate::gltf::{exp_roundtrip, Storage};
+use crate::gltf::{exp_roundtrip, oct_roundtrip, Storage};
 use anyhow::{bail, Result};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par, Side};
@@ -127,6 +127,9 @@ pub struct BaseBits {
     pub position: Option<i32>,
     pub normal: Option<i32>,
     pub tangent: Option<i32>,
+    /// NORMAL and TANGENT as normalized SHORT through the OCTAHEDRAL filter at those bits
+    /// (with `--quantize`), not floats through the EXPONENTIAL one.
+    pub octahedral: bool,
 }
 
 /// Which of a primitive's own POSITION, NORMAL and TANGENT the writer can store again (plain
@@ -150,12 +153,36 @@ pub struct Compacted {
     /// the keys' own, between keys the least-squares fit of the frame.
     pub authored_weights: Vec<Vec<f64>>,
     /// How the authored targets are stored (rig layout; `None`: as they are in the input).
-    pub authored: Option<Storage>,
+    pub authored: Option<AuthoredStorage>,
     /// Store sparse accessors where they pay.
     pub sparse: bool,
     /// Mantissa bits of the EXPONENTIAL filter on the weights animation (with meshopt).
     pub weight_bits: Option<i32>,
     pub figures: CompactFigures,
+}
+
+/// How the authored targets are stored: their positions, and their normals and tangents.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AuthoredStorage {
+    pub position: Storage,
+    pub normal: Storage,
+}
+
+impl AuthoredStorage {
+    /// The storage of attribute `name` (POSITION, NORMAL, TANGENT).
+    pub fn of(&self, name: &str) -> Storage {
+        match name {
+            "POSITION" => self.position,
+            _ => self.normal,
+        }
+    }
+
+    fn of_attr(&self, attr: Attr) -> Storage {
+        match attr {
+            Attr::Position => self.position,
+            _ => self.normal,
+        }
+    }
 }
 
 /// What `--report` and the summary say of a compacted mesh.
@@ -548,10 +575,10 @@ impl Plan<'_> {
         }
     }
 
-    /// Mantissa bits of the exponential filter for the authored targets: their rounding at
-    /// the largest authored weight within the steps `q_pos` (positions) and `q_nrm` (normals
-    /// and tangents).
-    fn authored_bits(&self, q_pos: f64, q_nrm: f64) -> i32 {
+    /// Mantissa bits of the exponential filter for the authored targets' positions, and for
+    /// their normals and tangents: their rounding at the largest authored weight within the
+    /// steps `q_pos` and `q_nrm`.
+    fn authored_bits(&self, q_pos: f64, q_nrm: f64) -> (i32, i32) {
         let rows = self.rows;
         let weight = rows
             .authored
@@ -577,7 +604,39 @@ impl Plan<'_> {
                 .collect(),
         );
         let bits = |l: f64, step: f64| ((l * weight / step).log2().ceil() as i32 + 1).clamp(4, 24);
-        bits(lp, q_pos).max(if ln > 0.0 { bits(ln, q_nrm) } else { 4 })
+        (bits(lp, q_pos), if ln > 0.0 { bits(ln, q_nrm) } else { 4 })
+    }
+
+    /// Normalized BYTE or SHORT for the authored targets' positions (`positions`) or their
+    /// normal and tangent deltas, when `quantize` and every component lies in [-1, 1] (a unit
+    /// vector's change mostly does, and a character's shapes in metres; the target keeps its
+    /// meaning at weight 1, no scale needed) and the integer step, at the largest authored
+    /// weight, is within `step`.
+    fn authored_quantized(&self, positions: bool, step: f64, quantize: bool) -> Option<Storage> {
+        let rows = self.rows;
+        let mut all = rows
+            .mesh
+            .primitives
+            .iter()
+            .flat_map(|p| match positions {
+                true => p.target_pos.iter().collect::<Vec<_>>(),
+                false => p.target_nrm.iter().chain(&p.target_tan).flatten().collect(),
+            })
+            .flatten()
+            .peekable();
+        all.peek()?;
+        if !quantize || !all.all(|d| d.abs().max_element() <= 1.0) {
+            return None;
+        }
+        let weight = rows
+            .authored
+            .iter()
+            .flatten()
+            .fold(1.0f64, |m, w| m.max(w.abs()));
+        [(Storage::Byte, 127.0), (Storage::Short, 32767.0)]
+            .into_iter()
+            .find(|(_, steps)| weight / steps <= step)
+            .map(|(s, _)| s)
     }
 
     /// The basis of the first `k` directions, encoded, and its measured deviation.
@@ -673,8 +732,16 @@ impl Plan<'_> {
             }
             targets.push(target);
         }
-        let authored = exp_bits.filter(|_| self.rig).map(|_| Storage::Float {
-            exp_bits: Some(self.authored_bits(q_pos, q_nrm)),
+        let authored = exp_bits.filter(|_| self.rig).map(|_| {
+            let (p, n) = self.authored_bits(q_pos, q_nrm);
+            AuthoredStorage {
+                position: self
+                    .authored_quantized(true, q_pos, quantize)
+                    .unwrap_or(Storage::Float { exp_bits: Some(p) }),
+                normal: self
+                    .authored_quantized(false, q_nrm, quantize)
+                    .unwrap_or(Storage::Float { exp_bits: Some(n) }),
+            }
         });
         let weights: Vec<Vec<f32>> = weights
             .iter()
@@ -793,7 +860,7 @@ impl Plan<'_> {
         &self,
         targets: &[NewTarget],
         weights: &[Vec<f32>],
-        authored: Option<Storage>,
+        authored: Option<AuthoredStorage>,
         figures: &mut CompactFigures,
     ) -> Option<i32> {
         let rows = self.rows;
@@ -892,8 +959,8 @@ impl Plan<'_> {
         weight_bits
     }
 
-    /// The fewest mantissa bits of the EXPONENTIAL filter on the weights animation (each
-    /// track's view of rows `[authored, basis]`, as the writer lays it out) whose rounding, added
+    /// The fewest mantissa bits of the EXPONENTIAL filter on the weights animation (the view of
+    /// every track's rows `[authored, basis]`, as the writer lays it out) whose rounding, added
     /// up over the targets as if it never cancelled, stays within [`WEIGHT_SHARE`] of the
     /// tolerances; and the weights (authored, basis) a reader then decodes. `decoded` holds the
     /// basis targets per block, `authored` the authored ones where they are filtered.
@@ -943,12 +1010,8 @@ impl Plan<'_> {
                 }
             }
         }
-        // The rows as written, track by track (each track is a view of its own).
+        // The rows as written: every track of the mesh in one view.
         let n = rows.count();
-        let mut spans: Vec<usize> = rows.frames.tracks.iter().map(|t| t.frames.len()).collect();
-        if spans.iter().sum::<usize>() != n {
-            spans = vec![n];
-        }
         let written: Vec<f32> = (0..n)
             .flat_map(|f| {
                 let authored = rows.authored[f].iter().map(|&x| x as f32);
@@ -958,19 +1021,7 @@ impl Plan<'_> {
             })
             .collect();
         let comps = crate::gltf::row_components(width);
-        let roundtrip = |bits: i32| -> Vec<f32> {
-            let mut out = Vec::with_capacity(written.len());
-            let mut start = 0;
-            for span in &spans {
-                out.extend(exp_roundtrip(
-                    &written[start * width..(start + span) * width],
-                    comps,
-                    bits,
-                ));
-                start += span;
-            }
-            out
-        };
+        let roundtrip = |bits: i32| exp_roundtrip(&written, comps, bits);
         let fits = |decoded: &[f32]| {
             let mut worst = vec![0.0f64; width];
             for (i, (x, d)) in written.iter().zip(decoded).enumerate() {
@@ -997,28 +1048,40 @@ impl Plan<'_> {
 
     /// The authored targets as a reader decodes them after the EXPONENTIAL filter, per block
     /// and target (`None` when they are stored exactly).
-    fn authored_decoded(&self, authored: Option<Storage>) -> Option<Vec<Vec<Option<Vec<f32>>>>> {
-        let Some(Storage::Float {
-            exp_bits: Some(bits),
-        }) = authored
-        else {
-            return None;
-        };
+    fn authored_decoded(
+        &self,
+        authored: Option<AuthoredStorage>,
+    ) -> Option<Vec<Vec<Option<Vec<f32>>>>> {
+        let authored = authored?;
         let rows = self.rows;
-        let storage = Storage::Float {
-            exp_bits: Some(bits),
-        };
         // As the writer stores them: the dense targets of a block share one filtered view (one
         // exponent per component), a sparse target's values are a view of their own.
         Some(
             rows.blocks
                 .iter()
                 .map(|b| {
+                    let mut out: Vec<Option<Vec<f32>>> = vec![None; rows.mesh.target_count];
+                    let storage = authored.of_attr(b.attr);
+                    let bits = match storage {
+                        Storage::Float {
+                            exp_bits: Some(bits),
+                        } => bits,
+                        Storage::Float { exp_bits: None } => return out,
+                        // Integers: each value on its own.
+                        _ => {
+                            for (i, slot) in out.iter_mut().enumerate() {
+                                *slot = rows.authored_values(b.prim, b.attr, i).map(|a| {
+                                    let flat = a.iter().flat_map(|d| d.as_vec3().to_array());
+                                    flat.map(|x| storage.stored(x)).collect()
+                                });
+                            }
+                            return out;
+                        }
+                    };
                     let flat = |i: usize| -> Option<Vec<f32>> {
                         let a = rows.authored_values(b.prim, b.attr, i)?;
                         Some(a.iter().flat_map(|d| d.as_vec3().to_array()).collect())
                     };
-                    let mut out: Vec<Option<Vec<f32>>> = vec![None; rows.mesh.target_count];
                     let mut dense = Vec::new();
                     for (i, slot) in out.iter_mut().enumerate() {
                         let Some(values) = flat(i) else { continue };
@@ -1116,10 +1179,29 @@ fn base_rounding(
             .collect();
         Some((b, error))
     };
+    // Unit vectors (and a tangent's sign) through the octahedral filter, error on x, y, z.
+    let octahedral = |values: Vec<[f64; 4]>, within: f64| -> Option<(i32, Vec<f32>)> {
+        let ints: Vec<i16> = values.iter().flatten().map(|&x| snorm16(x)).collect();
+        (2..=16).find_map(|b| {
+            let decoded = oct_roundtrip(&ints, b);
+            let error: Vec<f32> = values
+                .iter()
+                .zip(decoded.chunks_exact(4))
+                .flat_map(|(x, d)| (0..3).map(move |i| (unsnorm16(d[i]) - x[i]) as f32))
+                .collect();
+            let worst = error
+                .chunks_exact(3)
+                .map(|e| e.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>())
+                .fold(0.0f64, f64::max);
+            (worst.sqrt() <= within).then_some((b, error))
+        })
+    };
+    let oct = opts.quantize;
     for (bi, block) in blocks.iter().enumerate() {
         let p = &mesh.primitives[block.prim];
         let r = restorable.get(block.prim).copied().unwrap_or_default();
         let base = &mut bits[block.prim];
+        base.octahedral = oct;
         let (slot, done) = match block.attr {
             Attr::Position if r.position => (
                 &mut base.position,
@@ -1128,6 +1210,19 @@ fn base_rounding(
                     3,
                     BASE_SHARE * tol,
                 ),
+            ),
+            Attr::Normal if r.normal && oct => (
+                &mut base.normal,
+                p.normals.as_ref().and_then(|n| {
+                    let v = n.iter().map(|v| [v.x, v.y, v.z, 0.0]).collect();
+                    octahedral(v, BASE_SHARE * ntol)
+                }),
+            ),
+            Attr::Tangent if r.tangent && oct => (
+                &mut base.tangent,
+                p.tangents
+                    .as_ref()
+                    .and_then(|t| octahedral(t.clone(), BASE_SHARE * ntol)),
             ),
             Attr::Normal if r.normal => (
                 &mut base.normal,
@@ -1149,6 +1244,16 @@ fn base_rounding(
         }
     }
     (bits, errors)
+}
+
+/// A value in [-1, 1] as a normalized i16 (as meshopt quantizes it) ...
+pub fn snorm16(x: f64) -> i16 {
+    (x.clamp(-1.0, 1.0) * 32767.0).round() as i16
+}
+
+/// ... and back, as a reader decodes it.
+fn unsnorm16(i: i16) -> f64 {
+    (i as f64 / 32767.0).max(-1.0)
 }
 
 /// What a sparse accessor adds to the JSON beside a dense one, in bytes: its indices' view and

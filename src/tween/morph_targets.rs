@@ -21,8 +21,8 @@ use super::keys::{MorphMesh, Primitive, TrackOrigin};
 use super::options::Layout;
 use super::schedule::FrameAt;
 use crate::gltf::{
-    arr, compact as drop_unused, drop_channels, row_components, Document, Output, ELEMENT_MARK,
-    FILTER_GROUP, FILTER_MARK,
+    self, arr, compact as drop_unused, drop_channels, row_components, Document, Output,
+    ELEMENT_MARK, FILTER_GROUP, FILTER_MARK,
 };
 use anyhow::Result;
 use glam::DVec3;
@@ -36,6 +36,9 @@ struct Edits {
     replaced: BTreeSet<usize>,
     samplers: Vec<Value>,
     channels: Vec<Value>,
+    /// Key times written so far, with their accessor: a track whose times are the first keys
+    /// of another's (clips at one rate from 0) reads them from the same view.
+    times: Vec<(Vec<f32>, usize)>,
 }
 
 /// One processed mesh as it is written: its frames, what was read of it, the layout, and its
@@ -228,10 +231,14 @@ pub fn apply_frames(
             (&w.compact, compact_opts)
         {
             base::reencode(out, doc, m, &c.base, opts.tolerance, &mut edits.replaced)?;
+            for p in &m.primitives {
+                gltf::reorder(out, m.mesh, p.index, &mut edits.replaced);
+            }
         }
         name_targets(out, &w, &plays, new, shift);
-        for (track, plays) in m.tracks.iter().zip(&plays) {
-            animate_track(out, &w, track, plays, new, shift, &mut edits);
+        let outputs = push_weights(out, &w, &plays, new);
+        for ((track, plays), output) in m.tracks.iter().zip(&plays).zip(outputs) {
+            animate_track(out, track, plays, output, shift, &mut edits);
         }
         match layout {
             Layout::Frames => dropped.extend(m.dropped_channels.iter().copied()),
@@ -424,6 +431,7 @@ fn reencode_authored(
     // comes between the dense ones.
     let mut targets = old;
     for (name, bounds) in [("POSITION", true), ("NORMAL", false), ("TANGENT", false)] {
+        let storage = storage.of(name);
         // (target, its values, sparse), each decided once.
         let mut chosen: Vec<(usize, Vec<f32>, bool)> = Vec::new();
         for (i, t) in targets.iter().enumerate() {
@@ -508,14 +516,51 @@ fn name_targets(out: &mut Output, w: &Written, plays: &[Vec<Played>], new: usize
     }
 }
 
-/// One key per frame of `track`: written into the sampler the keys came from, or (keys made
-/// from targets) into the new animation in `edits`.
+/// The weights of every track of the mesh (one key per frame), in one view: one accessor per
+/// track. With meshopt the codec takes a key's row of weights as one element, and the filter
+/// (where the compaction chose one) gives each target one exponent over the view, as the
+/// compaction measured it.
+fn push_weights(out: &mut Output, w: &Written, plays: &[Vec<Played>], new: usize) -> Vec<usize> {
+    let rows: Vec<Vec<f32>> = w
+        .frames
+        .tracks
+        .iter()
+        .zip(plays)
+        .map(|(track, plays)| w.weights(track, plays, new))
+        .collect();
+    let bytes: Vec<u8> = rows
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let view = out.bin.push_view(&bytes, None);
+    if out.meshopt {
+        let width = w.kept() + new;
+        out.bin.views[view][ELEMENT_MARK] = json!(4 * row_components(width));
+        if let Some(bits) = w.compact.as_ref().and_then(|c| c.weight_bits) {
+            out.bin.views[view][FILTER_MARK] = json!(bits);
+        }
+    }
+    let mut offset = 0;
+    rows.iter()
+        .map(|r| {
+            let mut acc = json!({ "bufferView": view, "componentType": 5126, "count": r.len(), "type": "SCALAR" });
+            if offset > 0 {
+                acc["byteOffset"] = json!(offset);
+            }
+            offset += 4 * r.len();
+            out.push_accessor(acc)
+        })
+        .collect()
+}
+
+/// One key per frame of `track` (weights in accessor `output`): written into the sampler the
+/// keys came from, or (keys made from targets) into the new animation in `edits`.
 fn animate_track(
     out: &mut Output,
-    w: &Written,
     track: &TrackFrames,
     plays: &[Played],
-    new: usize,
+    output: usize,
     shift: f64,
     edits: &mut Edits,
 ) {
@@ -524,21 +569,8 @@ fn animate_track(
         .iter()
         .map(|f| (f.time + shift) as f32)
         .collect();
-    let weights = w.weights(track, plays, new);
-    let input = out.push_f32(&times, "SCALAR", 1, true, None);
-    let output = out.push_f32(&weights, "SCALAR", 1, false, None);
-    if out.meshopt {
-        // The codec takes a key's row of weights as one element (and the filter, where the
-        // compaction chose one, gives each target its own exponent, as it measured).
-        let view = out.json["accessors"][output]["bufferView"]
-            .as_u64()
-            .unwrap_or(0) as usize;
-        let width = w.kept() + new;
-        out.bin.views[view][ELEMENT_MARK] = json!(4 * row_components(width));
-        if let Some(bits) = w.compact.as_ref().and_then(|c| c.weight_bits) {
-            out.bin.views[view][FILTER_MARK] = json!(bits);
-        }
-    }
+    debug_assert_eq!(times.len(), plays.len());
+    let input = key_times(out, &times, &mut edits.times);
     match &track.origin {
         TrackOrigin::Animation {
             animation, sampler, ..
@@ -568,6 +600,30 @@ fn animate_track(
             }
         }
     }
+}
+
+/// An accessor of key times `times`: one written before when it holds the same times, else a
+/// new accessor (over the view of earlier times that begin with these, when there are some).
+fn key_times(out: &mut Output, times: &[f32], written: &mut Vec<(Vec<f32>, usize)>) -> usize {
+    let bits = |t: &[f32]| t.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+    let mine = bits(times);
+    let earlier = written
+        .iter()
+        .find(|(t, _)| t.len() >= times.len() && bits(&t[..times.len()]) == mine);
+    let input = match earlier {
+        Some((t, a)) if t.len() == times.len() => return *a,
+        Some((_, a)) => {
+            let mut acc = out.json["accessors"][*a].clone();
+            acc["count"] = json!(times.len());
+            let (lo, hi) = gltf::min_max(times, 1);
+            acc["min"] = gltf::f32_json(&lo);
+            acc["max"] = gltf::f32_json(&hi);
+            out.push_accessor(acc)
+        }
+        None => out.push_f32(times, "SCALAR", 1, true, None),
+    };
+    written.push((times.to_vec(), input));
+    input
 }
 
 /// The weights channels of the mesh that no track rewrote (other clips, or every clip under
