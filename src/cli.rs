@@ -278,15 +278,19 @@ pub struct TweenArgs {
     /// number (at most that many: engines that blend few targets at a time), or `off`.
     #[arg(long, value_name = "K|auto|off")]
     basis: Option<String>,
-    /// Store new targets as normalized SHORT/BYTE with their scale in the weights.
+    /// Store new targets as normalized SHORT/BYTE with their scale in the weights (with
+    /// --meshopt too: authored targets whose values lie in [-1, 1] where the step fits, and
+    /// the processed meshes' own normals and tangents through the octahedral filter).
     #[arg(long)]
     quantize: bool,
     /// Store targets that move part of the mesh as sparse accessors.
     #[arg(long)]
     sparse: bool,
-    /// Compress vertex, index, target and animation data with EXT_meshopt_compression (float
-    /// targets, and the processed meshes' own positions, normals, tangents and texture
-    /// coordinates, through its exponential filter, within the tolerance).
+    /// Compress vertex, index, target and animation data with EXT_meshopt_compression: the
+    /// processed primitives' vertices renumbered in the order their triangles use them and
+    /// the triangles in vertex-cache order (alpha-blended ones keep their order), as gltfpack
+    /// does; float targets, the weights animation and the meshes' own positions, normals,
+    /// tangents and texture coordinates through its exponential filter, within the tolerance.
     #[arg(long)]
     meshopt: bool,
     /// Interpolation method.

@@ -151,15 +151,6 @@ impl Output {
             acc["min"] = f32_json(&lo);
             acc["max"] = f32_json(&hi);
         }
-        // A target that moves nothing has no data: one such accessor serves every target alike.
-        if acc.get("bufferView").is_none() && acc.get("sparse").is_none() {
-            if let Some(same) = super::read::arr(&self.json, "accessors")
-                .iter()
-                .position(|a| *a == acc)
-            {
-                return same;
-            }
-        }
         self.push_accessor(acc)
     }
 
