@@ -299,3 +299,124 @@ fn write_indices(out: &mut Output, a: usize, indices: &[u32]) -> usize {
     acc["bufferView"] = json!(view);
     out.push_accessor(acc)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Six vertices, two triangles listed last-first, attributes of several layouts (f32 VEC3,
+    /// u8 VEC4 joints in 4-byte elements, u16 VEC4 weights, a sparse target): after the reorder
+    /// every vertex carries all of its own values, the triangles are the same ones, and the
+    /// vertices run in the order the triangles first use them.
+    #[test]
+    fn every_attribute_moves_with_its_vertex() {
+        let mut out = Output::new(json!({
+            "asset": { "version": "2.0" },
+            "meshes": [{ "primitives": [{
+                "attributes": { "POSITION": 0, "JOINTS_0": 1, "WEIGHTS_0": 2 },
+                "indices": 3,
+                "targets": [{ "POSITION": 4 }],
+            }]}],
+            "accessors": [],
+        }));
+        let push = |out: &mut Output, bytes: Vec<u8>, acc: Value| -> usize {
+            let v = out.bin.push_view(&bytes, Some(34962));
+            let mut acc = acc;
+            acc["bufferView"] = json!(v);
+            out.push_accessor(acc)
+        };
+        let pos: Vec<u8> = (0..6)
+            .flat_map(|v| [v as f32, 0.0, 0.0])
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        push(
+            &mut out,
+            pos,
+            json!({ "componentType": 5126, "count": 6, "type": "VEC3" }),
+        );
+        let joints: Vec<u8> = (0..6u8).flat_map(|v| [v, v + 1, v + 2, v + 3]).collect();
+        push(
+            &mut out,
+            joints,
+            json!({ "componentType": 5121, "count": 6, "type": "VEC4" }),
+        );
+        let weights: Vec<u8> = (0..6u16)
+            .flat_map(|v| [100 * v, 1, 2, 3])
+            .flat_map(u16::to_le_bytes)
+            .collect();
+        push(
+            &mut out,
+            weights,
+            json!({ "componentType": 5123, "normalized": true, "count": 6, "type": "VEC4" }),
+        );
+        let indices: Vec<u8> = [3u16, 4, 5, 0, 1, 2]
+            .iter()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        push(
+            &mut out,
+            indices,
+            json!({ "componentType": 5123, "count": 6, "type": "SCALAR" }),
+        );
+        // The target moves vertices 1 and 4 by (10 + v, 0, 0).
+        let si = out
+            .bin
+            .push_view(&[1u16, 4].map(u16::to_le_bytes).concat(), None);
+        let sv = out.bin.push_view(
+            &[11f32, 0.0, 0.0, 14.0, 0.0, 0.0]
+                .map(f32::to_le_bytes)
+                .concat(),
+            None,
+        );
+        out.push_accessor(json!({
+            "componentType": 5126, "count": 6, "type": "VEC3",
+            "sparse": { "count": 2, "indices": { "bufferView": si, "componentType": 5123 },
+                        "values": { "bufferView": sv } },
+        }));
+        let mut replaced = BTreeSet::new();
+        assert!(reorder(&mut out, 0, 0, &mut replaced));
+        assert_eq!(replaced.len(), 5);
+        let p = out.json["meshes"][0]["primitives"][0].clone();
+        let at = |name: &str| p["attributes"][name].as_u64().unwrap() as usize;
+        let values = |a: usize| raw(&out, a).unwrap();
+        let (pos, ps, _) = values(at("POSITION"));
+        let old_of: Vec<u32> = (0..6)
+            .map(|i| f32::from_le_bytes(pos[i * ps..i * ps + 4].try_into().unwrap()) as u32)
+            .collect();
+        // First use: the second triangle's vertices (3, 4, 5) come first.
+        assert_eq!(&old_of[..3], &[3, 4, 5]);
+        let (j, js, _) = values(at("JOINTS_0"));
+        let (w, ws, _) = values(at("WEIGHTS_0"));
+        for (i, &v) in old_of.iter().enumerate() {
+            assert_eq!(
+                &j[i * js..i * js + 4],
+                &[v as u8, v as u8 + 1, v as u8 + 2, v as u8 + 3]
+            );
+            assert_eq!(
+                u16::from_le_bytes([w[i * ws], w[i * ws + 1]]),
+                100 * v as u16
+            );
+        }
+        let idx = read_indices(&out, p["indices"].as_u64().unwrap() as usize).unwrap();
+        let mut tris: Vec<Vec<u32>> = idx
+            .chunks(3)
+            .map(|t| {
+                let mut t: Vec<u32> = t.iter().map(|&i| old_of[i as usize]).collect();
+                t.sort();
+                t
+            })
+            .collect();
+        tris.sort();
+        assert_eq!(tris, vec![vec![0, 1, 2], vec![3, 4, 5]]);
+        let target = p["targets"][0]["POSITION"].as_u64().unwrap() as usize;
+        let entries = sparse_entries(&out, &out.json["accessors"][target]["sparse"], 12).unwrap();
+        assert!(
+            entries.windows(2).all(|e| e[0].0 < e[1].0),
+            "indices increase"
+        );
+        for (i, value) in entries {
+            let x = f32::from_le_bytes(value[..4].try_into().unwrap());
+            assert_eq!(x, 10.0 + old_of[i as usize] as f32);
+        }
+    }
+}
