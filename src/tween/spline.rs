@@ -197,7 +197,7 @@ struct Path {
 }
 
 pub struct SplineSegment {
-    tris: Vec<Tri>,
+    tris: Vec<Option<Tri>>,
     placement: Placement,
     paths: Vec<Path>,
     /// Positions of a and b, for vertices no valid triangle touches.
@@ -427,10 +427,11 @@ impl<'a> SplineTrack<'a> {
             .map(|(s, w)| (s / w.max(f64::MIN_POSITIVE)).sqrt())
             .collect();
         let paths = self.paths(&build.win, &logs, &scatter, &placement);
-        let tris: Vec<Tri> = per.into_iter().flatten().collect();
         clock::add(Part::Window, t0);
         Ok(SplineSegment {
-            tris,
+            // Kept as they are (a triangle of no area is None): collecting the others into a
+            // vector of their own held both, 330 MB each at a million triangles, at the peak.
+            tris: per,
             placement,
             paths,
             x: [x0.clone(), x1.clone()],
@@ -806,7 +807,7 @@ impl SplineSegment {
     fn system(&self, u: f64) -> (Vec<[f64; 3]>, Vec<DVec3>) {
         let w = hermite(u);
         let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
-        for tri in &self.tris {
+        for tri in self.tris.iter().flatten() {
             let r = tri.r[0] * w[1] + tri.r[1] * w[2] + tri.r[2] * w[3];
             let rot = if tri.axis == DVec3::ZERO {
                 rotation(r)
