@@ -28,6 +28,7 @@ use anyhow::{bail, Result};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par, Side};
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// What `--compact` and its parts ask for.
@@ -905,10 +906,18 @@ impl Plan<'_> {
             } else {
                 nrm_n[b.prim] += b.vertices;
             }
-            let mut row = vec![0.0; 3 * b.vertices];
-            for (f, w) in weights.iter().enumerate() {
-                rows.fill(b, f, 0, b.vertices, &mut row);
+            // Frames in parallel, each summed in vertex order from what the block before left
+            // (normals and tangents share a sum): the same figures on any number of threads.
+            let sums = if b.attr == Attr::Position {
+                &pos2[b.prim]
+            } else {
+                &nrm2[b.prim]
+            };
+            let frame = |row: &mut Vec<f64>, f: usize| -> (f64, f64) {
+                let w = &weights[f];
+                rows.fill(b, f, 0, b.vertices, row);
                 let unweighted = 1.0 / b.weight;
+                let (mut sum, mut most) = (sums[f], 0.0f64);
                 for (v, r) in row.chunks_exact(3).enumerate() {
                     let mut e = [r[0] * unweighted, r[1] * unweighted, r[2] * unweighted];
                     if let Some(be) = &self.base_error[bi] {
@@ -938,12 +947,21 @@ impl Plan<'_> {
                         }
                     }
                     let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-                    if b.attr == Attr::Position {
-                        pos2[b.prim][f] += d2;
-                        worst = worst.max(d2);
-                    } else {
-                        nrm2[b.prim][f] += d2;
-                    }
+                    sum += d2;
+                    most = most.max(d2);
+                }
+                (sum, most)
+            };
+            let per_frame: Vec<(f64, f64)> = (0..weights.len())
+                .into_par_iter()
+                .map_init(|| vec![0.0; 3 * b.vertices], frame)
+                .collect();
+            for (f, (sum, most)) in per_frame.into_iter().enumerate() {
+                if b.attr == Attr::Position {
+                    pos2[b.prim][f] = sum;
+                    worst = worst.max(most);
+                } else {
+                    nrm2[b.prim][f] = sum;
                 }
             }
         }
