@@ -403,14 +403,16 @@ impl<'a> SplineTrack<'a> {
         let (x0, x1) = (&self.keys[a], &self.keys[a + 1]);
         let t0 = std::time::Instant::now();
         let build = Build::new(self, a);
+        // The system first, from key a alone: the per-triangle data of the keys is not yet
+        // held while the factorization (the largest buffers) runs.
+        let placement = build.placement()?;
+        clock::add(Part::Numeric, t0);
+        let t0 = std::time::Instant::now();
         // First key b alone: its branches are made consistent across the surface before the
         // other keys are unrolled from it.
         let (mut per, stretch_b) = build.first_key();
         let order = self.consistent_branches(&mut per);
         clock::add(Part::KeyB, t0);
-        let t0 = std::time::Instant::now();
-        let placement = build.placement(&per)?;
-        clock::add(Part::Numeric, t0);
         let t0 = std::time::Instant::now();
         let stats = Components::of(&per, &build.areas, &placement);
         // The branch-consistent logs to b, before the split replaces some by swings.
@@ -564,9 +566,7 @@ impl<'t, 'a> Build<'t, 'a> {
                 let Some(v_inv) = self.inverse(corners) else {
                     return (None, DMat3::IDENTITY);
                 };
-                let g3 = gradient_operator(&v_inv);
-                let w = weight(area);
-                let g = [g3[1] * w, g3[2] * w];
+                let g = self.operator(&v_inv, area);
                 let (rb, sb) = self.rs(&v_inv, corners, b);
                 let tri = Tri {
                     corners,
@@ -582,16 +582,35 @@ impl<'t, 'a> Build<'t, 'a> {
             .unzip()
     }
 
-    /// The system A = sum w g g^T over the valid triangles, factored.
-    fn placement(&self, per: &[Option<Tri>]) -> Result<Placement> {
-        // Pass sqrt(w) g (the stored g carry w).
-        let grads = per.iter().zip(&self.areas).map(|(t, &area)| {
-            t.as_ref().map(|t| {
+    /// A triangle's gradient operator at corners 1 and 2 (`v_inv` its inverse edge matrix at key
+    /// a), weighted by its `area`, as [`Tri::g`] holds it.
+    fn operator(&self, v_inv: &DMat3, area: f64) -> [DVec3; 2] {
+        let g3 = gradient_operator(v_inv);
+        let w = weight(area);
+        [g3[1] * w, g3[2] * w]
+    }
+
+    /// The system A = sum w g g^T over the valid triangles (those key a gives an inverse, as
+    /// [`Build::first_key`] keeps them), factored.
+    fn placement(&self) -> Result<Placement> {
+        let ops: Vec<Option<[DVec3; 2]>> = self
+            .track
+            .triangles
+            .par_iter()
+            .zip(&self.areas)
+            .map(|(&corners, &area)| Some(self.operator(&self.inverse(corners)?, area)))
+            .collect();
+        // Pass sqrt(w) g (the operators carry w).
+        let grads = ops.iter().zip(&self.areas).map(|(g, &area)| {
+            g.map(|g| {
                 let s = 1.0 / weight(area).sqrt();
-                [-(t.g[0] + t.g[1]) * s, t.g[0] * s, t.g[1] * s]
+                [-(g[0] + g[1]) * s, g[0] * s, g[1] * s]
             })
         });
-        let valid: Vec<[u32; 3]> = per.iter().flatten().map(|t| t.corners).collect();
+        let valid: Vec<[u32; 3]> = (self.track.triangles.iter().zip(&ops))
+            .filter(|(_, g)| g.is_some())
+            .map(|(&c, _)| c)
+            .collect();
         let n = self.track.keys[self.a].len();
         Placement::new(self.track.pattern, n, grads, &valid)
     }
