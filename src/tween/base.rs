@@ -89,7 +89,11 @@ pub fn reencode(
             };
             let Some(bits) = chosen else { continue };
             let old = out.json["accessors"][a as usize].clone();
-            let oct = b.octahedral && matches!(name.as_str(), "NORMAL" | "TANGENT");
+            let oct = match name.as_str() {
+                "NORMAL" => b.normal_oct,
+                "TANGENT" => b.tangent_oct,
+                _ => false,
+            };
             let same = stored
                 .iter()
                 .find(|(v, b, ty, _)| *b == bits && *ty == old["type"] && *v == values);

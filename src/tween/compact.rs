@@ -128,9 +128,10 @@ pub struct BaseBits {
     pub position: Option<i32>,
     pub normal: Option<i32>,
     pub tangent: Option<i32>,
-    /// NORMAL and TANGENT as normalized SHORT through the OCTAHEDRAL filter at those bits
-    /// (with `--quantize`), not floats through the EXPONENTIAL one.
-    pub octahedral: bool,
+    /// NORMAL, TANGENT as normalized SHORT through the OCTAHEDRAL filter at those bits (with
+    /// `--quantize`, where every vector is a unit one), not floats through the EXPONENTIAL one.
+    pub normal_oct: bool,
+    pub tangent_oct: bool,
 }
 
 /// Which of a primitive's own POSITION, NORMAL and TANGENT the writer can store again (plain
@@ -1214,50 +1215,53 @@ fn base_rounding(
             (worst.sqrt() <= within).then_some((b, error))
         })
     };
-    let oct = opts.quantize;
     for (bi, block) in blocks.iter().enumerate() {
         let p = &mesh.primitives[block.prim];
         let r = restorable.get(block.prim).copied().unwrap_or_default();
         let base = &mut bits[block.prim];
-        base.octahedral = oct;
-        let (slot, done) = match block.attr {
-            Attr::Position if r.position => (
-                &mut base.position,
-                rounded(
+        let within = BASE_SHARE * ntol;
+        let done = match block.attr {
+            Attr::Position if r.position => {
+                let done = rounded(
                     flat(p.base.iter().map(|v| v.to_array())),
                     3,
                     BASE_SHARE * tol,
-                ),
-            ),
-            Attr::Normal if r.normal && oct => (
-                &mut base.normal,
-                p.normals.as_ref().and_then(|n| {
-                    let v = n.iter().map(|v| [v.x, v.y, v.z, 0.0]).collect();
-                    octahedral(v, BASE_SHARE * ntol)
-                }),
-            ),
-            Attr::Tangent if r.tangent && oct => (
-                &mut base.tangent,
-                p.tangents
-                    .as_ref()
-                    .and_then(|t| octahedral(t.clone(), BASE_SHARE * ntol)),
-            ),
-            Attr::Normal if r.normal => (
-                &mut base.normal,
-                p.normals.as_ref().and_then(|n| {
-                    rounded(flat(n.iter().map(|v| v.to_array())), 3, BASE_SHARE * ntol)
-                }),
-            ),
-            Attr::Tangent if r.tangent => (
-                &mut base.tangent,
-                p.tangents
-                    .as_ref()
-                    .and_then(|t| rounded(flat(t.iter().copied()), 4, BASE_SHARE * ntol)),
-            ),
+                );
+                base.position = done.as_ref().map(|d| d.0);
+                done
+            }
+            Attr::Normal | Attr::Tangent => {
+                let normal = block.attr == Attr::Normal;
+                let vectors: Option<Vec<[f64; 4]>> = match normal {
+                    true => p
+                        .normals
+                        .as_ref()
+                        .filter(|_| r.normal)
+                        .map(|n| n.iter().map(|v| [v.x, v.y, v.z, 0.0]).collect()),
+                    false => p.tangents.clone().filter(|_| r.tangent),
+                };
+                let Some(vectors) = vectors else { continue };
+                // Octahedral where every vector is a unit one, else the exponential filter.
+                let oct = opts
+                    .quantize
+                    .then(|| octahedral(vectors.clone(), within))
+                    .flatten();
+                let is_oct = oct.is_some();
+                let done = oct.or_else(|| match normal {
+                    true => rounded(flat(vectors.iter().map(|v| [v[0], v[1], v[2]])), 3, within),
+                    false => rounded(flat(vectors.iter().copied()), 4, within),
+                });
+                let bits = done.as_ref().map(|d| d.0);
+                if normal {
+                    (base.normal, base.normal_oct) = (bits, is_oct);
+                } else {
+                    (base.tangent, base.tangent_oct) = (bits, is_oct);
+                }
+                done
+            }
             _ => continue,
         };
-        if let Some((b, error)) = done {
-            *slot = Some(b);
+        if let Some((_, error)) = done {
             errors[bi] = Some(error);
         }
     }
