@@ -2,9 +2,10 @@
 //!
 //! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
 //! container, buffers; [`uri`] says what external files it may read) -> [`decode`] (meshopt
-//! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles) ... the
-//! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`]) ->
-//! [`reorder`] (with meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`] (meshopt
+//! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`,
+//! triangles) ... the command's own work ... -> [`build`] (new accessors and buffer views on an
+//! [`Output`]) -> [`mod@reorder`] (with meshopt: triangles and vertices in mesh order) ->
+//! [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`] (meshopt
 //! compression, when asked for) -> [`write`] (`.glb` or `.gltf` with its `.bin` and images,
 //! staged as one all-or-nothing set of files).
 
