@@ -427,14 +427,65 @@ impl Cleanup<'_> {
     }
 }
 
-/// Whether the sources plant leg `l` by weighted vote (the source of more weight decides, either
-/// at 0.5) at their times `t`, a frame standing for `half` (source seconds) either side of it
+/// Whether the sources plant leg `l` by weighted vote (the source of more weight decides; at 0.5
+/// the naive blend's figures take either, the blend itself [`even_vote`]) at their times `t`, a frame standing for `half` (source seconds) either side of it
 /// so that a contact shorter than a frame still plants the frame nearest it. The clean-up pins
 /// these frames and the figures measure sliding there too (a naive blend's feet may never
 /// settle enough for the contact test).
 fn planted_by_vote(an: [&Analysis; 2], w: f64, l: usize, t: [f64; 2], half: [f64; 2]) -> bool {
     let x = |p: bool| if p { 1.0 } else { 0.0 };
     (1.0 - w) * x(an[0].planted(l, t[0], half[0])) + w * x(an[1].planted(l, t[1], half[1])) >= 0.5
+}
+
+/// The vote of two sources of equal weight: where both plant the foot, and of each run of frames
+/// where only one does, the half next to a frame both plant (all of it between two such frames,
+/// its middle half where it touches none), so that the blend's contact runs from about the mean
+/// of the sources' touchdowns to the mean of their lift-offs (either source alone deciding
+/// would plant the foot through the union of both contacts, much of it where the blended foot
+/// already swings). `looping`: runs wrap round the plan.
+fn even_vote(a: &[bool], b: &[bool], looping: bool) -> Vec<bool> {
+    let n = a.len();
+    let both: Vec<bool> = a.iter().zip(b).map(|(x, y)| *x && *y).collect();
+    let one: Vec<bool> = a.iter().zip(b).map(|(x, y)| x != y).collect();
+    let mut out = both.clone();
+    // Start of every run of `one` frames (on a loop, one that does not continue one before it).
+    let at = |i: isize| -> Option<usize> {
+        if (0..n as isize).contains(&i) {
+            Some(i as usize)
+        } else if looping && n > 0 {
+            Some(i.rem_euclid(n as isize) as usize)
+        } else {
+            None
+        }
+    };
+    if one.iter().all(|&x| x) {
+        return a.to_vec();
+    }
+    for s in 0..n {
+        if !one[s] || at(s as isize - 1).is_some_and(|p| one[p]) {
+            continue;
+        }
+        let mut run = vec![s];
+        while let Some(next) = at(*run.last().expect("a frame") as isize + 1) {
+            if !one[next] || next == s {
+                break;
+            }
+            run.push(next);
+        }
+        let before = at(s as isize - 1).is_some_and(|p| both[p]);
+        let after = at(*run.last().expect("a frame") as isize + 1).is_some_and(|q| both[q]);
+        let len = run.len();
+        let keep: std::ops::Range<usize> = match (before, after) {
+            (true, true) => 0..len,
+            (true, false) => 0..len.div_ceil(2),
+            (false, true) => len / 2..len,
+            (false, false) => len / 4..(len - len / 4).max(len / 4 + 1),
+        };
+        for &j in &run[keep] {
+            out[j] = true;
+        }
+    }
+    out
 }
 
 /// `vote` per frame of the phase plan, each frame standing for half the way to its neighbours.
@@ -495,7 +546,14 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     let before_loop = track_of(before.pos.clone(), dt, phase.looping);
     let vote = |l: usize, t: [f64; 2], half: [f64; 2]| planted_by_vote([an_a, an_b], w, l, t, half);
     let voted: Vec<Vec<bool>> = (0..ch.legs.len())
-        .map(|l| voted_on(&phase.frames, |t, half| vote(l, t, half)))
+        .map(|l| match w == 0.5 {
+            false => voted_on(&phase.frames, |t, half| vote(l, t, half)),
+            true => {
+                let one =
+                    |s: usize| voted_on(&phase.frames, |t, half| an[s].planted(l, t[s], half[s]));
+                even_vote(&one(0), &one(1), phase.looping)
+            }
+        })
         .collect();
     let mut max_drop: f64 = 0.0;
     if opts.cleanup && !ch.legs.is_empty() && cleanup_strength(w) > 0.0 {
