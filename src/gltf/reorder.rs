@@ -35,18 +35,23 @@ pub fn reorder(out: &mut Output, mesh: usize, prim: usize, replaced: &mut BTreeS
     let Some(index_acc) = p["indices"].as_u64().map(|i| i as usize) else {
         return false;
     };
-    // (path under the primitive, accessor) of every vertex accessor.
+    // (JSON pointer under the primitive, accessor) of every vertex accessor; an attribute's
+    // name escaped as a pointer needs ("_A/B" is "_A~1B").
+    let escape = |k: &str| k.replace('~', "~0").replace('/', "~1");
     let mut refs: Vec<(String, usize)> = Vec::new();
     if let Some(a) = p["attributes"].as_object() {
         for (k, v) in a {
-            refs.extend(v.as_u64().map(|i| (format!("/attributes/{k}"), i as usize)));
+            refs.extend(
+                v.as_u64()
+                    .map(|i| (format!("/attributes/{}", escape(k)), i as usize)),
+            );
         }
     }
     for (t, target) in p["targets"].as_array().into_iter().flatten().enumerate() {
         for (k, v) in target.as_object().into_iter().flatten() {
             refs.extend(
                 v.as_u64()
-                    .map(|i| (format!("/targets/{t}/{k}"), i as usize)),
+                    .map(|i| (format!("/targets/{t}/{}", escape(k)), i as usize)),
             );
         }
     }
@@ -111,23 +116,24 @@ pub fn reorder(out: &mut Output, mesh: usize, prim: usize, replaced: &mut BTreeS
     let mut new_of: BTreeMap<usize, usize> = BTreeMap::new();
     for a in order {
         new_of.insert(a, permuted(out, a, &remap));
-        replaced.insert(a);
     }
     let new_indices = write_indices(out, index_acc, &indices);
-    replaced.insert(index_acc);
     let p = &mut out.json["meshes"][mesh]["primitives"][prim];
     for (path, a) in &refs {
-        if let Some(v) = p.pointer_mut(path) {
-            *v = json!(new_of[a]);
-        }
+        let v = p
+            .pointer_mut(path)
+            .expect("a path read from this primitive");
+        *v = json!(new_of[a]);
+        replaced.insert(*a);
     }
+    replaced.insert(index_acc);
     p["indices"] = json!(new_indices);
     true
 }
 
 /// The bytes of accessor `a` in `out`: (view bytes from the accessor's first element, element
-/// stride, element size), or `None` for an accessor without a view; also `None` when the
-/// accessor does not fit its view or has a layout the reorder does not know.
+/// stride, element size), no bytes for an accessor without a view; `None` when the accessor
+/// does not fit its view or has a layout the reorder does not know.
 fn raw(out: &Output, a: usize) -> Option<(Vec<u8>, usize, usize)> {
     let acc = &out.json["accessors"][a];
     let elem = comp_size(acc["componentType"].as_u64()? as u32)?
@@ -305,7 +311,8 @@ mod tests {
     use super::*;
 
     /// Six vertices, two triangles listed last-first, attributes of several layouts (f32 VEC3,
-    /// u8 VEC4 joints in 4-byte elements, u16 VEC4 weights, a sparse target): after the reorder
+    /// u8 VEC4 joints in 4-byte elements, u16 VEC4 weights also read by an attribute named
+    /// `_W/~`, a sparse target): after the reorder
     /// every vertex carries all of its own values, the triangles are the same ones, and the
     /// vertices run in the order the triangles first use them.
     #[test]
@@ -313,7 +320,7 @@ mod tests {
         let mut out = Output::new(json!({
             "asset": { "version": "2.0" },
             "meshes": [{ "primitives": [{
-                "attributes": { "POSITION": 0, "JOINTS_0": 1, "WEIGHTS_0": 2 },
+                "attributes": { "POSITION": 0, "JOINTS_0": 1, "WEIGHTS_0": 2, "_W/~": 2 },
                 "indices": 3,
                 "targets": [{ "POSITION": 4 }],
             }]}],
@@ -377,6 +384,9 @@ mod tests {
         assert!(reorder(&mut out, 0, 0, &mut replaced));
         assert_eq!(replaced.len(), 5);
         let p = out.json["meshes"][0]["primitives"][0].clone();
+        // An attribute whose name a JSON pointer must escape follows its accessor too.
+        assert_eq!(p["attributes"]["_W/~"], p["attributes"]["WEIGHTS_0"]);
+        assert_ne!(p["attributes"]["_W/~"], json!(2));
         let at = |name: &str| p["attributes"][name].as_u64().unwrap() as usize;
         let values = |a: usize| raw(&out, a).unwrap();
         let (pos, ps, _) = values(at("POSITION"));
