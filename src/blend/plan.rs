@@ -427,11 +427,12 @@ impl Cleanup<'_> {
     }
 }
 
-/// Whether the sources plant leg `l` by weighted vote (the source of more weight decides; at 0.5
-/// the naive blend's figures take either, the blend itself [`even_vote`]) at their times `t`, a frame standing for `half` (source seconds) either side of it
-/// so that a contact shorter than a frame still plants the frame nearest it. The clean-up pins
-/// these frames and the figures measure sliding there too (a naive blend's feet may never
-/// settle enough for the contact test).
+/// Whether the sources plant leg `l` by weighted vote (the source of more weight decides; at
+/// 0.5 either, which the naive blend's figures take, the blend itself [`even_vote`]) at their
+/// times `t`, a frame standing for `half` (source seconds) either side of it so that a contact
+/// shorter than a frame still plants the frame nearest it. The clean-up pins these frames and
+/// the figures measure sliding there too (a naive blend's feet may never settle enough for the
+/// contact test).
 fn planted_by_vote(an: [&Analysis; 2], w: f64, l: usize, t: [f64; 2], half: [f64; 2]) -> bool {
     let x = |p: bool| if p { 1.0 } else { 0.0 };
     (1.0 - w) * x(an[0].planted(l, t[0], half[0])) + w * x(an[1].planted(l, t[1], half[1])) >= 0.5
@@ -448,7 +449,7 @@ fn even_vote(a: &[bool], b: &[bool], looping: bool) -> Vec<bool> {
     let both: Vec<bool> = a.iter().zip(b).map(|(x, y)| *x && *y).collect();
     let one: Vec<bool> = a.iter().zip(b).map(|(x, y)| x != y).collect();
     let mut out = both.clone();
-    // Start of every run of `one` frames (on a loop, one that does not continue one before it).
+    // Frame `i` of the plan, wrapped on a loop.
     let at = |i: isize| -> Option<usize> {
         if (0..n as isize).contains(&i) {
             Some(i as usize)
@@ -461,6 +462,8 @@ fn even_vote(a: &[bool], b: &[bool], looping: bool) -> Vec<bool> {
     if one.iter().all(|&x| x) {
         return a.to_vec();
     }
+    // From the start of every run of `one` frames (on a loop, one that does not continue one
+    // before it).
     for s in 0..n {
         if !one[s] || at(s as isize - 1).is_some_and(|p| one[p]) {
             continue;

@@ -270,7 +270,7 @@ pub(super) fn comp_size(ty: u32) -> Option<usize> {
     }
 }
 
-fn read_uint(b: &[u8], at: usize, ty: u32) -> u64 {
+pub(super) fn read_uint(b: &[u8], at: usize, ty: u32) -> u64 {
     match ty {
         5121 | 5120 => b[at] as u64,
         5123 | 5122 => u16::from_le_bytes([b[at], b[at + 1]]) as u64,

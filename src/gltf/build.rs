@@ -83,7 +83,7 @@ impl Storage {
 /// f32 values as JSON numbers written as short as they read back exactly as f32 (serde_json
 /// would write each as the f64 it widens to: `0.04999995231628418` for `0.049999952`), whole
 /// ones without a fraction (`2`, not `2.0`).
-pub fn f32_json(values: &[f32]) -> Value {
+fn f32_json(values: &[f32]) -> Value {
     Value::Array(
         values
             .iter()
@@ -98,7 +98,7 @@ pub fn f32_json(values: &[f32]) -> Value {
 }
 
 /// Per component, the smallest and largest of `data` (elements of `ncomp` values).
-pub fn min_max(data: &[f32], ncomp: usize) -> (Vec<f32>, Vec<f32>) {
+fn min_max(data: &[f32], ncomp: usize) -> (Vec<f32>, Vec<f32>) {
     let mut lo = vec![f32::INFINITY; ncomp];
     let mut hi = vec![f32::NEG_INFINITY; ncomp];
     for e in data.chunks_exact(ncomp) {
@@ -108,6 +108,13 @@ pub fn min_max(data: &[f32], ncomp: usize) -> (Vec<f32>, Vec<f32>) {
         }
     }
     (lo, hi)
+}
+
+/// Set accessor `acc`'s min and max to those of `data` (elements of `ncomp` values), as f32.
+pub fn set_bounds(acc: &mut Value, data: &[f32], ncomp: usize) {
+    let (lo, hi) = min_max(data, ncomp);
+    acc["min"] = f32_json(&lo);
+    acc["max"] = f32_json(&hi);
 }
 
 /// The output document under construction.
@@ -147,9 +154,7 @@ impl Output {
         let mut acc =
             json!({ "bufferView": view, "componentType": 5126, "count": count, "type": ty });
         if bounds && count > 0 {
-            let (lo, hi) = min_max(data, ncomp);
-            acc["min"] = f32_json(&lo);
-            acc["max"] = f32_json(&hi);
+            set_bounds(&mut acc, data, ncomp);
         }
         self.push_accessor(acc)
     }

@@ -20,7 +20,7 @@ mod uri;
 mod write;
 
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
-pub use build::{f32_json, min_max, BinBuilder, Output, Storage};
+pub use build::{set_bounds, BinBuilder, Output, Storage};
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
 pub use encode::{
     exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,

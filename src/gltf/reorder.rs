@@ -14,7 +14,7 @@
 //! inbetween tween face.glb -o face_small.glb --compact   # vertices in mesh order
 //! ```
 
-use super::accessor::{comp_size, components};
+use super::accessor::{comp_size, components, read_uint};
 use super::build::Output;
 use super::compact::visit_accessor_refs;
 use super::encode::{ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK};
@@ -198,7 +198,8 @@ fn permuted(out: &mut Output, a: usize, remap: &[u32]) -> usize {
 /// The entries of a sparse part: (vertex, value bytes) in the file's order.
 fn sparse_entries(out: &Output, sparse: &Value, elem: usize) -> Option<Vec<(u32, Vec<u8>)>> {
     let count = sparse["count"].as_u64()? as usize;
-    let isz = comp_size(sparse["indices"]["componentType"].as_u64()? as u32)?;
+    let it = sparse["indices"]["componentType"].as_u64()? as u32;
+    let isz = comp_size(it)?;
     let bytes_of = |part: &Value, size: usize| -> Option<&[u8]> {
         let view = out.bin.views.get(part["bufferView"].as_u64()? as usize)?;
         let start = view["byteOffset"].as_u64()? as usize
@@ -212,8 +213,8 @@ fn sparse_entries(out: &Output, sparse: &Value, elem: usize) -> Option<Vec<(u32,
     Some(
         (0..count)
             .map(|k| {
-                let b = &idx[k * isz..(k + 1) * isz];
-                (uint(b), vals[k * elem..(k + 1) * elem].to_vec())
+                let i = read_uint(idx, k * isz, it) as u32;
+                (i, vals[k * elem..(k + 1) * elem].to_vec())
             })
             .collect(),
     )
@@ -249,11 +250,6 @@ fn sparse_permuted(out: &mut Output, sparse: &Value, elem: usize, remap: &[u32])
     Some(s)
 }
 
-/// A little-endian unsigned integer of 1, 2 or 4 bytes.
-fn uint(b: &[u8]) -> u32 {
-    b.iter().rev().fold(0u32, |v, &x| (v << 8) | x as u32)
-}
-
 /// A new view of `bytes` like view `like` (its target and the writer's marks).
 fn push_like(out: &mut Output, like: usize, bytes: &[u8]) -> usize {
     let old = out.bin.views[like].clone();
@@ -276,14 +272,14 @@ fn read_indices(out: &Output, a: usize) -> Option<Vec<u32>> {
     if !matches!(ty, 5121 | 5123 | 5125) || out.json["accessors"][a]["type"] != "SCALAR" {
         return None;
     }
-    let (data, stride, elem) = raw(out, a)?;
+    let (data, stride, _) = raw(out, a)?;
     if data.is_empty() {
         return None;
     }
     let count = out.json["accessors"][a]["count"].as_u64()? as usize;
     Some(
         (0..count)
-            .map(|k| uint(&data[k * stride..k * stride + elem]))
+            .map(|k| read_uint(&data, k * stride, ty) as u32)
             .collect(),
     )
 }

@@ -12,7 +12,7 @@
 
 use super::compact::{fewest_bits, snorm16, BaseBits, Restorable, UV_FACTOR};
 use super::frames::MeshFrames;
-use crate::gltf::{exp_roundtrip, f32_json, min_max, Document, Output, FILTER_MARK, OCT_MARK};
+use crate::gltf::{exp_roundtrip, set_bounds, Document, Output, FILTER_MARK, OCT_MARK};
 use anyhow::Result;
 use serde_json::{json, Value};
 use std::collections::{BTreeMap, BTreeSet};
@@ -97,14 +97,14 @@ pub fn reencode(
             let same = stored
                 .iter()
                 .find(|(v, b, ty, _)| *b == bits && *ty == old["type"] && *v == values);
-            let new = match same {
-                Some(&(.., new)) if !oct => new,
-                _ if oct => push_octahedral(out, &values, n, bits, &old) as u64,
-                _ => {
-                    let new = push_filtered(out, &values, n, bits, &old) as u64;
-                    stored.push((values, bits, old["type"].clone(), new));
-                    new
-                }
+            let new = if oct {
+                push_octahedral(out, &values, n, bits, &old) as u64
+            } else if let Some(&(.., new)) = same {
+                new
+            } else {
+                let new = push_filtered(out, &values, n, bits, &old) as u64;
+                stored.push((values, bits, old["type"].clone(), new));
+                new
             };
             replaced.insert(a as usize);
             done.insert(a, new);
@@ -136,9 +136,7 @@ fn push_filtered(out: &mut Output, values: &[f32], n: usize, bits: i32, old: &Va
         acc["name"] = name.clone();
     }
     if bounds && !values.is_empty() {
-        let (lo, hi) = min_max(&exp_roundtrip(values, n, bits), n);
-        acc["min"] = f32_json(&lo);
-        acc["max"] = f32_json(&hi);
+        set_bounds(acc, &exp_roundtrip(values, n, bits), n);
     }
     new
 }

@@ -173,10 +173,10 @@ pub struct AuthoredStorage {
 impl AuthoredStorage {
     /// The storage of attribute `name` (POSITION, NORMAL, TANGENT).
     pub fn of(&self, name: &str) -> Storage {
-        match name {
-            "POSITION" => self.position,
-            _ => self.normal,
-        }
+        self.of_attr(match name {
+            "POSITION" => Attr::Position,
+            _ => Attr::Normal,
+        })
     }
 
     fn of_attr(&self, attr: Attr) -> Storage {
@@ -577,20 +577,25 @@ impl Plan<'_> {
         }
     }
 
-    /// Mantissa bits of the exponential filter for the authored targets' positions, and for
-    /// their normals and tangents: their rounding at the largest authored weight within the
-    /// steps `q_pos` and `q_nrm`.
-    fn authored_bits(&self, q_pos: f64, q_nrm: f64) -> (i32, i32) {
+    /// How the authored targets are stored, their positions and (apart) their normals and
+    /// tangents: normalized BYTE or SHORT when `quantize` and every component lies in [-1, 1] (a
+    /// unit vector's change mostly does, and a character's shapes in metres; the target keeps
+    /// its meaning at weight 1, no scale needed) and the integer step at the largest authored
+    /// weight is within the step (`q_pos`, `q_nrm`); else floats through the exponential filter
+    /// at the fewest mantissa bits whose rounding at that weight is within it.
+    fn authored_storage(&self, q_pos: f64, q_nrm: f64, quantize: bool) -> AuthoredStorage {
         let rows = self.rows;
         let weight = rows
             .authored
             .iter()
             .flatten()
             .fold(1.0f64, |m, w| m.max(w.abs()));
+        // The largest component of the listed deltas (`None`: there are none).
         let largest = |list: Vec<&Vec<DVec3>>| {
             list.iter()
                 .flat_map(|v| v.iter())
-                .fold(0.0f64, |m, d| m.max(d.abs().max_element()))
+                .map(|d| d.abs().max_element())
+                .reduce(f64::max)
         };
         let mesh = rows.mesh;
         let lp = largest(
@@ -605,40 +610,22 @@ impl Plan<'_> {
                 .flat_map(|p| p.target_nrm.iter().chain(&p.target_tan).flatten())
                 .collect(),
         );
-        let bits = |l: f64, step: f64| ((l * weight / step).log2().ceil() as i32 + 1).clamp(4, 24);
-        (bits(lp, q_pos), if ln > 0.0 { bits(ln, q_nrm) } else { 4 })
-    }
-
-    /// Normalized BYTE or SHORT for the authored targets' positions (`positions`) or their
-    /// normal and tangent deltas, when `quantize` and every component lies in [-1, 1] (a unit
-    /// vector's change mostly does, and a character's shapes in metres; the target keeps its
-    /// meaning at weight 1, no scale needed) and the integer step, at the largest authored
-    /// weight, is within `step`.
-    fn authored_quantized(&self, positions: bool, step: f64, quantize: bool) -> Option<Storage> {
-        let rows = self.rows;
-        let mut all = rows
-            .mesh
-            .primitives
-            .iter()
-            .flat_map(|p| match positions {
-                true => p.target_pos.iter().collect::<Vec<_>>(),
-                false => p.target_nrm.iter().chain(&p.target_tan).flatten().collect(),
+        let store = |largest: Option<f64>, step: f64| {
+            let integer = [(Storage::Byte, 127.0), (Storage::Short, 32767.0)]
+                .into_iter()
+                .find(|(_, steps)| weight / steps <= step)
+                .map(|(s, _)| s)
+                .filter(|_| quantize && largest.is_some_and(|l| l <= 1.0));
+            let l = largest.unwrap_or(0.0);
+            let bits = ((l * weight / step).log2().ceil() as i32 + 1).clamp(4, 24);
+            integer.unwrap_or(Storage::Float {
+                exp_bits: Some(bits),
             })
-            .flatten()
-            .peekable();
-        all.peek()?;
-        if !quantize || !all.all(|d| d.abs().max_element() <= 1.0) {
-            return None;
+        };
+        AuthoredStorage {
+            position: store(lp, q_pos),
+            normal: store(ln, q_nrm),
         }
-        let weight = rows
-            .authored
-            .iter()
-            .flatten()
-            .fold(1.0f64, |m, w| m.max(w.abs()));
-        [(Storage::Byte, 127.0), (Storage::Short, 32767.0)]
-            .into_iter()
-            .find(|(_, steps)| weight / steps <= step)
-            .map(|(s, _)| s)
     }
 
     /// The basis of the first `k` directions, encoded, and its measured deviation.
@@ -734,17 +721,9 @@ impl Plan<'_> {
             }
             targets.push(target);
         }
-        let authored = exp_bits.filter(|_| self.rig).map(|_| {
-            let (p, n) = self.authored_bits(q_pos, q_nrm);
-            AuthoredStorage {
-                position: self
-                    .authored_quantized(true, q_pos, quantize)
-                    .unwrap_or(Storage::Float { exp_bits: Some(p) }),
-                normal: self
-                    .authored_quantized(false, q_nrm, quantize)
-                    .unwrap_or(Storage::Float { exp_bits: Some(n) }),
-            }
-        });
+        let authored = exp_bits
+            .filter(|_| self.rig)
+            .map(|_| self.authored_storage(q_pos, q_nrm, quantize));
         let weights: Vec<Vec<f32>> = weights
             .iter()
             .map(|w| w.iter().map(|&x| x as f32).collect())

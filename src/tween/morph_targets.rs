@@ -237,8 +237,8 @@ pub fn apply_frames(
         }
         name_targets(out, &w, &plays, new, shift);
         let outputs = push_weights(out, &w, &plays, new);
-        for ((track, plays), output) in m.tracks.iter().zip(&plays).zip(outputs) {
-            animate_track(out, track, plays, output, shift, &mut edits);
+        for (track, output) in m.tracks.iter().zip(outputs) {
+            animate_track(out, track, output, shift, &mut edits);
         }
         match layout {
             Layout::Frames => dropped.extend(m.dropped_channels.iter().copied()),
@@ -559,7 +559,6 @@ fn push_weights(out: &mut Output, w: &Written, plays: &[Vec<Played>], new: usize
 fn animate_track(
     out: &mut Output,
     track: &TrackFrames,
-    plays: &[Played],
     output: usize,
     shift: f64,
     edits: &mut Edits,
@@ -569,7 +568,6 @@ fn animate_track(
         .iter()
         .map(|f| (f.time + shift) as f32)
         .collect();
-    debug_assert_eq!(times.len(), plays.len());
     let input = key_times(out, &times, &mut edits.times);
     match &track.origin {
         TrackOrigin::Animation {
@@ -605,19 +603,16 @@ fn animate_track(
 /// An accessor of key times `times`: one written before when it holds the same times, else a
 /// new accessor (over the view of earlier times that begin with these, when there are some).
 fn key_times(out: &mut Output, times: &[f32], written: &mut Vec<(Vec<f32>, usize)>) -> usize {
-    let bits = |t: &[f32]| t.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
-    let mine = bits(times);
-    let earlier = written
-        .iter()
-        .find(|(t, _)| t.len() >= times.len() && bits(&t[..times.len()]) == mine);
+    let begins = |t: &[f32]| {
+        t.len() >= times.len() && t.iter().zip(times).all(|(x, y)| x.to_bits() == y.to_bits())
+    };
+    let earlier = written.iter().find(|(t, _)| begins(t));
     let input = match earlier {
         Some((t, a)) if t.len() == times.len() => return *a,
         Some((_, a)) => {
             let mut acc = out.json["accessors"][*a].clone();
             acc["count"] = json!(times.len());
-            let (lo, hi) = gltf::min_max(times, 1);
-            acc["min"] = gltf::f32_json(&lo);
-            acc["max"] = gltf::f32_json(&hi);
+            gltf::set_bounds(&mut acc, times, 1);
             out.push_accessor(acc)
         }
         None => out.push_f32(times, "SCALAR", 1, true, None),
