@@ -27,7 +27,7 @@ use super::gradient::{deformation, frame, gradient_operator, polar, quat_log, ro
 use super::solve::{scatter, Pattern, Placement};
 use super::weld::{bbox_diagonal, rms_rel};
 use anyhow::Result;
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DVec3, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -166,22 +166,35 @@ pub struct SplineTrack<'a> {
     triangles: &'a [[u32; 3]],
 }
 
-/// Per valid triangle of a segment.
+/// Per valid triangle of a segment. Held in single precision (172 bytes with its `Option`
+/// instead of 336: at 4M triangles 0.69 GB instead of 1.34 GB through every frame), as the
+/// output's vertices are; computed and used in double precision.
 struct Tri {
     corners: [u32; 3],
     /// Rotation logs relative to key a (whose own is zero): the tangent at a, b's log, the
     /// tangent at b (per unit of u, see [`hermite`]).
-    r: [DVec3; 3],
+    r: [Vec3; 3],
     /// Gradient operator at corners 1 and 2 of the reference triangle (corner 0: minus sum).
-    g: [DVec3; 2],
+    g: [Vec3; 2],
     /// S g for both gradients and S the stretch's tangent at a, b's stretch, its tangent at b
     /// (key a's stretch is I).
-    sg: [[DVec3; 2]; 3],
+    sg: [[Vec3; 2]; 3],
     /// Where the component is split (see [`SPLIT_ABOVE`]): the twist about `axis` (tangent at
     /// a, b's angle with any number of turns, tangent at b), `r` then holding the swings' logs;
     /// otherwise `axis` is zero and `r` the rotations' logs.
-    twist: [f64; 3],
-    axis: DVec3,
+    twist: [f32; 3],
+    axis: Vec3,
+}
+
+impl Tri {
+    /// b's rotation log (its swing where the component is split).
+    fn log_b(&self) -> DVec3 {
+        self.r[1].as_dvec3()
+    }
+
+    fn split(&self) -> bool {
+        self.axis != Vec3::ZERO
+    }
 }
 
 /// A component's path; each `[a, tangent at a, b, tangent at b]` (see [`hermite`]).
@@ -317,7 +330,7 @@ impl<'a> SplineTrack<'a> {
         let mut starts: Vec<(u64, u32)> = per
             .par_iter()
             .enumerate()
-            .filter_map(|(t, x)| x.as_ref().map(|x| (key(x.r[1]), t as u32)))
+            .filter_map(|(t, x)| x.as_ref().map(|x| (key(x.log_b()), t as u32)))
             .collect();
         starts.par_sort_unstable();
         for &(_, start) in &starts {
@@ -332,19 +345,19 @@ impl<'a> SplineTrack<'a> {
                 done[t as usize] = true;
                 order.push((t, from));
                 if from != u32::MAX {
-                    let target = per[from as usize].as_ref().map_or(DVec3::ZERO, |x| x.r[1]);
+                    let target = per[from as usize].as_ref().map_or(DVec3::ZERO, Tri::log_b);
                     if let Some(tri) = per[t as usize].as_mut() {
-                        tri.r[1] = closest_branch(tri.r[1], target);
+                        tri.r[1] = closest_branch(tri.log_b(), target).as_vec3();
                     }
                 }
                 let Some(tri) = per[t as usize].as_ref() else {
                     continue;
                 };
-                let r = tri.r[1];
+                let r = tri.log_b();
                 for &nb in self.pattern.neighbours(t as usize) {
                     if !done[nb as usize] {
                         if let Some(n) = per[nb as usize].as_ref() {
-                            let guess = closest_branch(n.r[1], r);
+                            let guess = closest_branch(n.log_b(), r);
                             heap.push(Reverse((key(guess), nb, t)));
                         }
                     }
@@ -418,7 +431,7 @@ impl<'a> SplineTrack<'a> {
         // The branch-consistent logs to b, before the split replaces some by swings.
         let full_b: Vec<DVec3> = per
             .iter()
-            .map(|t| t.as_ref().map_or(DVec3::ZERO, |t| t.r[1]))
+            .map(|t| t.as_ref().map_or(DVec3::ZERO, Tri::log_b))
             .collect();
         split_twists(&mut per, &order, &placement, &stats);
         let logs = build.window_pass(&mut per, &full_b, &stretch_b, &placement, &stats);
@@ -570,12 +583,12 @@ impl<'t, 'a> Build<'t, 'a> {
                 let (rb, sb) = self.rs(&v_inv, corners, b);
                 let tri = Tri {
                     corners,
-                    r: [DVec3::ZERO, rb, DVec3::ZERO],
-                    g,
+                    r: [Vec3::ZERO, rb.as_vec3(), Vec3::ZERO],
+                    g: g.map(|g| g.as_vec3()),
                     // Set with the tangents in the window pass.
-                    sg: [[DVec3::ZERO; 2]; 3],
+                    sg: [[Vec3::ZERO; 2]; 3],
                     twist: [0.0; 3],
-                    axis: DVec3::ZERO,
+                    axis: Vec3::ZERO,
                 };
                 (Some(tri), sb)
             })
@@ -686,34 +699,36 @@ impl<'t, 'a> Build<'t, 'a> {
         unroll(&mut log[..nw], &win.times, ia, closest_branch);
         let mut values = log;
         let [ta, tb] = &win.tangents;
-        if tri.axis != DVec3::ZERO {
+        if tri.split() {
+            let axis = tri.axis.as_dvec3();
             let mut twist = [0.0; MAX_WINDOW];
             for w in 0..nw {
                 (twist[w], values[w]) = if w == ia + 1 {
-                    (tri.twist[1], tri.r[1])
+                    (tri.twist[1] as f64, tri.log_b())
                 } else {
-                    twist_swing(log[w], tri.axis)
+                    twist_swing(log[w], axis)
                 };
             }
             unroll(&mut twist[..nw], &win.times, ia, nearest_turn);
             tri.twist = [
-                win.combine(ta, |w| twist[w]),
+                win.combine(ta, |w| twist[w]) as f32,
                 tri.twist[1],
-                win.combine(tb, |w| twist[w]),
+                win.combine(tb, |w| twist[w]) as f32,
             ];
         }
         tri.r = [
             win.combine(ta, |w| values[w]),
             values[ia + 1],
             win.combine(tb, |w| values[w]),
-        ];
-        let g = tri.g;
+        ]
+        .map(|r| r.as_vec3());
+        let g = tri.g.map(|g| g.as_dvec3());
         tri.sg = [
             win.combine(ta, |w| stretch[w]),
             stretch[ia + 1],
             win.combine(tb, |w| stretch[w]),
         ]
-        .map(|s| [s * g[0], s * g[1]]);
+        .map(|s| [(s * g[0]).as_vec3(), (s * g[1]).as_vec3()]);
         Some(log)
     }
 }
@@ -741,8 +756,8 @@ impl Components {
         };
         for (tri, c, area) in members() {
             area_of[c] += area;
-            mean_b[c] += tri.r[1] * area;
-            turn[c] = turn[c].max(tri.r[1].length());
+            mean_b[c] += tri.log_b() * area;
+            turn[c] = turn[c].max(tri.log_b().length());
         }
         for (m, w) in mean_b.iter_mut().zip(&area_of) {
             if *w > 0.0 {
@@ -751,7 +766,7 @@ impl Components {
         }
         let mut spread = vec![0.0; components];
         for (tri, c, area) in members() {
-            spread[c] += area * (tri.r[1] - mean_b[c]).length_squared();
+            spread[c] += area * (tri.log_b() - mean_b[c]).length_squared();
         }
         Components {
             area: area_of,
@@ -782,11 +797,11 @@ fn split_twists(
         .collect();
     per.par_iter_mut().flatten().for_each(|tri| {
         if let Some(c) = placement.component_of(tri.corners[0] as usize) {
-            tri.axis = axis[c];
-            if tri.axis != DVec3::ZERO {
-                let (twist, swing) = twist_swing(tri.r[1], tri.axis);
-                tri.twist[1] = twist;
-                tri.r[1] = swing;
+            tri.axis = axis[c].as_vec3();
+            if tri.split() {
+                let (twist, swing) = twist_swing(tri.log_b(), axis[c]);
+                tri.twist[1] = twist as f32;
+                tri.r[1] = swing.as_vec3();
             }
         }
     });
@@ -794,10 +809,12 @@ fn split_twists(
         let target = if from == u32::MAX {
             0.0
         } else {
-            per[from as usize].as_ref().map_or(0.0, |x| x.twist[1])
+            per[from as usize]
+                .as_ref()
+                .map_or(0.0, |x| x.twist[1] as f64)
         };
-        if let Some(tri) = per[t as usize].as_mut().filter(|x| x.axis != DVec3::ZERO) {
-            tri.twist[1] = nearest_turn(tri.twist[1], target);
+        if let Some(tri) = per[t as usize].as_mut().filter(|x| x.split()) {
+            tri.twist[1] = nearest_turn(tri.twist[1] as f64, target) as f32;
         }
     }
 }
@@ -827,20 +844,22 @@ impl SplineSegment {
         let w = hermite(u);
         let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
         for tri in self.tris.iter().flatten() {
-            let r = tri.r[0] * w[1] + tri.r[1] * w[2] + tri.r[2] * w[3];
-            let rot = if tri.axis == DVec3::ZERO {
-                rotation(r)
-            } else {
-                let twist = tri.twist[0] * w[1] + tri.twist[1] * w[2] + tri.twist[2] * w[3];
-                let q = glam::DQuat::from_axis_angle(tri.axis, twist)
+            let [r0, r1, r2] = tri.r.map(|r| r.as_dvec3());
+            let r = r0 * w[1] + r1 * w[2] + r2 * w[3];
+            let rot = if tri.split() {
+                let [t0, t1, t2] = tri.twist.map(f64::from);
+                let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
+                let q = glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist)
                     * glam::DQuat::from_scaled_axis(r);
                 DMat3::from_quat(q)
+            } else {
+                rotation(r)
             };
             let v: [DVec3; 2] = std::array::from_fn(|k| {
-                rot * (tri.g[k] * w[0]
-                    + tri.sg[0][k] * w[1]
-                    + tri.sg[1][k] * w[2]
-                    + tri.sg[2][k] * w[3])
+                rot * (tri.g[k].as_dvec3() * w[0]
+                    + tri.sg[0][k].as_dvec3() * w[1]
+                    + tri.sg[1][k].as_dvec3() * w[2]
+                    + tri.sg[2][k].as_dvec3() * w[3])
             });
             scatter(&mut rhs, tri.corners, v[0], v[1]);
         }
