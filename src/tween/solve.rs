@@ -149,14 +149,8 @@ pub struct Factor {
     perm: Vec<u32>,
     diag: Vec<f64>,
     /// Strictly-lower L by columns (for the backward solve, a gather per column of L = row of
-    /// L^T): column j's values at `col_ptr[j]..col_ptr[j + 1]`, first rows `j + 1..end[b]`, then
-    /// rows `below[below_ptr[b]..below_ptr[b + 1]]`, with `b = block[j]`...
-    col_ptr: Vec<usize>,
-    vals: Vec<f64>,
-    block: Vec<u32>,
-    end: Vec<u32>,
-    below_ptr: Vec<usize>,
-    below: Vec<u32>,
+    /// L^T)...
+    columns: Columns,
     /// ...and by rows (for the forward solve, a gather per row of L), so both passes
     /// accumulate in registers instead of scattering into memory.
     row_ptr: Vec<usize>,
@@ -263,12 +257,7 @@ impl Factor {
             row_vals,
             perm,
             diag,
-            col_ptr: columns.col_ptr,
-            vals: columns.vals,
-            block: columns.block,
-            end: columns.end,
-            below_ptr: columns.below_ptr,
-            below: columns.below,
+            columns,
             pinned,
         })
     }
@@ -284,7 +273,7 @@ impl Factor {
 
     /// Nonzeros of L kept for the solves (diagonal included).
     pub fn nonzeros(&self) -> usize {
-        self.diag.len() + self.vals.len()
+        self.diag.len() + self.columns.vals.len()
     }
 
     /// Solve `A x = b` in place for three right-hand sides stored as rows `[x, y, z]`.
@@ -315,7 +304,8 @@ impl Factor {
     pub fn solve_permuted<const M: usize>(&self, y: &mut [[f64; M]]) {
         let n = self.diag.len();
         assert_eq!(y.len(), n);
-        self.check_columns();
+        self.columns.check();
+        assert_eq!(self.columns.block.len(), n);
         assert!(self.perm.iter().all(|&p| (p as usize) < n));
         let by_rows = !self.row_ptr.is_empty();
         if by_rows {
@@ -341,8 +331,8 @@ impl Factor {
                     let v = *y.get_unchecked(j);
                     let w: [f64; M] = std::array::from_fn(|c| v[c] * d);
                     *y.get_unchecked_mut(j) = w;
-                    let (k, inside, below) = self.column(j);
-                    let vals = self.vals.get_unchecked(k..);
+                    let (k, inside, below) = self.columns.column(j);
+                    let vals = self.columns.vals.get_unchecked(k..);
                     for (l, r) in vals
                         .iter()
                         .zip(inside.chain(below.iter().map(|&r| r as usize)))
@@ -356,8 +346,8 @@ impl Factor {
             }
             // L^T w = z: gather along each column of L.
             for j in (0..n).rev() {
-                let (k, inside, below) = self.column(j);
-                let vals = self.vals.get_unchecked(k..);
+                let (k, inside, below) = self.columns.column(j);
+                let vals = self.columns.vals.get_unchecked(k..);
                 let s = gather_column(y, vals, inside, below);
                 let b = *y.get_unchecked(j);
                 let d = 1.0 / *self.diag.get_unchecked(j);
@@ -365,12 +355,26 @@ impl Factor {
             }
         }
     }
+}
 
+/// L's strictly-lower columns in blocks (see [`Factor`]): column j's values at
+/// `col_ptr[j]..col_ptr[j + 1]`, first rows `j + 1..end[b]`, then rows
+/// `below[below_ptr[b]..below_ptr[b + 1]]`, with `b = block[j]`.
+struct Columns {
+    col_ptr: Vec<usize>,
+    vals: Vec<f64>,
+    block: Vec<u32>,
+    end: Vec<u32>,
+    below_ptr: Vec<usize>,
+    below: Vec<u32>,
+}
+
+impl Columns {
     /// Column j of L below the diagonal: where its values start, its rows inside its block,
     /// then its block's rows below.
     ///
     /// # Safety
-    /// `j < n` and the columns checked by [`Factor::check_columns`].
+    /// `j < n` and the columns checked by [`Columns::check`].
     #[inline(always)]
     unsafe fn column(&self, j: usize) -> (usize, std::ops::Range<usize>, &[u32]) {
         let b = *self.block.get_unchecked(j) as usize;
@@ -383,11 +387,11 @@ impl Factor {
         )
     }
 
-    /// Check what [`Factor::column`] relies on: every column's entries lie within `vals` and
+    /// Check what [`Columns::column`] relies on: every column's entries lie within `vals` and
     /// its rows below `n`.
-    fn check_columns(&self) {
-        let n = self.diag.len();
-        assert!(self.col_ptr.len() == n + 1 && self.block.len() == n);
+    fn check(&self) {
+        let n = self.block.len();
+        assert_eq!(self.col_ptr.len(), n + 1);
         assert_eq!(self.below_ptr.len(), self.end.len() + 1);
         assert!(self.below_ptr.windows(2).all(|w| w[0] <= w[1]));
         assert!(self
@@ -405,19 +409,7 @@ impl Factor {
             assert_eq!(self.col_ptr[j + 1] - self.col_ptr[j], count);
         }
     }
-}
 
-/// L's strictly-lower columns in blocks (see [`Factor`]).
-struct Columns {
-    col_ptr: Vec<usize>,
-    vals: Vec<f64>,
-    block: Vec<u32>,
-    end: Vec<u32>,
-    below_ptr: Vec<usize>,
-    below: Vec<u32>,
-}
-
-impl Columns {
     /// Pack the strictly-lower entries of the factorization's buffer `values` to its front, in
     /// place (every entry moves only forwards: each column drops at least its diagonal).
     fn pack(symbolic: &SymbolicCholesky<u32>, mut values: Vec<f64>, n: usize) -> Columns {
@@ -453,20 +445,16 @@ impl Columns {
                 }
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
-                let (begin, end) = (s.supernode_begin(), s.supernode_end());
-                for sn in 0..s.n_supernodes() {
-                    let (start, stop) = (begin[sn] as usize, end[sn] as usize);
-                    let rows = s.supernode(sn).pattern();
-                    let ncols = stop - start;
-                    let nrows = ncols + rows.len();
-                    let base = s.col_ptr_for_val()[sn] as usize;
-                    c.end.push(stop as u32);
-                    c.below.extend_from_slice(rows);
+                for (sn, block) in supernodes(s).enumerate() {
+                    let (ncols, nrows) = (block.columns.len(), block.height());
+                    c.end.push(block.columns.end as u32);
+                    c.below.extend_from_slice(block.rows);
                     c.below_ptr.push(c.below.len());
                     for k in 0..ncols {
                         c.block.push(sn as u32);
                         // Column k of the block is column-major: rows k + 1.. follow its diagonal.
-                        keep(&mut c, base + k * nrows + k + 1..base + (k + 1) * nrows);
+                        let at = block.base + k * nrows;
+                        keep(&mut c, at + k + 1..at + nrows);
                     }
                 }
             }
@@ -495,26 +483,48 @@ fn walk_lower(symbolic: &SymbolicCholesky<u32>, n: usize, f: &mut dyn FnMut(usiz
             }
         }
         SymbolicCholeskyRaw::Supernodal(s) => {
-            let (begin, end) = (s.supernode_begin(), s.supernode_end());
-            for sn in 0..s.n_supernodes() {
-                let (start, stop) = (begin[sn] as usize, end[sn] as usize);
-                let pattern_rows = s.supernode(sn).pattern();
-                let ncols = stop - start;
-                let nrows = ncols + pattern_rows.len();
-                let base = s.col_ptr_for_val()[sn] as usize;
+            for block in supernodes(s) {
+                let (start, ncols, nrows) =
+                    (block.columns.start, block.columns.len(), block.height());
                 for c in 0..ncols {
                     for r in c..nrows {
                         let row = if r < ncols {
                             start + r
                         } else {
-                            pattern_rows[r - ncols] as usize
+                            block.rows[r - ncols] as usize
                         };
-                        f(start + c, row, base + c * nrows + r);
+                        f(start + c, row, block.base + c * nrows + r);
                     }
                 }
             }
         }
     }
+}
+
+/// One supernode of faer's factor: its columns, the rows below its diagonal block, and where
+/// its dense column-major block (the diagonal block's rows, then `rows`) starts in the values.
+struct Supernode<'s> {
+    columns: std::ops::Range<usize>,
+    rows: &'s [u32],
+    base: usize,
+}
+
+impl Supernode<'_> {
+    /// Rows of the block: the diagonal block's, then those below.
+    fn height(&self) -> usize {
+        self.columns.len() + self.rows.len()
+    }
+}
+
+fn supernodes<'s>(
+    s: &'s faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<u32>,
+) -> impl Iterator<Item = Supernode<'s>> {
+    let (begin, end) = (s.supernode_begin(), s.supernode_end());
+    (0..s.n_supernodes()).map(move |sn| Supernode {
+        columns: begin[sn] as usize..end[sn] as usize,
+        rows: s.supernode(sn).pattern(),
+        base: s.col_ptr_for_val()[sn] as usize,
+    })
 }
 
 /// One step of a gathering triangular solve: `y[i] = (y[i] - sum_k vals[k] y[idx[k]]) / diag[i]`
@@ -556,26 +566,40 @@ unsafe fn gather_dot<const M: usize>(
     start: usize,
     end: usize,
 ) -> [f64; M] {
-    let (mut a, mut b) = ([0.0f64; M], [0.0f64; M]);
-    let mut k = start;
-    while k + 1 < end {
-        let (v0, v1) = (*vals.get_unchecked(k), *vals.get_unchecked(k + 1));
-        let t0 = y.get_unchecked(*idx.get_unchecked(k) as usize);
-        let t1 = y.get_unchecked(*idx.get_unchecked(k + 1) as usize);
+    let mut sums = [[0.0f64; M]; 2];
+    add_pairs(&mut sums, end - start, |k| {
+        let k = start + k;
+        (
+            *vals.get_unchecked(k),
+            y.get_unchecked(*idx.get_unchecked(k) as usize),
+        )
+    });
+    std::array::from_fn(|c| sums[0][c] + sums[1][c])
+}
+
+/// Add `count` terms `v * row` (`term(k)` gives the k-th) into two accumulators, alternately:
+/// the inner loop of the triangular solves.
+#[inline(always)]
+fn add_pairs<'y, const M: usize>(
+    sums: &mut [[f64; M]; 2],
+    count: usize,
+    term: impl Fn(usize) -> (f64, &'y [f64; M]),
+) {
+    let mut k = 0;
+    while k + 1 < count {
+        let ((v0, t0), (v1, t1)) = (term(k), term(k + 1));
         for c in 0..M {
-            a[c] += v0 * t0[c];
-            b[c] += v1 * t1[c];
+            sums[0][c] += v0 * t0[c];
+            sums[1][c] += v1 * t1[c];
         }
         k += 2;
     }
-    if k < end {
-        let v = *vals.get_unchecked(k);
-        let t = y.get_unchecked(*idx.get_unchecked(k) as usize);
+    if k < count {
+        let (v, t) = term(k);
         for c in 0..M {
-            a[c] += v * t[c];
+            sums[0][c] += v * t[c];
         }
     }
-    std::array::from_fn(|c| a[c] + b[c])
 }
 
 /// `sum_k vals[k] * y[row_k]` over a column's rows, `inside` (contiguous) then `below`, for
@@ -590,46 +614,19 @@ unsafe fn gather_column<const M: usize>(
     inside: std::ops::Range<usize>,
     below: &[u32],
 ) -> [f64; M] {
-    let (mut a, mut b) = ([0.0f64; M], [0.0f64; M]);
-    let mut k = 0;
-    let mut r = inside.start;
-    while r + 1 < inside.end {
-        let (v0, v1) = (*vals.get_unchecked(k), *vals.get_unchecked(k + 1));
-        let (t0, t1) = (y.get_unchecked(r), y.get_unchecked(r + 1));
-        for c in 0..M {
-            a[c] += v0 * t0[c];
-            b[c] += v1 * t1[c];
-        }
-        k += 2;
-        r += 2;
-    }
-    if r < inside.end {
-        let (v, t) = (*vals.get_unchecked(k), y.get_unchecked(r));
-        for c in 0..M {
-            a[c] += v * t[c];
-        }
-        k += 1;
-    }
-    let mut i = 0;
-    while i + 1 < below.len() {
-        let (v0, v1) = (*vals.get_unchecked(k), *vals.get_unchecked(k + 1));
-        let t0 = y.get_unchecked(*below.get_unchecked(i) as usize);
-        let t1 = y.get_unchecked(*below.get_unchecked(i + 1) as usize);
-        for c in 0..M {
-            a[c] += v0 * t0[c];
-            b[c] += v1 * t1[c];
-        }
-        k += 2;
-        i += 2;
-    }
-    if i < below.len() {
-        let v = *vals.get_unchecked(k);
-        let t = y.get_unchecked(*below.get_unchecked(i) as usize);
-        for c in 0..M {
-            a[c] += v * t[c];
-        }
-    }
-    std::array::from_fn(|c| a[c] + b[c])
+    let mut sums = [[0.0f64; M]; 2];
+    let first = inside.start;
+    let count = inside.len();
+    add_pairs(&mut sums, count, |k| {
+        (*vals.get_unchecked(k), y.get_unchecked(first + k))
+    });
+    add_pairs(&mut sums, below.len(), |k| {
+        (
+            *vals.get_unchecked(count + k),
+            y.get_unchecked(*below.get_unchecked(k) as usize),
+        )
+    });
+    std::array::from_fn(|c| sums[0][c] + sums[1][c])
 }
 
 /// Connected components of `triangles` over `n` vertices (union-find); vertices touched by no
