@@ -126,9 +126,9 @@ impl Pattern {
 }
 
 /// Above this many off-diagonal nonzeros in L, only the column-oriented copy is kept (8 bytes
-/// an entry, compacted inside the factorization's own buffer) and the row copy (12 bytes an
-/// entry) is not built: a factor of 16M nonzeros then takes about 130 MiB instead of 310 MiB,
-/// and no second buffer is ever allocated.
+/// an entry, packed inside the factorization's own buffer, plus the supernodes' explicit zeros)
+/// and the row copy (12 bytes an entry) is not built: a factor of 16M nonzeros then takes about
+/// 140 MiB instead of 320 MiB, and no second buffer is ever allocated.
 pub const TWO_COPIES_MAX_NONZEROS: usize = 16_000_000;
 
 /// Most frames solved in one pass over the factor ([`Placement::place_block`]); 12 right-hand
@@ -141,9 +141,9 @@ pub const MAX_BLOCK: usize = 4;
 ///
 /// The columns keep faer's supernodes: the columns of a block share their rows below the block,
 /// so a column's entries are the rows after it inside its block (contiguous) and then the
-/// block's rows below, stored once per block instead of a row index per entry (a third less
-/// memory than plain CSC; the supernodes' explicit zeros are kept, 10-15% of the entries on
-/// the bench's tubes). A simplicial factor is kept as one block per column.
+/// block's rows below, stored once per block instead of a row index per entry (about a
+/// quarter less memory than plain CSC: the supernodes' explicit zeros are kept, 10-15% of the
+/// entries on the bench's tubes). A simplicial factor is kept as one block per column.
 pub struct Factor {
     /// `perm[i]`: the original row placed at position i.
     perm: Vec<u32>,

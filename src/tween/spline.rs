@@ -884,6 +884,12 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_triangle_s_data_takes_172_bytes() {
+        // What the memory figures of a segment (and the 4M-triangle peak) rest on.
+        assert_eq!(std::mem::size_of::<Option<Tri>>(), 172);
+    }
+
+    #[test]
     fn c2_tangents_reproduce_lines_and_match_hand_values() {
         // Three uniform knots: the chord ends give m0 + 4 m1 + m2 = 3 (v2 - v0) with
         // m0 = v1 - v0, m2 = v2 - v1, so m1 = (v2 - v0) / 2, Catmull-Rom's tangent.
