@@ -367,7 +367,9 @@ fn twist_error(method: Method, degrees: f64) -> (f64, f64) {
 
 #[test]
 fn large_twists_between_two_keys_stay_consistent() {
-    for (degrees, tol) in [(90.0, 0.005), (270.0, 0.005), (360.0, 0.01)] {
+    // 270 and 360 degrees: 0.0007 and 0.0013 (0.0025 and 0.0045 before a split component's
+    // rotations were taken around its twist).
+    for (degrees, tol) in [(90.0, 0.005), (270.0, 0.0015), (360.0, 0.002)] {
         let lin = twist_error(Method::Linear, degrees);
         let seed = twist_error(Method::Seed, degrees);
         let spline = twist_error(Method::Spline, degrees);
@@ -478,14 +480,17 @@ fn rms(a: &[DVec3], b: &[DVec3]) -> f64 {
 /// fat, short and long, twisted 22.5 to 720 degrees in 22.5-degree steps, in one, three and
 /// five key steps (odd, so that the clip's middle frame is a tween; the resolutions and angles
 /// where the turn count was once chosen wrong are in). Wherever a key step shears the surface
-/// less than tan 31 degrees (helix slope r x angle / length <= 0.6):
+/// less than tan 35 degrees (helix slope r x angle / length <= 0.7):
 /// - within 0.01 of the diagonal of the analytic twist;
 /// - no wrong turn count: at the same shape, resolutions agree within 0.005 of the diagonal, and
 ///   no step of 22.5 degrees changes the error by more than 0.005 (a wrong count costs 0.13).
 ///
-/// Beyond that slope, linear stretch interpolation itself departs from the twist (0.0175 at 720
-/// degrees in one step of the 0.5 x 6 tube, growing smoothly with the angle, the same at every
-/// resolution; a fat short tube 1 x 2 reaches 0.25): add a key.
+/// And the issue's own tube (0.5 x 0.25 x 6) at 16 to 32 segments around: within 0.01 at every
+/// angle up to 720 degrees in one key step (slope 1.05; before a split component's rotations
+/// were taken around its twist, 36 of its cases were over, up to 0.0175). Beyond the slope,
+/// the coarse tubes (6 to 12 segments around, whose chords a per-triangle interpolation cannot
+/// follow) and the fat short tube (1 x 2, slope up to 6.3, 0.38 at 630 degrees in one step) depart
+/// from the analytic twist, smoothly with the angle: add a key.
 #[test]
 fn whole_turns_at_any_resolution() {
     // (rings, segments around, ry, rz, length); shapes that differ only in resolution in a row.
@@ -527,7 +532,10 @@ fn whole_turns_at_any_resolution() {
                         worst = (e, what.clone());
                     }
                     let slope = ry.max(rz) * (degrees / keys as f64).to_radians() / len;
-                    if slope > 0.6 {
+                    if (ry, rz, len, segments >= 16) == (0.5, 0.25, 6.0, true) && e > 0.01 {
+                        failures.push(format!("{what}: the issue's tube (slope {slope:.2})"));
+                    }
+                    if slope > 0.7 {
                         continue;
                     }
                     if e > 0.01 {
@@ -542,7 +550,7 @@ fn whole_turns_at_any_resolution() {
                 let (lo, hi) = errors
                     .iter()
                     .fold((f64::MAX, 0.0f64), |(l, h), &e| (l.min(e), h.max(e)));
-                if slope <= 0.6 && hi - lo > 0.005 {
+                if slope <= 0.7 && hi - lo > 0.005 {
                     failures.push(format!(
                         "{:?} at {degrees} deg in {keys}: resolutions disagree {errors:?}",
                         family[0]

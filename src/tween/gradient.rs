@@ -96,6 +96,22 @@ pub fn polar(t: &DMat3) -> (DQuat, DMat3) {
     (DQuat::from_mat3(&r).normalize(), s)
 }
 
+/// `T = Q U` with Q the rotation that takes the in-plane unit direction `e` of the reference
+/// triangle (unit normal `n`) to the direction of `T e` and `n` to the deformed normal (`T n`'s
+/// direction), and `U = Q^T T`: the part of T that Q leaves, shear included (not symmetric).
+/// For a rotation T, Q = T and U = I, as the polar decomposition gives them; for a surface
+/// sheared along `e`'s normal plane (a twisted tube, `e` around it) Q is the rigid turn and U the
+/// shear, which interpolates linearly. `None` where T collapses `e` or `n`.
+pub fn aligned(t: &DMat3, e: DVec3, n: DVec3) -> Option<(DQuat, DMat3)> {
+    let e2 = (*t * e).try_normalize()?;
+    let n2 = (*t * n).try_normalize()?;
+    let e2 = (e2 - n2 * n2.dot(e2)).try_normalize()?;
+    let from = DMat3::from_cols(e, n.cross(e), n);
+    let to = DMat3::from_cols(e2, n2.cross(e2), n2);
+    let q = to * from.transpose();
+    Some((DQuat::from_mat3(&q).normalize(), q.transpose() * *t))
+}
+
 /// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations: eigenvalues in
 /// descending order and the matching eigenvectors as the columns of the returned matrix.
 pub fn sym_eigen(m: &DMat3) -> ([f64; 3], DMat3) {
@@ -242,6 +258,25 @@ mod tests {
         let (q, s2) = polar(&(r * s));
         assert!(close(&DMat3::from_quat(q), &r, 1e-10));
         assert!(close(&s2, &s, 1e-10));
+    }
+
+    #[test]
+    fn aligned_keeps_rotations_and_leaves_a_twist_s_shear_to_u() {
+        let (e, n) = (DVec3::Y, DVec3::Z);
+        let r = DMat3::from_quat(DQuat::from_axis_angle(
+            DVec3::new(1.0, 2.0, -0.5).normalize(),
+            2.5,
+        ));
+        let (q, u) = aligned(&r, e, n).unwrap();
+        assert!(close(&DMat3::from_quat(q), &r, 1e-12) && close(&u, &DMat3::IDENTITY, 1e-12));
+        // A surface along x sheared around it (a helix's slope, 1.5) and turned about x: the
+        // turn comes out whole, the shear stays in U; the polar decomposition mixes them.
+        let shear = DMat3::from_cols(DVec3::new(1.0, 1.5, 0.0), DVec3::Y, DVec3::Z);
+        let turn = DMat3::from_rotation_x(2.0);
+        let (q, u) = aligned(&(turn * shear), e, n).unwrap();
+        assert!(close(&DMat3::from_quat(q), &turn, 1e-12) && close(&u, &shear, 1e-12));
+        let (p, _) = polar(&(turn * shear));
+        assert!(!close(&DMat3::from_quat(p), &turn, 0.1));
     }
 
     #[test]

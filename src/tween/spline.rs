@@ -23,7 +23,7 @@
 //! it, outward from the segment's own log.
 
 use super::clock::{self, Part};
-use super::gradient::{deformation, frame, gradient_operator, polar, quat_log, rotation};
+use super::gradient::{aligned, deformation, frame, gradient_operator, polar, quat_log, rotation};
 use super::solve::{scatter, Pattern, Placement};
 use super::weld::{bbox_diagonal, rms_rel};
 use anyhow::Result;
@@ -40,6 +40,11 @@ const NO_TURN: f64 = 1e-5;
 /// (see [`twist_swing`]); below it, as logs (the same to second order, and measured a little
 /// better on the morph-keyframe birds).
 const SPLIT_ABOVE: f64 = std::f64::consts::PI;
+
+/// A split component's triangle whose normal makes less than asin(0.1), about 6 degrees, with
+/// the twist axis faces along it (a tube's cap): its rotation is taken by the polar
+/// decomposition, as the direction across the axis in its plane is not defined there.
+const ALONG_AXIS: f64 = 0.1;
 
 /// Weight each triangle's term by its reference area.
 const WEIGHTED: bool = true;
@@ -177,7 +182,8 @@ struct Tri {
     /// Gradient operator at corners 1 and 2 of the reference triangle (corner 0: minus sum).
     g: [Vec3; 2],
     /// S g for both gradients and S the stretch's tangent at a, b's stretch, its tangent at b
-    /// (key a's stretch is I).
+    /// (key a's stretch is I; where the rotation is taken across a twist, see [`Build::across`],
+    /// S is the aligned decomposition's U).
     sg: [[Vec3; 2]; 3],
     /// Where the component is split (see [`SPLIT_ABOVE`]): the twist about `axis` (tangent at
     /// a, b's angle with any number of turns, tangent at b), `r` then holding the swings' logs;
@@ -680,6 +686,35 @@ impl<'t, 'a> Build<'t, 'a> {
         logs
     }
 
+    /// Where `tri` belongs to a split component and faces across its twist axis: its unit
+    /// normal in key a and the in-plane direction across the axis (see [`aligned`]): its
+    /// rotation to every key is then taken around the twist, so the shear that a twist puts
+    /// on the surface stays in the part interpolated linearly. `None` elsewhere, and for a
+    /// triangle facing along the axis (within [`ALONG_AXIS`], like a tube's cap).
+    fn across(&self, tri: &Tri) -> Option<(DVec3, DVec3)> {
+        if !tri.split() {
+            return None;
+        }
+        let x = &self.track.keys[self.a];
+        let [i, j, k] = tri.corners.map(|v| x[v as usize]);
+        let n = (j - i).cross(k - i).try_normalize()?;
+        let e = tri.axis.as_dvec3().cross(n);
+        (e.length() > ALONG_AXIS).then(|| (e.normalize(), n))
+    }
+
+    /// [`Build::rs`] by the decomposition aligned `across` the twist (see [`Build::across`]).
+    fn aligned_rs(
+        &self,
+        v_inv: &DMat3,
+        [i, j, k]: [u32; 3],
+        key: usize,
+        (e, n): (DVec3, DVec3),
+    ) -> Option<(DVec3, DMat3)> {
+        let x = &self.track.keys[key];
+        let t = deformation(v_inv, x[i as usize], x[j as usize], x[k as usize]);
+        aligned(&t, e, n).map(|(q, u)| (quat_log(q), u))
+    }
+
     /// Set `tri`'s tangents (rotation, twist, stretch) from its values at the window's keys,
     /// given its branch-consistent log `full_b` and stretch `sb` at key b; returns its unrolled
     /// logs at the window's keys (`None` for a triangle degenerate in key a).
@@ -691,9 +726,18 @@ impl<'t, 'a> Build<'t, 'a> {
         let mut log = [DVec3::ZERO; MAX_WINDOW];
         let mut stretch = [DMat3::IDENTITY; MAX_WINDOW];
         (log[ia + 1], stretch[ia + 1]) = (full_b, sb);
+        let across = self.across(tri);
+        let aligned_at =
+            |key: usize| across.and_then(|ac| self.aligned_rs(&v_inv, tri.corners, key, ac));
+        // b by the aligned decomposition where it applies, on the branch of b's settled log.
+        let aligned_b = aligned_at(win.keys[ia + 1]);
+        if let Some((log_b, u)) = aligned_b {
+            (log[ia + 1], stretch[ia + 1]) = (closest_branch(log_b, full_b), u);
+        }
         for (w, &key) in win.keys.iter().enumerate() {
             if w != ia && w != ia + 1 {
-                (log[w], stretch[w]) = self.rs(&v_inv, tri.corners, key);
+                (log[w], stretch[w]) =
+                    aligned_at(key).unwrap_or_else(|| self.rs(&v_inv, tri.corners, key));
             }
         }
         unroll(&mut log[..nw], &win.times, ia, closest_branch);
@@ -704,7 +748,13 @@ impl<'t, 'a> Build<'t, 'a> {
             let mut twist = [0.0; MAX_WINDOW];
             for w in 0..nw {
                 (twist[w], values[w]) = if w == ia + 1 {
-                    (tri.twist[1] as f64, tri.log_b())
+                    if aligned_b.is_some() {
+                        // The turn count as b's twist was unwrapped over the surface.
+                        let (twist, swing) = twist_swing(log[w], axis);
+                        (nearest_turn(twist, tri.twist[1] as f64), swing)
+                    } else {
+                        (tri.twist[1] as f64, tri.log_b())
+                    }
                 } else {
                     twist_swing(log[w], axis)
                 };
@@ -712,7 +762,7 @@ impl<'t, 'a> Build<'t, 'a> {
             unroll(&mut twist[..nw], &win.times, ia, nearest_turn);
             tri.twist = [
                 win.combine(ta, |w| twist[w]) as f32,
-                tri.twist[1],
+                twist[ia + 1] as f32,
                 win.combine(tb, |w| twist[w]) as f32,
             ];
         }
