@@ -45,7 +45,8 @@ fn bent_tube_keeps_its_volume_without_inverted_triangles() {
     assert_eq!(f.len(), 11);
     for fr in f {
         let v = fr["volume_change"].as_f64().unwrap();
-        assert!(v.abs() <= 0.01, "frame {}: volume change {v}", fr["frame"]);
+        // 0.29% at most (0.82% before a split component's rotations were taken around its turn).
+        assert!(v.abs() <= 0.005, "frame {}: volume change {v}", fr["frame"]);
         assert_eq!(fr["inverted_triangles"], 0, "frame {}", fr["frame"]);
     }
     // Keys are exact: no distortion at t = 0 and 1.

@@ -99,9 +99,10 @@ pub fn polar(t: &DMat3) -> (DQuat, DMat3) {
 /// `T = Q U` with Q the rotation that takes the in-plane unit direction `e` of the reference
 /// triangle (unit normal `n`) to the direction of `T e` and `n` to the deformed normal (`T n`'s
 /// direction), and `U = Q^T T`: the part of T that Q leaves, shear included (not symmetric).
-/// For a rotation T, Q = T and U = I, as the polar decomposition gives them; for a surface
-/// sheared along `e`'s normal plane (a twisted tube, `e` around it) Q is the rigid turn and U the
-/// shear, which interpolates linearly. `None` where T collapses `e` or `n`.
+/// For a rotation T, Q = T and U = I, as the polar decomposition gives them; for a turned
+/// surface sheared along `e` (a twisted tube, `e` around it, the shear its helix's slope) Q is
+/// the turn and U the shear, which interpolates linearly, where the polar decomposition hands
+/// part of the shear to the rotation. `None` where T collapses `e` or `n`.
 pub fn aligned(t: &DMat3, e: DVec3, n: DVec3) -> Option<(DQuat, DMat3)> {
     let e2 = (*t * e).try_normalize()?;
     let n2 = (*t * n).try_normalize()?;
