@@ -573,11 +573,13 @@ fn whole_turns_at_any_resolution() {
 /// bent at its middle by 45 or 90 degrees while twisting 90 to 720 degrees, in one and three key
 /// steps, at three resolutions. What holds: up to 360 degrees of twist per key step the three
 /// resolutions agree within 0.01 of the diagonal (the turn is counted the same at every
-/// tessellation). What does not yet (issue 16, open): against the analytic pose (half the twist,
-/// then half the bend) the middle frame is off by 0.02 at 90 degrees and 45 of bend in one step,
-/// 0.10 at 180 and 90 (rotations about a moving axis do not commute, and slerp takes the
-/// shortest way between the keys' rotations, not this path), and past 360 degrees a step the
-/// resolutions disagree (720 degrees in one step: 0.35, 0.05, 0.37). The figures are printed.
+/// tessellation), and in three key steps the middle frame is within 0.02 of the analytic pose
+/// (half the twist, then half the bend) at every twist: 0.0134-0.0140 at 720 and 90 (0.068-0.070
+/// before the bend a split component's cross-section shares was taken apart from its twist).
+/// What does not yet (issue 16, open): in one key step the middle frame is off by 0.02 at 90
+/// degrees and 45 of bend, 0.08 at 180 and 90 (rotations about a moving axis do not commute, and
+/// the keys alone do not say which way between them), and past 360 degrees a step the
+/// resolutions disagree (720 degrees in one step: 0.31, 0.11, 0.32). The figures are printed.
 #[test]
 fn a_bent_and_twisted_arm_counts_its_turns_at_every_resolution() {
     let mut failures = Vec::new();
@@ -605,6 +607,9 @@ fn a_bent_and_twisted_arm_counts_its_turns_at_every_resolution() {
                     .iter()
                     .fold((f64::MAX, 0.0f64), |(l, h), &e| (l.min(e), h.max(e)));
                 worst = worst.max(hi - lo);
+                if keys == 3 && hi > 0.02 {
+                    failures.push(format!("{what}: off the analytic pose"));
+                }
                 if twist / keys as f64 <= 360.0 && hi - lo > 0.01 {
                     failures.push(format!("{what}: resolutions disagree"));
                 }

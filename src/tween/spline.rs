@@ -46,6 +46,12 @@ const SPLIT_ABOVE: f64 = std::f64::consts::PI;
 /// decomposition, as the direction across the axis in its plane is not defined there.
 const ALONG_AXIS: f64 = 0.1;
 
+/// Half the width of the cross-section over which a split component's bend is averaged
+/// (see [`Build::bends`]), as a fraction of the component's extent along its twist axis: 3% of
+/// a limb's length covers one to three rings of the tested arms (30 to 120 rings); 8% measured
+/// about the same.
+const CROSS_SECTION: f64 = 0.03;
+
 /// Weight each triangle's term by its reference area.
 const WEIGHTED: bool = true;
 
@@ -171,8 +177,8 @@ pub struct SplineTrack<'a> {
     triangles: &'a [[u32; 3]],
 }
 
-/// Per valid triangle of a segment. Held in single precision (172 bytes with its `Option`
-/// instead of 336: at 4M triangles 0.69 GB instead of 1.34 GB through every frame), as the
+/// Per valid triangle of a segment. Held in single precision (208 bytes with its `Option`
+/// instead of 408: at 4M triangles 0.83 GB instead of 1.63 GB through every frame), as the
 /// output's vertices are; computed and used in double precision.
 struct Tri {
     corners: [u32; 3],
@@ -190,6 +196,10 @@ struct Tri {
     /// otherwise `axis` is zero and `r` the rotations' logs.
     twist: [f32; 3],
     axis: Vec3,
+    /// Where the component is split: the bend its cross-section shares (see
+    /// [`Build::bends`]), a rotation log applied after the twist: tangent at a, b's, tangent at
+    /// b (key a's is zero).
+    bend: [Vec3; 3],
 }
 
 impl Tri {
@@ -231,15 +241,30 @@ pub struct SplineSegment {
 /// `axis` half way.
 fn twist_swing(r: DVec3, axis: DVec3) -> (f64, DVec3) {
     let q = glam::DQuat::from_scaled_axis(r);
+    match twist_of(q, axis) {
+        Some(twist) => {
+            let along = q.xyz().dot(axis);
+            (2.0 * along.atan2(q.w), quat_log(twist.conjugate() * q))
+        }
+        // A half-turn swing: no twist can be told apart.
+        None => (0.0, r),
+    }
+}
+
+/// The twist about unit `axis` of rotation `q` (the same whichever side of it the swing is
+/// taken), `None` for a half-turn swing.
+fn twist_of(q: glam::DQuat, axis: DVec3) -> Option<glam::DQuat> {
     let along = q.xyz().dot(axis);
     let norm = (q.w * q.w + along * along).sqrt();
-    if norm < 1e-12 {
-        // A half-turn swing: no twist can be told apart.
-        return (0.0, r);
-    }
-    let twist = glam::DQuat::from_xyzw(axis.x * along, axis.y * along, axis.z * along, q.w) / norm;
-    let swing = twist.conjugate() * q;
-    (2.0 * along.atan2(q.w), quat_log(swing))
+    (norm >= 1e-12)
+        .then(|| glam::DQuat::from_xyzw(axis.x * along, axis.y * along, axis.z * along, q.w) / norm)
+}
+
+/// The swing of the rotation with log `r` taken after its twist about `axis` (R = swing
+/// twist): the swing in the deformed key's frame, as a limb's bend at a joint is.
+fn swing_after_twist(r: DVec3, axis: DVec3) -> DVec3 {
+    let q = glam::DQuat::from_scaled_axis(r);
+    twist_of(q, axis).map_or(DVec3::ZERO, |twist| quat_log(q * twist.conjugate()))
 }
 
 /// `angle` plus the whole turns that bring it nearest to `target`.
@@ -595,6 +620,7 @@ impl<'t, 'a> Build<'t, 'a> {
                     sg: [[Vec3::ZERO; 2]; 3],
                     twist: [0.0; 3],
                     axis: Vec3::ZERO,
+                    bend: [Vec3::ZERO; 3],
                 };
                 (Some(tri), sb)
             })
@@ -645,6 +671,8 @@ impl<'t, 'a> Build<'t, 'a> {
         stats: &Components,
     ) -> Vec<[DVec3; MAX_WINDOW]> {
         let mut logs = vec![[DVec3::ZERO; MAX_WINDOW]; stats.area.len()];
+        let bends = self.bends(per, placement);
+        let nw = self.win.keys.len();
         // Fixed chunks: the sums, and so the output, do not depend on the number of threads.
         let chunk = 4096;
         let sums: Vec<std::collections::HashMap<usize, [DVec3; MAX_WINDOW]>> = per
@@ -652,12 +680,15 @@ impl<'t, 'a> Build<'t, 'a> {
             .zip(self.areas.par_chunks(chunk))
             .zip(full_b.par_chunks(chunk))
             .zip(stretch_b.par_chunks(chunk))
-            .map(|(((tris, areas), full_b), stretch_b)| {
+            .enumerate()
+            .map(|(at, (((tris, areas), full_b), stretch_b))| {
                 let mut sums = std::collections::HashMap::new();
                 let each = tris.iter_mut().zip(areas).zip(full_b).zip(stretch_b);
-                for (((tri, &area), &full_b), &sb) in each {
+                for (k, (((tri, &area), &full_b), &sb)) in each.enumerate() {
                     let Some(tri) = tri.as_mut() else { continue };
-                    let Some(log) = self.tangents(tri, full_b, sb) else {
+                    let t = at * chunk + k;
+                    let bend = bends.get(t * nw..(t + 1) * nw);
+                    let Some(log) = self.tangents(tri, full_b, sb, bend) else {
                         continue;
                     };
                     if let Some(c) = placement.component_of(tri.corners[0] as usize) {
@@ -715,10 +746,101 @@ impl<'t, 'a> Build<'t, 'a> {
         aligned(&t, e, n).map(|(q, u)| (quat_log(q), u))
     }
 
+    /// The bend of each triangle of a split component at every window key (`nw` a triangle,
+    /// empty where no component splits): the swing its rotation makes after its twist
+    /// ([`swing_after_twist`]), averaged, weighted by area, over the component's triangles whose
+    /// centroids in key a lie within [`CROSS_SECTION`] of its own along the twist axis. A limb's
+    /// bend is shared by its cross-section; the small tilt a twist gives each triangle (a flat
+    /// triangle between two rings turned apart) turns with the surface around the axis and
+    /// averages out over it. Single precision and running sums: 2 x 12 bytes a triangle and
+    /// window key at the peak.
+    fn bends(&self, per: &[Option<Tri>], placement: &Placement) -> Vec<Vec3> {
+        if !per.iter().flatten().any(Tri::split) {
+            return Vec::new();
+        }
+        let (win, x) = (&self.win, &self.track.keys[self.a]);
+        let nw = win.keys.len();
+        let component = |t: usize| {
+            let tri = per[t].as_ref().filter(|tri| tri.split())?;
+            placement.component_of(tri.corners[0] as usize)
+        };
+        // Each split triangle's swings (a's is zero) and position along the axis.
+        let mut swing = vec![Vec3::ZERO; per.len() * nw];
+        let mut position = vec![0.0f64; per.len()];
+        let counted: Vec<bool> = (swing.par_chunks_mut(nw).zip(&mut position).zip(per))
+            .enumerate()
+            .map(|(t, ((swing, position), tri))| {
+                let Some(tri) = tri.as_ref().filter(|_| component(t).is_some()) else {
+                    return false;
+                };
+                let Some(v_inv) = self.inverse(tri.corners) else {
+                    return false;
+                };
+                let (axis, across) = (tri.axis.as_dvec3().normalize(), self.across(tri));
+                for (w, &key) in win.keys.iter().enumerate().filter(|&(w, _)| w != win.a) {
+                    let (log, _) = across
+                        .and_then(|ac| self.aligned_rs(&v_inv, tri.corners, key, ac))
+                        .unwrap_or_else(|| self.rs(&v_inv, tri.corners, key));
+                    swing[w] = swing_after_twist(log, axis).as_vec3();
+                }
+                let centroid = tri.corners.map(|v| x[v as usize]).iter().sum::<DVec3>() / 3.0;
+                *position = centroid.dot(axis);
+                true
+            })
+            .collect();
+        // By component, then along the axis (ties by triangle: the same order on any thread).
+        let mut order: Vec<u32> = (0..per.len() as u32)
+            .filter(|&t| counted[t as usize])
+            .collect();
+        order.par_sort_unstable_by(|&p, &q| {
+            let key = |t: u32| (component(t as usize), position[t as usize]);
+            let ((cp, sp), (cq, sq)) = (key(p), key(q));
+            cp.cmp(&cq).then(sp.total_cmp(&sq)).then(p.cmp(&q))
+        });
+        let mut bend = vec![Vec3::ZERO; per.len() * nw];
+        for run in order.chunk_by(|&p, &q| component(p as usize) == component(q as usize)) {
+            let at = |i: usize| position[run[i] as usize];
+            let half = CROSS_SECTION * (at(run.len() - 1) - at(0));
+            let (mut lo, mut hi, mut area) = (0, 0, 0.0);
+            let mut sum = [DVec3::ZERO; MAX_WINDOW];
+            let add = |t: u32, sign: f64, sum: &mut [DVec3; MAX_WINDOW], area: &mut f64| {
+                let (t, a) = (t as usize, sign * self.areas[t as usize]);
+                *area += a;
+                for (s, w) in sum.iter_mut().zip(&swing[t * nw..(t + 1) * nw]) {
+                    *s += w.as_dvec3() * a;
+                }
+            };
+            for i in 0..run.len() {
+                while hi < run.len() && at(hi) <= at(i) + half {
+                    add(run[hi], 1.0, &mut sum, &mut area);
+                    hi += 1;
+                }
+                while at(lo) < at(i) - half {
+                    add(run[lo], -1.0, &mut sum, &mut area);
+                    lo += 1;
+                }
+                if area > 0.0 {
+                    let t = run[i] as usize;
+                    for (b, s) in bend[t * nw..(t + 1) * nw].iter_mut().zip(&sum) {
+                        *b = (*s / area).as_vec3();
+                    }
+                }
+            }
+        }
+        bend
+    }
+
     /// Set `tri`'s tangents (rotation, twist, stretch) from its values at the window's keys,
-    /// given its branch-consistent log `full_b` and stretch `sb` at key b; returns its unrolled
-    /// logs at the window's keys (`None` for a triangle degenerate in key a).
-    fn tangents(&self, tri: &mut Tri, full_b: DVec3, sb: DMat3) -> Option<[DVec3; MAX_WINDOW]> {
+    /// given its branch-consistent log `full_b` and stretch `sb` at key b, and in a split
+    /// component its `bend` at the window's keys; returns its unrolled logs at the window's
+    /// keys (`None` for a triangle degenerate in key a).
+    fn tangents(
+        &self,
+        tri: &mut Tri,
+        full_b: DVec3,
+        sb: DMat3,
+        bend: Option<&[Vec3]>,
+    ) -> Option<[DVec3; MAX_WINDOW]> {
         let win = &self.win;
         let (ia, nw) = (win.a, win.keys.len());
         // Recomputed rather than kept from the first pass (72 bytes a triangle).
@@ -740,6 +862,30 @@ impl<'t, 'a> Build<'t, 'a> {
                     aligned_at(key).unwrap_or_else(|| self.rs(&v_inv, tri.corners, key));
             }
         }
+        let bend = bend.filter(|_| tri.split());
+        if let Some(bend) = bend {
+            let bend: [DVec3; MAX_WINDOW] =
+                std::array::from_fn(|w| bend.get(w).map_or(DVec3::ZERO, |b| b.as_dvec3()));
+            // The rotation left after the bend: R = bend twist swing.
+            let unbent = |w: usize, log: DVec3| {
+                let b = glam::DQuat::from_scaled_axis(bend[w]);
+                quat_log(b.conjugate() * glam::DQuat::from_scaled_axis(log))
+            };
+            let key = win.keys[ia + 1];
+            let (log_b, u) = aligned_b.unwrap_or_else(|| self.rs(&v_inv, tri.corners, key));
+            log[ia + 1] = closest_branch(unbent(ia + 1, log_b), full_b - bend[ia + 1]);
+            stretch[ia + 1] = u;
+            for w in (0..nw).filter(|&w| w != ia && w != ia + 1) {
+                log[w] = unbent(w, log[w]);
+            }
+            let [ta, tb] = &win.tangents;
+            tri.bend = [
+                win.combine(ta, |w| bend[w]),
+                bend[ia + 1],
+                win.combine(tb, |w| bend[w]),
+            ]
+            .map(|r| r.as_vec3());
+        }
         unroll(&mut log[..nw], &win.times, ia, closest_branch);
         let mut values = log;
         let [ta, tb] = &win.tangents;
@@ -748,7 +894,7 @@ impl<'t, 'a> Build<'t, 'a> {
             let mut twist = [0.0; MAX_WINDOW];
             for w in 0..nw {
                 (twist[w], values[w]) = if w == ia + 1 {
-                    if aligned_b.is_some() {
+                    if aligned_b.is_some() || bend.is_some() {
                         // The turn count as b's twist was unwrapped over the surface.
                         let (twist, swing) = twist_swing(log[w], axis);
                         (nearest_turn(twist, tri.twist[1] as f64), swing)
@@ -899,7 +1045,10 @@ impl SplineSegment {
             let rot = if tri.split() {
                 let [t0, t1, t2] = tri.twist.map(f64::from);
                 let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
-                let q = glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist)
+                let [b0, b1, b2] = tri.bend.map(|b| b.as_dvec3());
+                let bend = b0 * w[1] + b1 * w[2] + b2 * w[3];
+                let q = glam::DQuat::from_scaled_axis(bend)
+                    * glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist)
                     * glam::DQuat::from_scaled_axis(r);
                 DMat3::from_quat(q)
             } else {
@@ -934,9 +1083,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_triangle_s_data_takes_172_bytes() {
+    fn a_triangle_s_data_takes_208_bytes() {
         // What the memory figures of a segment (and the 4M-triangle peak) rest on.
-        assert_eq!(std::mem::size_of::<Option<Tri>>(), 172);
+        assert_eq!(std::mem::size_of::<Option<Tri>>(), 208);
     }
 
     #[test]
