@@ -177,8 +177,8 @@ pub struct SplineTrack<'a> {
     triangles: &'a [[u32; 3]],
 }
 
-/// Per valid triangle of a segment. Held in single precision (208 bytes with its `Option`
-/// instead of 408: at 4M triangles 0.83 GB instead of 1.63 GB through every frame), as the
+/// Per valid triangle of a segment. Held in single precision (172 bytes with its `Option`
+/// instead of 336: at 4M triangles 0.69 GB instead of 1.34 GB through every frame), as the
 /// output's vertices are; computed and used in double precision.
 struct Tri {
     corners: [u32; 3],
@@ -196,10 +196,6 @@ struct Tri {
     /// otherwise `axis` is zero and `r` the rotations' logs.
     twist: [f32; 3],
     axis: Vec3,
-    /// Where the component is split: the bend its cross-section shares (see
-    /// [`Build::bends`]), a rotation log applied after the twist: tangent at a, b's, tangent at
-    /// b (key a's is zero).
-    bend: [Vec3; 3],
 }
 
 impl Tri {
@@ -227,6 +223,10 @@ struct Path {
 
 pub struct SplineSegment {
     tris: Vec<Option<Tri>>,
+    /// Where a component splits, each triangle's bend (see [`Build::bends`]) as a rotation log
+    /// applied after its twist: tangent at a, b's, tangent at b (a's is zero); empty elsewhere
+    /// (beside the triangles rather than in them: only split components pay for it).
+    bends: Vec<[Vec3; 3]>,
     placement: Placement,
     paths: Vec<Path>,
     /// Positions of a and b, for vertices no valid triangle touches.
@@ -465,7 +465,20 @@ impl<'a> SplineTrack<'a> {
             .map(|t| t.as_ref().map_or(DVec3::ZERO, Tri::log_b))
             .collect();
         split_twists(&mut per, &order, &placement, &stats);
-        let logs = build.window_pass(&mut per, &full_b, &stretch_b, &placement, &stats);
+        drop(order);
+        let bends_at_keys = build.bends(&per, &placement);
+        let logs = build.window_pass(
+            &mut per,
+            &full_b,
+            &stretch_b,
+            &bends_at_keys,
+            &placement,
+            &stats,
+        );
+        // Key b's data and the bends at the window's keys are not held into the frames.
+        drop((full_b, stretch_b));
+        let bends = build.bend_tangents(&bends_at_keys);
+        drop(bends_at_keys);
         let scatter: Vec<f64> = stats
             .spread
             .iter()
@@ -478,6 +491,7 @@ impl<'a> SplineTrack<'a> {
             // Kept as they are (a triangle of no area is None): collecting the others into a
             // vector of their own held both, 330 MB each at a million triangles, at the peak.
             tris: per,
+            bends,
             placement,
             paths,
             x: [x0.clone(), x1.clone()],
@@ -620,7 +634,6 @@ impl<'t, 'a> Build<'t, 'a> {
                     sg: [[Vec3::ZERO; 2]; 3],
                     twist: [0.0; 3],
                     axis: Vec3::ZERO,
-                    bend: [Vec3::ZERO; 3],
                 };
                 (Some(tri), sb)
             })
@@ -667,11 +680,11 @@ impl<'t, 'a> Build<'t, 'a> {
         per: &mut [Option<Tri>],
         full_b: &[DVec3],
         stretch_b: &[DMat3],
+        bends: &[Vec3],
         placement: &Placement,
         stats: &Components,
     ) -> Vec<[DVec3; MAX_WINDOW]> {
         let mut logs = vec![[DVec3::ZERO; MAX_WINDOW]; stats.area.len()];
-        let bends = self.bends(per, placement);
         let nw = self.win.keys.len();
         // Fixed chunks: the sums, and so the output, do not depend on the number of threads.
         let chunk = 4096;
@@ -830,6 +843,20 @@ impl<'t, 'a> Build<'t, 'a> {
         bend
     }
 
+    /// `bends` (see [`Build::bends`]) as each triangle's tangent at a, value at b and tangent at
+    /// b, as [`SplineSegment::bends`] keeps them.
+    fn bend_tangents(&self, bends: &[Vec3]) -> Vec<[Vec3; 3]> {
+        let (win, nw) = (&self.win, self.win.keys.len());
+        let [ta, tb] = &win.tangents;
+        bends
+            .par_chunks(nw)
+            .map(|b| {
+                let at = |w: usize| b[w].as_dvec3();
+                [win.combine(ta, at), at(win.a + 1), win.combine(tb, at)].map(|r| r.as_vec3())
+            })
+            .collect()
+    }
+
     /// Set `tri`'s tangents (rotation, twist, stretch) from its values at the window's keys,
     /// given its branch-consistent log `full_b` and stretch `sb` at key b, and in a split
     /// component its `bend` at the window's keys; returns its unrolled logs at the window's
@@ -878,13 +905,6 @@ impl<'t, 'a> Build<'t, 'a> {
             for w in (0..nw).filter(|&w| w != ia && w != ia + 1) {
                 log[w] = unbent(w, log[w]);
             }
-            let [ta, tb] = &win.tangents;
-            tri.bend = [
-                win.combine(ta, |w| bend[w]),
-                bend[ia + 1],
-                win.combine(tb, |w| bend[w]),
-            ]
-            .map(|r| r.as_vec3());
         }
         unroll(&mut log[..nw], &win.times, ia, closest_branch);
         let mut values = log;
@@ -1039,14 +1059,17 @@ impl SplineSegment {
     fn system(&self, u: f64) -> (Vec<[f64; 3]>, Vec<DVec3>) {
         let w = hermite(u);
         let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
-        for tri in self.tris.iter().flatten() {
+        for (t, tri) in self.tris.iter().enumerate() {
+            let Some(tri) = tri else { continue };
             let [r0, r1, r2] = tri.r.map(|r| r.as_dvec3());
             let r = r0 * w[1] + r1 * w[2] + r2 * w[3];
             let rot = if tri.split() {
                 let [t0, t1, t2] = tri.twist.map(f64::from);
                 let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
-                let [b0, b1, b2] = tri.bend.map(|b| b.as_dvec3());
-                let bend = b0 * w[1] + b1 * w[2] + b2 * w[3];
+                let bend = self.bends.get(t).map_or(DVec3::ZERO, |b| {
+                    let [b0, b1, b2] = b.map(|b| b.as_dvec3());
+                    b0 * w[1] + b1 * w[2] + b2 * w[3]
+                });
                 let q = glam::DQuat::from_scaled_axis(bend)
                     * glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist)
                     * glam::DQuat::from_scaled_axis(r);
@@ -1083,9 +1106,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_triangle_s_data_takes_208_bytes() {
+    fn a_triangle_s_data_takes_172_bytes() {
         // What the memory figures of a segment (and the 4M-triangle peak) rest on.
-        assert_eq!(std::mem::size_of::<Option<Tri>>(), 208);
+        assert_eq!(std::mem::size_of::<Option<Tri>>(), 172);
     }
 
     #[test]
