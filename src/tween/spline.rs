@@ -746,6 +746,20 @@ impl<'t, 'a> Build<'t, 'a> {
         (e.length() > ALONG_AXIS).then(|| (e.normalize(), n))
     }
 
+    /// [`Build::rs`] by the decomposition aligned `across` the twist where it applies (see
+    /// [`Build::across`]), by the polar one elsewhere.
+    fn rs_across(
+        &self,
+        v_inv: &DMat3,
+        corners: [u32; 3],
+        key: usize,
+        across: Option<(DVec3, DVec3)>,
+    ) -> (DVec3, DMat3) {
+        across
+            .and_then(|ac| self.aligned_rs(v_inv, corners, key, ac))
+            .unwrap_or_else(|| self.rs(v_inv, corners, key))
+    }
+
     /// [`Build::rs`] by the decomposition aligned `across` the twist (see [`Build::across`]).
     fn aligned_rs(
         &self,
@@ -773,45 +787,35 @@ impl<'t, 'a> Build<'t, 'a> {
         }
         let (win, x) = (&self.win, &self.track.keys[self.a]);
         let nw = win.keys.len();
-        let component = |t: usize| {
-            let tri = per[t].as_ref().filter(|tri| tri.split())?;
-            placement.component_of(tri.corners[0] as usize)
-        };
-        // Each split triangle's swings (a's is zero) and position along the axis.
+        // Each split triangle's component, swings (a's is zero) and position along the axis.
         let mut swing = vec![Vec3::ZERO; per.len() * nw];
         let mut position = vec![0.0f64; per.len()];
-        let counted: Vec<bool> = (swing.par_chunks_mut(nw).zip(&mut position).zip(per))
-            .enumerate()
-            .map(|(t, ((swing, position), tri))| {
-                let Some(tri) = tri.as_ref().filter(|_| component(t).is_some()) else {
-                    return false;
-                };
-                let Some(v_inv) = self.inverse(tri.corners) else {
-                    return false;
-                };
+        let component: Vec<Option<usize>> = (swing.par_chunks_mut(nw).zip(&mut position).zip(per))
+            .map(|((swing, position), tri)| {
+                let tri = tri.as_ref().filter(|tri| tri.split())?;
+                let c = placement.component_of(tri.corners[0] as usize)?;
+                let v_inv = self.inverse(tri.corners)?;
                 let (axis, across) = (tri.axis.as_dvec3().normalize(), self.across(tri));
                 for (w, &key) in win.keys.iter().enumerate().filter(|&(w, _)| w != win.a) {
-                    let (log, _) = across
-                        .and_then(|ac| self.aligned_rs(&v_inv, tri.corners, key, ac))
-                        .unwrap_or_else(|| self.rs(&v_inv, tri.corners, key));
+                    let (log, _) = self.rs_across(&v_inv, tri.corners, key, across);
                     swing[w] = swing_after_twist(log, axis).as_vec3();
                 }
                 let centroid = tri.corners.map(|v| x[v as usize]).iter().sum::<DVec3>() / 3.0;
                 *position = centroid.dot(axis);
-                true
+                Some(c)
             })
             .collect();
         // By component, then along the axis (ties by triangle: the same order on any thread).
         let mut order: Vec<u32> = (0..per.len() as u32)
-            .filter(|&t| counted[t as usize])
+            .filter(|&t| component[t as usize].is_some())
             .collect();
         order.par_sort_unstable_by(|&p, &q| {
-            let key = |t: u32| (component(t as usize), position[t as usize]);
+            let key = |t: u32| (component[t as usize], position[t as usize]);
             let ((cp, sp), (cq, sq)) = (key(p), key(q));
             cp.cmp(&cq).then(sp.total_cmp(&sq)).then(p.cmp(&q))
         });
         let mut bend = vec![Vec3::ZERO; per.len() * nw];
-        for run in order.chunk_by(|&p, &q| component(p as usize) == component(q as usize)) {
+        for run in order.chunk_by(|&p, &q| component[p as usize] == component[q as usize]) {
             let at = |i: usize| position[run[i] as usize];
             let half = CROSS_SECTION * (at(run.len() - 1) - at(0));
             let (mut lo, mut hi, mut area) = (0, 0, 0.0);
@@ -876,17 +880,15 @@ impl<'t, 'a> Build<'t, 'a> {
         let mut stretch = [DMat3::IDENTITY; MAX_WINDOW];
         (log[ia + 1], stretch[ia + 1]) = (full_b, sb);
         let across = self.across(tri);
-        let aligned_at =
-            |key: usize| across.and_then(|ac| self.aligned_rs(&v_inv, tri.corners, key, ac));
         // b by the aligned decomposition where it applies, on the branch of b's settled log.
-        let aligned_b = aligned_at(win.keys[ia + 1]);
+        let aligned_b =
+            across.and_then(|ac| self.aligned_rs(&v_inv, tri.corners, win.keys[ia + 1], ac));
         if let Some((log_b, u)) = aligned_b {
             (log[ia + 1], stretch[ia + 1]) = (closest_branch(log_b, full_b), u);
         }
         for (w, &key) in win.keys.iter().enumerate() {
             if w != ia && w != ia + 1 {
-                (log[w], stretch[w]) =
-                    aligned_at(key).unwrap_or_else(|| self.rs(&v_inv, tri.corners, key));
+                (log[w], stretch[w]) = self.rs_across(&v_inv, tri.corners, key, across);
             }
         }
         let bend = bend.filter(|_| tri.split());
