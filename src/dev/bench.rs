@@ -127,7 +127,7 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
             ..Default::default()
         };
         let t = Instant::now();
-        let pattern = Pattern::new(x0.len(), &triangles)?;
+        let pattern = Pattern::new(x0.len(), &triangles, &x0)?;
         row.symbolic_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let seed = Segment::new(

@@ -95,7 +95,7 @@ pub fn evaluate(mesh: &MorphMesh, step: usize, methods: &[&str]) -> Result<MeshS
     let dropped: Vec<usize> = (0..*kept.last().unwrap())
         .filter(|i| i % step != 0)
         .collect();
-    let pattern = Pattern::new(welded.n, &welded.triangles)?;
+    let pattern = Pattern::new(welded.n, &welded.triangles, &keys[0])?;
     let kept_keys: Vec<Vec<DVec3>> = kept.iter().map(|&i| keys[i].clone()).collect();
     let kept_times: Vec<f64> = kept.iter().map(|&i| times[i]).collect();
     // A cycle only when the kept keys close it.

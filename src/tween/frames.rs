@@ -86,7 +86,7 @@ struct TrackKeys {
 impl<'a> MeshTween<'a> {
     fn new(mesh: &'a MorphMesh, opts: &'a TweenOptions) -> Result<MeshTween<'a>> {
         let welded = Welded::build(mesh);
-        let pattern = pattern_for(opts.method, &welded)?;
+        let pattern = pattern_for(opts.method, mesh, &welded)?;
         let shape = opts.report.then(|| Shape::new(&welded.triangles));
         Ok(MeshTween {
             mesh,
@@ -394,10 +394,21 @@ fn frame_deltas(
 }
 
 /// The solve's sparsity pattern of `welded`, for the methods that solve (`seed`, `spline`).
-fn pattern_for(method: Method, welded: &Welded) -> Result<Option<Pattern>> {
+fn pattern_for(method: Method, mesh: &MorphMesh, welded: &Welded) -> Result<Option<Pattern>> {
     let t0 = Instant::now();
     let pattern = match method {
-        Method::Seed | Method::Spline => Some(Pattern::new(welded.n, &welded.triangles)?),
+        Method::Seed | Method::Spline => {
+            let base: Vec<DVec3> = mesh
+                .primitives
+                .iter()
+                .flat_map(|p| p.base.iter().copied())
+                .collect();
+            Some(Pattern::new(
+                welded.n,
+                &welded.triangles,
+                &welded.weld(&base),
+            )?)
+        }
         Method::Linear => None,
     };
     super::clock::add(super::clock::Part::Symbolic, t0);
@@ -422,7 +433,7 @@ pub fn frames_at(
     frames: &[FrameAt],
 ) -> Result<(Welded, Vec<Vec<DVec3>>)> {
     let welded = Welded::build(mesh);
-    let pattern = pattern_for(opts.method, &welded)?;
+    let pattern = pattern_for(opts.method, mesh, &welded)?;
     let keys: Vec<Vec<DVec3>> = key_poses(mesh, track)
         .iter()
         .map(|k| welded.weld(k))

@@ -16,15 +16,17 @@
 //! `A` is singular: one translation per connected component. Each component's first vertex is
 //! pinned to 0 (a Dirichlet row), and the component is translated afterwards onto its centroid
 //! path. Vertices that no valid triangle touches are pinned too and placed by the caller.
-//! Pins are rows of the fixed pattern, so the symbolic analysis (fill-reducing AMD ordering,
-//! elimination tree, supernodes) is done once per mesh and only the numeric factorization is
+//! Pins are rows of the fixed pattern, so the symbolic analysis (fill-reducing ordering: faer's
+//! AMD, or for large meshes [`super::order`]'s nested dissection; elimination tree, supernodes)
+//! is done once per mesh and only the numeric factorization is
 //! redone for each reference pose.
 
 use anyhow::{anyhow, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, SymbolicCholesky, SymbolicCholeskyRaw,
+    factorize_symbolic_cholesky, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Par, Side};
@@ -46,8 +48,9 @@ pub struct Pattern {
 }
 
 impl Pattern {
-    /// Analyse the pattern of `triangles` over `n` vertices.
-    pub fn new(n: usize, triangles: &[[u32; 3]]) -> Result<Pattern> {
+    /// Analyse the pattern of `triangles` over `n` vertices at `positions` (a pose of the
+    /// mesh: large meshes are ordered by their geometry, [`super::order`]).
+    pub fn new(n: usize, triangles: &[[u32; 3]], positions: &[DVec3]) -> Result<Pattern> {
         // Upper-triangular entries (row <= col), column by column.
         let mut cols: Vec<Vec<u32>> = (0..n as u32).map(|i| vec![i]).collect();
         for t in triangles {
@@ -87,13 +90,28 @@ impl Pattern {
             .collect();
         let sym =
             SymbolicSparseColMat::<u32>::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
-        let symbolic = factorize_symbolic_cholesky(
-            sym.as_ref(),
-            Side::Upper,
-            Default::default(),
-            Default::default(),
-        )
-        .map_err(|e| anyhow!("symbolic factorization failed: {e:?}"))?;
+        // Large meshes by their geometry (nested dissection), else faer's AMD.
+        let dissected = (n >= super::order::MIN_VERTICES && positions.len() == n)
+            .then(|| {
+                let (start, neighbours) = symmetric_adjacency(n, &col_ptr, &row_idx);
+                super::order::dissect(positions, &start, &neighbours)
+            })
+            .flatten()
+            .map(|fwd| {
+                let mut inv = vec![0u32; n];
+                for (new, &old) in fwd.iter().enumerate() {
+                    inv[old as usize] = new as u32;
+                }
+                (fwd, inv)
+            });
+        let ordering = match &dissected {
+            Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, n)),
+            None => SymmetricOrdering::Amd,
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(sym.as_ref(), Side::Upper, ordering, Default::default())
+                .map_err(|e| anyhow!("symbolic factorization failed: {e:?}"))?;
+        drop(dissected);
         let (neighbour_start, neighbours) = edge_neighbours(triangles);
         Ok(Pattern {
             n,
@@ -859,6 +877,35 @@ pub fn scatter(rhs: &mut [[f64; 3]], corners: [u32; 3], v1: DVec3, v2: DVec3) {
 
 /// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
 /// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
+/// Both triangles of an upper-triangular pattern as adjacency lists (CSR, diagonal left out).
+fn symmetric_adjacency(n: usize, col_ptr: &[u32], row_idx: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; n + 1];
+    for c in 0..n {
+        for &r in &row_idx[col_ptr[c] as usize..col_ptr[c + 1] as usize] {
+            if r as usize != c {
+                start[r as usize + 1] += 1;
+                start[c + 1] += 1;
+            }
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut neighbours = vec![0u32; start[n] as usize];
+    for c in 0..n {
+        for &r in &row_idx[col_ptr[c] as usize..col_ptr[c + 1] as usize] {
+            if r as usize != c {
+                neighbours[fill[r as usize] as usize] = c as u32;
+                fill[r as usize] += 1;
+                neighbours[fill[c] as usize] = r;
+                fill[c] += 1;
+            }
+        }
+    }
+    (start, neighbours)
+}
+
 fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
     use rayon::prelude::*;
     let mut edges: Vec<(u64, u32)> = triangles
@@ -903,7 +950,7 @@ mod tests {
     /// The factor of a small tube's system (vertex 0 pinned), and the tube.
     fn tube_factor() -> (Factor, crate::dev::synth::Surface) {
         let s = crate::dev::synth::tube(12, 9, 3.0, 0.5, 0.4);
-        let pattern = Pattern::new(s.positions.len(), &s.triangles).unwrap();
+        let pattern = Pattern::new(s.positions.len(), &s.triangles, &s.positions).unwrap();
         let grads: Vec<Option<[DVec3; 3]>> = s
             .triangles
             .iter()

@@ -1,0 +1,197 @@
+//! Fill-reducing ordering of large meshes: geometric nested dissection.
+//!
+//! A mesh is a surface, so its system matrix is a near-planar graph whose best orderings come
+//! from small separators (George's nested dissection). A part is cut at the median of its
+//! vertices along x, y and z in turn, and the cut with the fewest separator vertices is kept
+//! (the left half's vertices that touch the right half: a mesh's vertex spacing differs by
+//! direction, so the longest side of the box is not always the shortest cut); the separator is
+//! numbered after the two halves, which are dissected in turn, in parallel, down to leaves of
+//! [`LEAF`] vertices. Vertices of more than [`DENSE_DEGREE`] neighbours (a fan's centre closing
+//! a cap) are numbered last, as AMD treats dense rows.
+//!
+//! On the bench's 1M-triangle tube (500k vertices) the factor stores 30.1M entries against 42.2M
+//! by faer's approximate minimum degree ordering (METIS: 25.9M, but its ordering alone takes
+//! 1.7 s), and the whole symbolic analysis takes 0.42 s against 0.38 s; the numeric
+//! factorization 1.1 s against 1.6 s, and at 4M triangles 5.6 s against 15.2 s. Below
+//! [`MIN_VERTICES`] faer's AMD is kept: on the bench's tubes it is as good there (150k
+//! vertices: 8.2M entries against 8.3M), and the outputs of smaller meshes do not change.
+//!
+//! ```text
+//! let perm = order::dissect(&positions, &start, &neighbours);   // perm[new] = old
+//! ```
+
+use glam::DVec3;
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+
+/// Meshes with fewer welded vertices keep faer's approximate minimum degree ordering.
+pub const MIN_VERTICES: usize = 200_000;
+
+/// Largest part left undivided (vertices): it is numbered as it comes.
+pub const LEAF: usize = 8;
+
+/// Vertices with more neighbours than this are numbered after everything else.
+pub const DENSE_DEGREE: u32 = 32;
+
+/// Parts at least this large (vertices) dissect their two halves on two threads.
+const PARALLEL_PART: usize = 20_000;
+
+/// A part of at least [`CHECKED_PART`] vertices whose best cut needs more than this many times
+/// the square root of its size as separator is not shaped like a surface in its positions
+/// (collapsed or scattered: a base pose at the origin, vertices left in a pile): the caller
+/// keeps faer's AMD ordering. A square grid's cut is 1 times the root, a tube's 1.4 times.
+pub const BAD_CUT: f64 = 10.0;
+pub const CHECKED_PART: usize = 10_000;
+
+/// The nested-dissection order of the vertices at `positions` over the symmetric adjacency
+/// `neighbours[start[v]..start[v + 1]]`: `perm[new] = old`, each separator after the parts it
+/// separates, so the factor's fill stays in the separators' blocks. The same for any number of
+/// threads. `None` where the positions do not separate the mesh well ([`BAD_CUT`]).
+pub fn dissect(positions: &[DVec3], start: &[u32], neighbours: &[u32]) -> Option<Vec<u32>> {
+    let n = positions.len();
+    let dense = |v: u32| start[v as usize + 1] - start[v as usize] > DENSE_DEGREE;
+    let mut verts: Vec<u32> = (0..n as u32).filter(|&v| !dense(v)).collect();
+    let graph = Graph {
+        positions,
+        start,
+        neighbours,
+        tag: (0..n).map(|_| AtomicU32::new(u32::MAX)).collect(),
+        next_tag: AtomicU32::new(0),
+    };
+    let mut out = graph.split(&mut verts)?;
+    out.extend((0..n as u32).filter(|&v| dense(v)));
+    Some(out)
+}
+
+struct Graph<'a> {
+    positions: &'a [DVec3],
+    start: &'a [u32],
+    neighbours: &'a [u32],
+    /// For each vertex, the cut that last put it on its right side: a left vertex finds its
+    /// neighbours across the cut in O(degree). Each cut has its own number, so parts dissected
+    /// at the same time on other threads never match it.
+    tag: Vec<AtomicU32>,
+    next_tag: AtomicU32,
+}
+
+impl Graph<'_> {
+    fn neighbours(&self, v: u32) -> &[u32] {
+        &self.neighbours[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+
+    /// The order of `verts` (reordered in place): left part, right part, then the separator.
+    fn split(&self, verts: &mut [u32]) -> Option<Vec<u32>> {
+        if verts.len() <= LEAF {
+            return Some(verts.to_vec());
+        }
+        let mid = verts.len() / 2;
+        // (left without the separator, right, separator) of the best cut so far.
+        let mut best: Option<(Vec<u32>, Vec<u32>, Vec<u32>)> = None;
+        for axis in 0..3 {
+            let mut cut = verts.to_vec();
+            cut.select_nth_unstable_by(mid, |a, b| {
+                let (pa, pb) = (self.positions[*a as usize], self.positions[*b as usize]);
+                pa[axis].total_cmp(&pb[axis]).then(a.cmp(b))
+            });
+            let t = self.next_tag.fetch_add(1, Relaxed);
+            for &v in &cut[mid..] {
+                self.tag[v as usize].store(t, Relaxed);
+            }
+            let (inner, separator): (Vec<u32>, Vec<u32>) = cut[..mid].iter().partition(|&&v| {
+                !self
+                    .neighbours(v)
+                    .iter()
+                    .any(|&u| self.tag[u as usize].load(Relaxed) == t)
+            });
+            if best.as_ref().is_none_or(|b| separator.len() < b.2.len()) {
+                best = Some((inner, cut[mid..].to_vec(), separator));
+            }
+        }
+        let (inner, right, separator) = best.expect("three cuts");
+        if verts.len() >= CHECKED_PART
+            && separator.len() as f64 > BAD_CUT * (verts.len() as f64).sqrt()
+        {
+            return None;
+        }
+        let (left, rest) = verts.split_at_mut(inner.len());
+        left.copy_from_slice(&inner);
+        let right_part = &mut rest[..right.len()];
+        right_part.copy_from_slice(&right);
+        let (a, b) = if inner.len() + right.len() >= PARALLEL_PART {
+            rayon::join(|| self.split(left), || self.split(right_part))
+        } else {
+            (self.split(left), self.split(right_part))
+        };
+        let mut a = a?;
+        a.extend_from_slice(&b?);
+        a.extend_from_slice(&separator);
+        Some(a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `w` x `h` grid of vertices at `positions` (4-neighbour adjacency).
+    fn grid(w: usize, h: usize) -> (Vec<u32>, Vec<u32>) {
+        let mut start = vec![0u32];
+        let mut neighbours = Vec::new();
+        for i in 0..w * h {
+            let (x, y) = (i % w, i / w);
+            if x > 0 {
+                neighbours.push((i - 1) as u32);
+            }
+            if x + 1 < w {
+                neighbours.push((i + 1) as u32);
+            }
+            if y > 0 {
+                neighbours.push((i - w) as u32);
+            }
+            if y + 1 < h {
+                neighbours.push((i + w) as u32);
+            }
+            start.push(neighbours.len() as u32);
+        }
+        (start, neighbours)
+    }
+
+    /// A grid's order is a permutation with the middle column last.
+    #[test]
+    fn a_grid_is_split_by_its_middle_column() {
+        let (w, h) = (40usize, 10usize);
+        let positions: Vec<DVec3> = (0..w * h)
+            .map(|i| DVec3::new((i % w) as f64, (i / w) as f64, 0.0))
+            .collect();
+        let (start, neighbours) = grid(w, h);
+        let perm = dissect(&positions, &start, &neighbours).unwrap();
+        let mut seen = perm.clone();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..(w * h) as u32).collect::<Vec<_>>());
+        let last: Vec<usize> = perm[w * h - h..].iter().map(|&v| v as usize % w).collect();
+        assert!(last.iter().all(|&x| x == w / 2 - 1), "{last:?}");
+    }
+
+    /// Positions that do not follow the mesh (scattered) are refused, so AMD is used.
+    #[test]
+    fn scattered_positions_are_refused() {
+        let (w, h) = (200usize, 200usize);
+        let (start, neighbours) = grid(w, h);
+        let mut state = 12345u64;
+        let positions: Vec<DVec3> = (0..w * h)
+            .map(|_| {
+                let mut r = || {
+                    state = state
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    (state >> 11) as f64 / (1u64 << 53) as f64
+                };
+                DVec3::new(r(), r(), r())
+            })
+            .collect();
+        assert!(dissect(&positions, &start, &neighbours).is_none());
+        let laid_out: Vec<DVec3> = (0..w * h)
+            .map(|i| DVec3::new((i % w) as f64, (i / w) as f64, 0.0))
+            .collect();
+        assert!(dissect(&laid_out, &start, &neighbours).is_some());
+    }
+}
