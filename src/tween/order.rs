@@ -9,12 +9,15 @@
 //! [`LEAF`] vertices. Vertices of more than [`DENSE_DEGREE`] neighbours (a fan's centre closing
 //! a cap) are numbered last, as AMD treats dense rows.
 //!
-//! On the bench's 1M-triangle tube (500k vertices) the factor stores 30.1M entries against 42.2M
-//! by faer's approximate minimum degree ordering (METIS: 25.9M, but its ordering alone takes
-//! 1.7 s), and the whole symbolic analysis takes 0.42 s against 0.38 s; the numeric
-//! factorization 1.1 s against 1.6 s, and at 4M triangles 5.6 s against 15.2 s. Below
-//! [`MIN_VERTICES`] faer's AMD is kept: on the bench's tubes it is as good there (150k
-//! vertices: 8.2M entries against 8.3M), and the outputs of smaller meshes do not change.
+//! How good that is depends on the shape, so [`super::solve`] analyses the factor of both this
+//! order and faer's approximate minimum degree (AMD) side by side and keeps the one that
+//! stores fewer entries. On the bench's 1M-triangle tube (500k vertices) this one wins: 30.1M
+//! entries against AMD's 42.2M (METIS: 25.9M, but its ordering alone takes 1.7 s), numeric
+//! factorization 1.0 s against 1.6 s, at 4M triangles 5.6 s against 15.2 s. On organic shapes
+//! AMD wins and is kept: Flamingo and Parrot subdivided to 0.56M-2.6M triangles, 8-26% more
+//! entries by dissection (plane cuts cross wings and body; minimum degree within leaves of 200
+//! to 4000 vertices does not change that). Below [`MIN_VERTICES`] only AMD is tried (the outputs
+//! of smaller meshes do not change).
 //!
 //! ```text
 //! let perm = order::dissect(&positions, &start, &neighbours);   // perm[new] = old

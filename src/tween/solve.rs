@@ -90,28 +90,7 @@ impl Pattern {
             .collect();
         let sym =
             SymbolicSparseColMat::<u32>::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
-        // Large meshes by their geometry (nested dissection), else faer's AMD.
-        let dissected = (n >= super::order::MIN_VERTICES && positions.len() == n)
-            .then(|| {
-                let (start, neighbours) = symmetric_adjacency(n, &col_ptr, &row_idx);
-                super::order::dissect(positions, &start, &neighbours)
-            })
-            .flatten()
-            .map(|fwd| {
-                let mut inv = vec![0u32; n];
-                for (new, &old) in fwd.iter().enumerate() {
-                    inv[old as usize] = new as u32;
-                }
-                (fwd, inv)
-            });
-        let ordering = match &dissected {
-            Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, n)),
-            None => SymmetricOrdering::Amd,
-        };
-        let symbolic =
-            factorize_symbolic_cholesky(sym.as_ref(), Side::Upper, ordering, Default::default())
-                .map_err(|e| anyhow!("symbolic factorization failed: {e:?}"))?;
-        drop(dissected);
+        let symbolic = analyse(sym.as_ref(), positions)?;
         let (neighbour_start, neighbours) = edge_neighbours(triangles);
         Ok(Pattern {
             n,
@@ -877,6 +856,40 @@ pub fn scatter(rhs: &mut [[f64; 3]], corners: [u32; 3], v1: DVec3, v2: DVec3) {
 
 /// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
 /// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
+/// The symbolic Cholesky analysis of `sym` (upper triangle) by faer's AMD ordering; for a
+/// large mesh ([`super::order::MIN_VERTICES`]) also by nested dissection of its `positions`,
+/// the two side by side, keeping the one whose factor stores fewer entries (dissection wins on
+/// regular surfaces such as the bench's tubes, AMD on organic shapes: see [`super::order`]).
+fn analyse(
+    sym: SymbolicSparseColMatRef<'_, u32>,
+    positions: &[DVec3],
+) -> Result<SymbolicCholesky<u32>> {
+    let n = sym.nrows();
+    let by = |ordering: SymmetricOrdering<'_, u32>| {
+        factorize_symbolic_cholesky(sym, Side::Upper, ordering, Default::default())
+            .map_err(|e| anyhow!("symbolic factorization failed: {e:?}"))
+    };
+    if n < super::order::MIN_VERTICES || positions.len() != n {
+        return by(SymmetricOrdering::Amd);
+    }
+    let dissected = || {
+        let (start, neighbours) = symmetric_adjacency(n, sym.col_ptr(), sym.row_idx());
+        let fwd = super::order::dissect(positions, &start, &neighbours)?;
+        let mut inv = vec![0u32; n];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old as usize] = new as u32;
+        }
+        Some(by(SymmetricOrdering::Custom(PermRef::new_checked(
+            &fwd, &inv, n,
+        ))))
+    };
+    let (amd, nd) = rayon::join(|| by(SymmetricOrdering::Amd), dissected);
+    match nd.transpose()? {
+        Some(nd) if nd.len_val() < amd.as_ref().map_or(usize::MAX, |a| a.len_val()) => Ok(nd),
+        _ => amd,
+    }
+}
+
 /// Both triangles of an upper-triangular pattern as adjacency lists (CSR, diagonal left out).
 fn symmetric_adjacency(n: usize, col_ptr: &[u32], row_idx: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let mut start = vec![0u32; n + 1];
