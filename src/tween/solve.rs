@@ -854,8 +854,6 @@ pub fn scatter(rhs: &mut [[f64; 3]], corners: [u32; 3], v1: DVec3, v2: DVec3) {
     }
 }
 
-/// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
-/// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
 /// The symbolic Cholesky analysis of `sym` (upper triangle) by faer's AMD ordering; for a
 /// large mesh ([`super::order::MIN_VERTICES`]) also by nested dissection of its `positions`,
 /// the two side by side, keeping the one whose factor stores fewer entries (dissection wins on
@@ -883,10 +881,12 @@ fn analyse(
             &fwd, &inv, n,
         ))))
     };
+    // A failed analysis by dissection only leaves AMD's (whose failure is the error).
     let (amd, nd) = rayon::join(|| by(SymmetricOrdering::Amd), dissected);
-    match nd.transpose()? {
-        Some(nd) if nd.len_val() < amd.as_ref().map_or(usize::MAX, |a| a.len_val()) => Ok(nd),
-        _ => amd,
+    match (amd, nd) {
+        (Ok(amd), Some(Ok(nd))) if nd.len_val() < amd.len_val() => Ok(nd),
+        (Err(_), Some(Ok(nd))) => Ok(nd),
+        (amd, _) => amd,
     }
 }
 
@@ -919,6 +919,8 @@ fn symmetric_adjacency(n: usize, col_ptr: &[u32], row_idx: &[u32]) -> (Vec<u32>,
     (start, neighbours)
 }
 
+/// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
+/// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
 fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
     use rayon::prelude::*;
     let mut edges: Vec<(u64, u32)> = triangles
