@@ -398,16 +398,8 @@ fn pattern_for(method: Method, mesh: &MorphMesh, welded: &Welded) -> Result<Opti
     let t0 = Instant::now();
     let pattern = match method {
         Method::Seed | Method::Spline => {
-            let base: Vec<DVec3> = mesh
-                .primitives
-                .iter()
-                .flat_map(|p| p.base.iter().copied())
-                .collect();
-            Some(Pattern::new(
-                welded.n,
-                &welded.triangles,
-                &welded.weld(&base),
-            )?)
+            let base = welded.weld(&mesh.pose(&[]));
+            Some(Pattern::new(welded.n, &welded.triangles, &base)?)
         }
         Method::Linear => None,
     };

@@ -43,6 +43,8 @@ const PARALLEL_PART: usize = 20_000;
 /// (collapsed or scattered: a base pose at the origin, vertices left in a pile): the caller
 /// keeps faer's AMD ordering. A square grid's cut is 1 times the root, a tube's 1.4 times.
 pub const BAD_CUT: f64 = 10.0;
+
+/// Smallest part (vertices) whose cut is checked against [`BAD_CUT`].
 pub const CHECKED_PART: usize = 10_000;
 
 /// The nested-dissection order of the vertices at `positions` over the symmetric adjacency
@@ -52,7 +54,7 @@ pub const CHECKED_PART: usize = 10_000;
 pub fn dissect(positions: &[DVec3], start: &[u32], neighbours: &[u32]) -> Option<Vec<u32>> {
     let n = positions.len();
     let dense = |v: u32| start[v as usize + 1] - start[v as usize] > DENSE_DEGREE;
-    let mut verts: Vec<u32> = (0..n as u32).filter(|&v| !dense(v)).collect();
+    let verts: Vec<u32> = (0..n as u32).filter(|&v| !dense(v)).collect();
     let graph = Graph {
         positions,
         start,
@@ -60,7 +62,7 @@ pub fn dissect(positions: &[DVec3], start: &[u32], neighbours: &[u32]) -> Option
         tag: (0..n).map(|_| AtomicU32::new(u32::MAX)).collect(),
         next_tag: AtomicU32::new(0),
     };
-    let mut out = graph.split(&mut verts)?;
+    let mut out = graph.split(&verts)?;
     out.extend((0..n as u32).filter(|&v| dense(v)));
     Some(out)
 }
@@ -81,13 +83,14 @@ impl Graph<'_> {
         &self.neighbours[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
     }
 
-    /// The order of `verts` (reordered in place): left part, right part, then the separator.
-    fn split(&self, verts: &mut [u32]) -> Option<Vec<u32>> {
+    /// The order of `verts`: left part, right part, then the separator between them.
+    fn split(&self, verts: &[u32]) -> Option<Vec<u32>> {
         if verts.len() <= LEAF {
             return Some(verts.to_vec());
         }
         let mid = verts.len() / 2;
-        // (left without the separator, right, separator) of the best cut so far.
+        // The best cut so far: its vertices (left half, then right from `mid`), the left half
+        // without the separator, and the separator.
         let mut best: Option<(Vec<u32>, Vec<u32>, Vec<u32>)> = None;
         for axis in 0..3 {
             let mut cut = verts.to_vec();
@@ -106,23 +109,20 @@ impl Graph<'_> {
                     .any(|&u| self.tag[u as usize].load(Relaxed) == t)
             });
             if best.as_ref().is_none_or(|b| separator.len() < b.2.len()) {
-                best = Some((inner, cut[mid..].to_vec(), separator));
+                best = Some((cut, inner, separator));
             }
         }
-        let (inner, right, separator) = best.expect("three cuts");
+        let (cut, inner, separator) = best.expect("three cuts");
         if verts.len() >= CHECKED_PART
             && separator.len() as f64 > BAD_CUT * (verts.len() as f64).sqrt()
         {
             return None;
         }
-        let (left, rest) = verts.split_at_mut(inner.len());
-        left.copy_from_slice(&inner);
-        let right_part = &mut rest[..right.len()];
-        right_part.copy_from_slice(&right);
+        let right = &cut[mid..];
         let (a, b) = if inner.len() + right.len() >= PARALLEL_PART {
-            rayon::join(|| self.split(left), || self.split(right_part))
+            rayon::join(|| self.split(&inner), || self.split(right))
         } else {
-            (self.split(left), self.split(right_part))
+            (self.split(&inner), self.split(right))
         };
         let mut a = a?;
         a.extend_from_slice(&b?);
