@@ -476,21 +476,21 @@ fn rms(a: &[DVec3], b: &[DVec3]) -> f64 {
         .sqrt()
 }
 
-/// Whole turns at any resolution (issue 16): tubes coarse and fine, square and not, thin and
+/// Whole turns at any resolution (issue 16): tubes coarse and fine, round and elliptic, thin and
 /// fat, short and long, twisted 22.5 to 720 degrees in 22.5-degree steps, in one, three and
 /// five key steps (odd, so that the clip's middle frame is a tween; the resolutions and angles
-/// where the turn count was once chosen wrong are in). Wherever a key step shears the surface
-/// less than tan 35 degrees (helix slope r x angle / length <= 0.7):
-/// - within 0.01 of the diagonal of the analytic twist;
-/// - no wrong turn count: at the same shape, resolutions agree within 0.005 of the diagonal, and
-///   no step of 22.5 degrees changes the error by more than 0.005 (a wrong count costs 0.13).
+/// where the turn count was once chosen wrong are in). Against the analytic twist:
+/// - within 0.01 of the diagonal wherever neighbouring rings turn apart by at most 45 degrees in
+///   a key step (1,132 of the 1,152 cases, worst 0.0069); within 0.03 everywhere (the 20 others,
+///   47 to 72 degrees between rings in one step, up to 0.025: the key's own chords are far
+///   from the helix there);
+/// - no wrong turn count: no step of 22.5 degrees changes the error by more than 0.005 (a
+///   wrong count costs 0.13), and where a key step shears the surface less than tan 35 degrees
+///   (helix slope r x angle / length <= 0.7) the resolutions of a shape agree within 0.005.
 ///
-/// And the issue's own tube (0.5 x 0.25 x 6) at 16 to 32 segments around: within 0.01 at every
-/// angle up to 720 degrees in one key step (slope 1.05; before a split component's rotations
-/// were taken around its twist, 36 of its cases were over, up to 0.0175). Beyond the slope,
-/// the coarse tubes (6 to 12 segments around, whose chords a per-triangle interpolation cannot
-/// follow) and the fat short tube (1 x 2, slope up to 6.3, 0.38 at 630 degrees in one step) depart
-/// from the analytic twist, smoothly with the angle: add a key.
+/// Before the rotations of a split component were taken around its twist after the bend (the
+/// shear and an elliptic tube's tilt in U, see `gradient::around_axis`), with its axis from its
+/// triangles' rotation axes, 78 cases were over 0.01, up to 0.354.
 #[test]
 fn whole_turns_at_any_resolution() {
     // (rings, segments around, ry, rz, length); shapes that differ only in resolution in a row.
@@ -509,6 +509,7 @@ fn whole_turns_at_any_resolution() {
         &[(16, 16, 0.2, 0.2, 8.0)],
     ];
     let (mut failures, mut cases, mut worst) = (Vec::new(), 0, (0.0, String::new()));
+    let mut over = 0;
     for family in shapes {
         for keys in [1, 3, 5] {
             let mut previous: Vec<f64> = vec![0.0; family.len()];
@@ -527,21 +528,16 @@ fn whole_turns_at_any_resolution() {
                     family.iter().zip(errors.iter().zip(&previous))
                 {
                     cases += 1;
+                    over += usize::from(e > 0.01);
                     let what = format!("{rings} rings x {segments} around, radii {ry}/{rz}, length {len}, {degrees} deg in {keys} key step(s): {e:.4}");
                     if e > worst.0 {
                         worst = (e, what.clone());
                     }
-                    let slope = ry.max(rz) * (degrees / keys as f64).to_radians() / len;
-                    if (ry, rz, len, segments >= 16) == (0.5, 0.25, 6.0, true) && e > 0.01 {
-                        failures.push(format!("{what}: the issue's tube (slope {slope:.2})"));
+                    let between_rings = degrees / keys as f64 / rings as f64;
+                    if e > 0.03 || (between_rings <= 45.0 && e > 0.01) {
+                        failures.push(format!("{what} ({between_rings} deg between rings)"));
                     }
-                    if slope > 0.7 {
-                        continue;
-                    }
-                    if e > 0.01 {
-                        failures.push(format!("{what} (slope {slope:.2})"));
-                    }
-                    if step > 1 && (e - before).abs() > 0.005 {
+                    if step > 1 && between_rings <= 45.0 && (e - before).abs() > 0.005 {
                         failures.push(format!("{what}: jumped from {before:.4}"));
                     }
                 }
@@ -560,7 +556,10 @@ fn whole_turns_at_any_resolution() {
             }
         }
     }
-    eprintln!("whole turns: {cases} cases, worst {}", worst.1);
+    eprintln!(
+        "whole turns: {cases} cases, {over} over 0.01 of the diagonal, worst {}",
+        worst.1
+    );
     assert!(
         failures.is_empty(),
         "{} of {cases} cases:\n{}",
@@ -571,15 +570,16 @@ fn whole_turns_at_any_resolution() {
 
 /// A bent and twisted arm (a twist about an axis that moves with the bend): an arm of 12 units
 /// bent at its middle by 45 or 90 degrees while twisting 90 to 720 degrees, in one and three key
-/// steps, at three resolutions. What holds: up to 360 degrees of twist per key step the three
-/// resolutions agree within 0.01 of the diagonal (the turn is counted the same at every
-/// tessellation), and in three key steps the middle frame is within 0.02 of the analytic pose
-/// (half the twist, then half the bend) at every twist: 0.0134-0.0140 at 720 and 90 (0.068-0.070
-/// before the bend a split component's cross-section shares was taken apart from its twist).
-/// What does not yet (issue 16, open): in one key step the middle frame is off by 0.02 at 90
-/// degrees and 45 of bend, 0.08 at 180 and 90 (rotations about a moving axis do not commute, and
-/// the keys alone do not say which way between them), and past 360 degrees a step the
-/// resolutions disagree (720 degrees in one step: 0.31, 0.11, 0.32). The figures are printed.
+/// steps, at three resolutions. What holds: at every twist, in one key step as in three, the
+/// three resolutions agree within 0.005 of the diagonal (the turn is counted the same at every
+/// tessellation: 0.0043 at most; 0.26 before the component's axis was taken from its
+/// triangles' rotation axes), and in three key steps the middle frame is within 0.02 of the
+/// analytic pose (half the twist, then half the bend) at every twist (0.0004-0.0135).
+/// What does not yet (issue 16, open): in one key step the middle frame is off by 0.013 at 90
+/// degrees of twist and 45 of bend up to 0.13 at 360 and 90 (0.02-0.38 before): the twist axis
+/// of the whole component is a compromise between the upper arm's and the forearm's, and a
+/// bending component's path is a straight line between its keys' centroids (a bend of 90
+/// degrees alone is 0.037 off, all of it a shift of the whole arm). The figures are printed.
 #[test]
 fn a_bent_and_twisted_arm_counts_its_turns_at_every_resolution() {
     let mut failures = Vec::new();
@@ -610,7 +610,7 @@ fn a_bent_and_twisted_arm_counts_its_turns_at_every_resolution() {
                 if keys == 3 && hi > 0.02 {
                     failures.push(format!("{what}: off the analytic pose"));
                 }
-                if twist / keys as f64 <= 360.0 && hi - lo > 0.01 {
+                if hi - lo > 0.005 {
                     failures.push(format!("{what}: resolutions disagree"));
                 }
             }

@@ -113,6 +113,33 @@ pub fn aligned(t: &DMat3, e: DVec3, n: DVec3) -> Option<(DQuat, DMat3)> {
     Some((DQuat::from_mat3(&q).normalize(), q.transpose() * *t))
 }
 
+/// Largest relative sideways move `U e` may make off `e` for [`around_axis`] to apply
+/// (dimensionless, about 6 degrees): a twisted surface's ring edges stay on their rings (0 up to
+/// round-off on the tested tubes, coarse and fat), a rotation left over after the bend and
+/// the twist (a part turning its own way inside a component that twists) moves them off.
+pub const AROUND_AXIS_RESIDUAL: f64 = 0.1;
+
+/// `T = B W U` with B the rotation `bend`, W the twist about unit `axis` that takes `e` (a unit
+/// direction across the axis in the reference triangle's plane) to the direction of
+/// `B^-1 T e` seen along the axis, and `U = (B W)^T T`: returns W's angle in (-pi, pi] and U.
+/// A twisted tube's surface (any cross-section) is turned ring by ring about its axis and
+/// sheared along it, `T = W (I + s (f^T))` with the shear linear in the twist: U is that shear
+/// whole, so interpolating W's angle and U linearly follows the twist exactly, where
+/// [`aligned`] (which keeps the normal) hands an elliptic tube's tilt to the rotation. `None`
+/// where `B^-1 T e` lies along the axis, or where U moves `e` off its line by more than
+/// [`AROUND_AXIS_RESIDUAL`] (the triangle turns some other way too: [`aligned`] serves it).
+pub fn around_axis(t: &DMat3, e: DVec3, axis: DVec3, bend: DQuat) -> Option<(f64, DMat3)> {
+    let turned = bend.conjugate() * (*t * e);
+    let to = (turned - axis * axis.dot(turned)).try_normalize()?;
+    let from = (e - axis * axis.dot(e)).try_normalize()?;
+    let angle = axis.dot(from.cross(to)).atan2(from.dot(to));
+    let q = DMat3::from_quat(bend * DQuat::from_axis_angle(axis, angle));
+    let u = q.transpose() * *t;
+    let ue = u * e;
+    let off = (ue - e * e.dot(ue)).length();
+    (off <= AROUND_AXIS_RESIDUAL * ue.length()).then_some((angle, u))
+}
+
 /// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations: eigenvalues in
 /// descending order and the matching eigenvectors as the columns of the returned matrix.
 pub fn sym_eigen(m: &DMat3) -> ([f64; 3], DMat3) {
@@ -278,6 +305,29 @@ mod tests {
         assert!(close(&DMat3::from_quat(q), &turn, 1e-12) && close(&u, &shear, 1e-12));
         let (p, _) = polar(&(turn * shear));
         assert!(!close(&DMat3::from_quat(p), &turn, 0.1));
+    }
+
+    #[test]
+    fn around_axis_leaves_a_twist_s_shear_and_tilt_to_u() {
+        // A triangle facing y on a surface along x: e across the axis (z), f = n x e along it.
+        let (axis, e, n) = (DVec3::X, DVec3::Z, DVec3::Y);
+        let f = n.cross(e);
+        // An elliptic tube's twist: the ring edge e kept, f sheared around the ring and
+        // tilted out of the plane (slope 4), turned 2.5 rad about the axis after a bend.
+        let sf = f + e * 4.0 + n * 1.5;
+        let basis = DMat3::from_cols(e, f, n);
+        let shear = DMat3::from_cols(e, sf, e.cross(sf).normalize()) * basis.transpose();
+        let bend = DQuat::from_rotation_z(0.4);
+        let twist = DMat3::from_axis_angle(axis, 2.5);
+        let t = DMat3::from_quat(bend) * twist * shear;
+        let (angle, u) = around_axis(&t, e, axis, bend).unwrap();
+        assert!((angle - 2.5).abs() < 1e-12 && close(&u, &shear, 1e-12));
+        // The polar and aligned decompositions both turn part of the tilt into rotation.
+        let (q, _) = aligned(&(twist * shear), e, n).unwrap();
+        assert!(!close(&DMat3::from_quat(q), &twist, 0.1));
+        // A triangle turning about its own normal as well: refused.
+        let own = DMat3::from_axis_angle(n, 0.3);
+        assert!(around_axis(&(twist * own), e, axis, DQuat::IDENTITY).is_none());
     }
 
     #[test]
