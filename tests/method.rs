@@ -367,14 +367,15 @@ fn twist_error(method: Method, degrees: f64) -> (f64, f64) {
 
 #[test]
 fn large_twists_between_two_keys_stay_consistent() {
-    // 270 and 360 degrees: 0.0007 and 0.0013 (0.0025 and 0.0045 before a split component's
-    // rotations were taken around its twist).
-    for (degrees, tol) in [(90.0, 0.005), (270.0, 0.0015), (360.0, 0.002)] {
+    // 5e-8, 6e-7 and 1.2e-6 (at 270 and 360 degrees 0.0007 and 0.0013 with the rotation that
+    // kept each triangle's normal, 0.0025 and 0.0045 with the polar decomposition; at 90
+    // degrees, before a component turning coherently one way split, 0.0003).
+    for (degrees, tol) in [(90.0, 1e-4), (270.0, 1e-4), (360.0, 1e-4)] {
         let lin = twist_error(Method::Linear, degrees);
         let seed = twist_error(Method::Seed, degrees);
         let spline = twist_error(Method::Spline, degrees);
         eprintln!(
-            "twist {degrees} deg, middle frame, RMS (max) error / diagonal: linear {:.4} ({:.4}), seed {:.4} ({:.4}), spline {:.4} ({:.4})",
+            "twist {degrees} deg, middle frame, RMS (max) error / diagonal: linear {:.4} ({:.4}), seed {:.4} ({:.4}), spline {:.1e} ({:.1e})",
             lin.0, lin.1, seed.0, seed.1, spline.0, spline.1
         );
         assert!(
@@ -394,7 +395,9 @@ fn a_720_degree_twist_in_eight_keys_stays_smooth() {
         .collect();
     let (_dir, path) = write_keys(s.clone(), keys);
     let meshes = common::morph_meshes(&path);
-    for method in [Method::Seed, Method::Spline] {
+    // Spline 1.4e-6 (2.4e-4 before its rotations were taken around the twist after the bend),
+    // seed 3.9e-4.
+    for (method, tol) in [(Method::Seed, 0.005), (Method::Spline, 1e-4)] {
         let (keys, f) = frames(&meshes[0], method, 3);
         assert_eq!(f.len(), 8 * 4 + 1);
         let d = common::diag(&keys[0]);
@@ -406,8 +409,8 @@ fn a_720_degree_twist_in_eight_keys_stays_smooth() {
                 rms(frame, &want) / d
             })
             .fold(0.0, f64::max);
-        eprintln!("{method:?}: 720-degree twist in 8 keys, worst frame RMS / diagonal {worst:.5}");
-        assert!(worst <= 0.005, "{method:?}: {worst}");
+        eprintln!("{method:?}: 720-degree twist in 8 keys, worst frame RMS / diagonal {worst:.1e}");
+        assert!(worst <= tol, "{method:?}: {worst}");
     }
 }
 
