@@ -96,6 +96,37 @@ pub fn polar(t: &DMat3) -> (DQuat, DMat3) {
     (DQuat::from_mat3(&r).normalize(), s)
 }
 
+/// [`polar`] of a triangle's deformation gradient `t` from the reference frame inverse `v_inv`
+/// (as [`deformation`] makes it), in closed form: T maps the reference triangle's plane to the
+/// deformed one and its normal to the deformed normal, so in orthonormal frames of the two
+/// planes it is a 2x2 block and a positive scale, and R is the 2x2 block's nearest rotation
+/// (one atan2) between the frames. The same R and S as [`polar`] to round-off, without its
+/// Jacobi sweeps; a collapsed deformed triangle goes to [`polar`].
+pub fn polar_of_triangle(t: &DMat3, v_inv: &DMat3) -> (DQuat, DMat3) {
+    // Rows of V^-1: the first lies in the reference plane, the third along its normal.
+    let rows = v_inv.transpose();
+    let (Some(e0), Some(n0)) = (rows.x_axis.try_normalize(), rows.z_axis.try_normalize()) else {
+        return polar(t);
+    };
+    let e0 = (e0 - n0 * n0.dot(e0)).normalize();
+    let f0 = n0.cross(e0);
+    let (te, tf) = (*t * e0, *t * f0);
+    let n1 = te.cross(tf);
+    let len = n1.length();
+    if !(len > 1e-12 * (te.length_squared() + tf.length_squared())) {
+        return polar(t);
+    }
+    let n1 = n1 / len;
+    let e1 = te.normalize();
+    let f1 = n1.cross(e1);
+    // The 2x2 block in (e1, f1) x (e0, f0): [[|Te|, e1.Tf], [0, f1.Tf]]; its nearest rotation.
+    let (sin, cos) = sin_cos((-e1.dot(tf)).atan2(te.length() + f1.dot(tf)));
+    let to = DMat3::from_cols(e1 * cos + f1 * sin, f1 * cos - e1 * sin, n1);
+    let r = to * DMat3::from_cols(e0, f0, n0).transpose();
+    let s = r.transpose() * *t;
+    (DQuat::from_mat3(&r).normalize(), (s + s.transpose()) * 0.5)
+}
+
 /// `T = Q U` with Q the rotation that takes the in-plane unit direction `e` of the reference
 /// triangle (unit normal `n`) to the direction of `T e` and `n` to the deformed normal (`T n`'s
 /// direction), and `U = Q^T T`: the part of T that Q leaves, shear included (not symmetric).
@@ -286,6 +317,61 @@ mod tests {
         let (q, s2) = polar(&(r * s));
         assert!(close(&DMat3::from_quat(q), &r, 1e-10));
         assert!(close(&s2, &s, 1e-10));
+    }
+
+    #[test]
+    fn polar_of_triangle_matches_polar() {
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut worst = 0.0f64;
+        for case in 0..2000 {
+            let p: [DVec3; 3] = std::array::from_fn(|_| DVec3::new(rnd(), rnd(), rnd()));
+            let Some(v) = frame(p[0], p[1], p[2]) else {
+                continue;
+            };
+            let v_inv = v.inverse();
+            let axis = DVec3::new(rnd(), rnd(), rnd()).normalize();
+            let turn = DMat3::from_axis_angle(axis, 3.0 * rnd());
+            // Stretched, sheared, flattened (every 10th nearly to a line) and turned.
+            let flat = if case % 10 == 0 {
+                1e-6
+            } else {
+                1.0 + rnd() * 0.9
+            };
+            let stretch = DMat3::from_cols(
+                DVec3::new(1.0 + 0.5 * rnd(), 0.3 * rnd(), 0.0),
+                DVec3::new(0.3 * rnd(), flat, 0.2 * rnd()),
+                DVec3::new(0.0, 0.1 * rnd(), 1.0 + 0.5 * rnd()),
+            );
+            let q: [DVec3; 3] = p.map(|x| turn * stretch * x);
+            let t = deformation(&v_inv, q[0], q[1], q[2]);
+            let (r1, s1) = polar(&t);
+            let (r2, s2) = polar_of_triangle(&t, &v_inv);
+            let dr = (DMat3::from_quat(r1) - DMat3::from_quat(r2))
+                .abs()
+                .to_cols_array();
+            let ds = (s1 - s2).abs().to_cols_array();
+            let scale = t
+                .abs()
+                .to_cols_array()
+                .iter()
+                .fold(1.0f64, |m, x| m.max(*x));
+            let d = dr.iter().chain(&ds).fold(0.0f64, |m, x| m.max(*x)) / scale;
+            if case % 10 != 0 {
+                worst = worst.max(d);
+            }
+            // Nearly flattened: both finite and T = R S.
+            assert!(
+                close(&(DMat3::from_quat(r2) * s2), &t, 1e-9 * scale),
+                "{case}"
+            );
+        }
+        assert!(worst < 1e-10, "{worst}");
     }
 
     #[test]

@@ -4,7 +4,9 @@
 //! every connected component translated so its vertex centroid follows the straight line
 //! between the keys'.
 
-use super::gradient::{axis_angle_matrix, deformation, frame, gradient_operator, polar, quat_log};
+use super::gradient::{
+    axis_angle_matrix, deformation, frame, gradient_operator, polar_of_triangle, quat_log,
+};
 use super::solve::{scatter, Pattern, Placement};
 use anyhow::Result;
 use glam::DVec3;
@@ -53,7 +55,7 @@ impl SeedSegment {
                 let v_inv = v.inverse();
                 let g = gradient_operator(&v_inv);
                 let t = deformation(&v_inv, x1[a as usize], x1[b as usize], x1[c as usize]);
-                let (q, s) = polar(&t);
+                let (q, s) = polar_of_triangle(&t, &v_inv);
                 let r = quat_log(q);
                 let angle = r.length();
                 let axis = if angle > 0.0 { r / angle } else { DVec3::X };

@@ -24,8 +24,8 @@
 
 use super::clock::{self, Part};
 use super::gradient::{
-    aligned, around_axis, deformation, frame, gradient_operator, polar, quat_log, rotation,
-    sym_eigen,
+    aligned, around_axis, deformation, frame, gradient_operator, polar_of_triangle, quat_log,
+    rotation, sym_eigen,
 };
 use super::solve::{scatter, Pattern, Placement};
 use super::weld::{bbox_diagonal, rms_rel};
@@ -613,12 +613,8 @@ impl<'t, 'a> Build<'t, 'a> {
     /// Rotation log and stretch from key a to `key` of the triangle with frame inverse v_inv.
     fn rs(&self, v_inv: &DMat3, [i, j, k]: [u32; 3], key: usize) -> (DVec3, DMat3) {
         let x = &self.track.keys[key];
-        let (q, s) = polar(&deformation(
-            v_inv,
-            x[i as usize],
-            x[j as usize],
-            x[k as usize],
-        ));
+        let t = deformation(v_inv, x[i as usize], x[j as usize], x[k as usize]);
+        let (q, s) = polar_of_triangle(&t, v_inv);
         (quat_log(q), s)
     }
 
@@ -918,7 +914,7 @@ impl<'t, 'a> Build<'t, 'a> {
                     if w == ia + 1 && aligned.is_none() && bend.is_none() {
                         continue;
                     }
-                    let (q, u) = aligned.unwrap_or_else(|| polar(&t));
+                    let (q, u) = aligned.unwrap_or_else(|| polar_of_triangle(&t, &v_inv));
                     (quat_log(bend.map_or(q, |(_, b)| b.conjugate() * q)), u)
                 }
             };
