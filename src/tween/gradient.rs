@@ -113,7 +113,7 @@ pub fn polar_of_triangle(t: &DMat3, v_inv: &DMat3) -> (DQuat, DMat3) {
     let (te, tf) = (*t * e0, *t * f0);
     let n1 = te.cross(tf);
     let len = n1.length();
-    if !(len > 1e-12 * (te.length_squared() + tf.length_squared())) {
+    if len.is_nan() || len <= 1e-12 * (te.length_squared() + tf.length_squared()) {
         return polar(t);
     }
     let n1 = n1 / len;
