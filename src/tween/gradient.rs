@@ -154,8 +154,8 @@ pub const AROUND_AXIS_RESIDUAL: f64 = 0.1;
 /// direction across the axis in the reference triangle's plane) to the direction of
 /// `B^-1 T e` seen along the axis, and `U = (B W)^T T`: returns W's angle in (-pi, pi] and U.
 /// A twisted tube's surface (any cross-section) is turned ring by ring about its axis and
-/// sheared along it, `T = W (I + s (f^T))` with the shear linear in the twist: U is that shear
-/// whole, so interpolating W's angle and U linearly follows the twist exactly, where
+/// sheared along it, `T = W (I + d f^T)` with f the in-plane direction along the axis and d its
+/// shear and tilt, linear in the twist: U is that shear whole, so interpolating W's angle and U linearly follows the twist exactly, where
 /// [`aligned`] (which keeps the normal) hands an elliptic tube's tilt to the rotation. `None`
 /// where `B^-1 T e` lies along the axis, or where U moves `e` off its line by more than
 /// [`AROUND_AXIS_RESIDUAL`] (the triangle turns some other way too: [`aligned`] serves it).
