@@ -69,8 +69,9 @@ fn a_sheet_has_its_size_and_a_band_per_method_each_holding_the_mesh() {
         );
         bands.push(rows.to_vec());
     }
-    // Linear shrinks the bent tube where seed and spline keep it: the bands differ, the most
-    // between linear and the others; the keys (first and last cells) are the same in all.
+    // Linear shrinks the bent tube where seed and spline keep it, and seed slides the upper
+    // tube (still in both keys) where linear and spline keep it still: every band differs from
+    // spline's; the keys (first and last cells) are the same in all.
     let differ = |a: &[u8], b: &[u8]| {
         a.chunks_exact(3)
             .zip(b.chunks_exact(3))
@@ -79,7 +80,7 @@ fn a_sheet_has_its_size_and_a_band_per_method_each_holding_the_mesh() {
     };
     let (ls, ss) = (differ(&bands[0], &bands[2]), differ(&bands[1], &bands[2]));
     eprintln!("pixels that differ: linear/spline {ls}, seed/spline {ss}");
-    assert!(ls > 2000 && ss > 50 && ls > ss, "{ls} {ss}");
+    assert!(ls > 2000 && ss > 2000, "{ls} {ss}");
     // The same run twice: the same bytes.
     let again = dir.path().join("again.png");
     let mut args2 = args;

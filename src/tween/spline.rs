@@ -56,6 +56,23 @@ const COHERENT: f64 = 0.25;
 /// twist's shear is small there (the tested tubes are within 0.005 of the diagonal either way).
 const COHERENT_ABOVE: f64 = 0.3;
 
+/// A straight limb (see [`limb_axes`]) is at least this much longer than wide, in the variance
+/// of its triangles' centres (about 4.5 times in extent): the tested arm (12 x 1) is 96, a
+/// short fat tube (2 x 2) under 1.
+const LIMB_ELONGATION: f64 = 20.0;
+
+/// A straight limb's sides face across its length within this on average (|n . axis|, about
+/// 1.1 degrees): 0 to round-off on a straight tube, 0.075-0.16 on the tested arm bent 15-30
+/// degrees or twisted in key a.
+const LIMB_STRAIGHT: f64 = 0.02;
+
+/// A straight limb's length is its twist axis only where its triangles' rotation axes lie
+/// within 45 degrees of it (cosine): a limb that twists (the tested arm's rotation axes lean
+/// 10-34 degrees towards its bend); one that only bends turns about an axis across it, which
+/// stays its axis (taking that bend as the cross-section's swing lost 1.2% of tube_bend's
+/// volume in between, against 0.3%).
+const TWIST_ALONG_LIMB: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
 /// A split component's triangle whose normal makes less than asin(0.1), about 6 degrees, with
 /// the twist axis faces along it (a tube's cap): its rotation is taken by the polar
 /// decomposition, as the direction across the axis in its plane is not defined there.
@@ -66,6 +83,12 @@ const ALONG_AXIS: f64 = 0.1;
 /// a limb's length covers one to three rings of the tested arms (30 to 120 rings); 8% measured
 /// about the same.
 const CROSS_SECTION: f64 = 0.03;
+
+/// Pull of a split triangle's screw pivot (see [`Screw`]) towards its centre (dimensionless,
+/// against |I - B|^2 of its bends): a bend under about 0.1 rad moves its centre nearly along
+/// the line between the keys' (the arm's and tube_bend's middle frames move by under 1e-3 of
+/// the diagonal from 1e-6 to 0.1).
+const SCREW_PULL: f64 = 0.01;
 
 /// Weight each triangle's term by its reference area.
 const WEIGHTED: bool = true;
@@ -234,6 +257,13 @@ struct Path {
     centroids: [DVec3; 4],
     /// How far the pivot path is followed, 0 to 1 (see [`RIGID_SPREAD`], [`LOOSE_SPREAD`]).
     rigid: f64,
+    /// Where the component splits: its triangles' screw pivots (see [`Screw`]), summed and
+    /// divided by their weight, as `[a, tangent at a, b, tangent at b]`, and that weight; the
+    /// path it then follows where its triangles do not turn as one, instead of `centroids`.
+    screw: Option<([DVec3; 4], f64)>,
+    /// Whether the component twists about its limb's length (see [`limb_axes`]): its screws
+    /// then turn with the bend alone.
+    limb: bool,
 }
 
 pub struct SplineSegment {
@@ -244,6 +274,8 @@ pub struct SplineSegment {
     bends: Vec<[Vec3; 3]>,
     placement: Placement,
     paths: Vec<Path>,
+    /// Where a component splits, each triangle's screw offset (see [`Screw`]); empty elsewhere.
+    offsets: Vec<Vec3>,
     /// Positions of a and b, for vertices no valid triangle touches.
     x: [Vec<DVec3>; 2],
 }
@@ -473,16 +505,17 @@ impl<'a> SplineTrack<'a> {
         let order = self.consistent_branches(&mut per);
         clock::add(Part::KeyB, t0);
         let t0 = std::time::Instant::now();
-        let stats = Components::of(&per, &build.areas, &placement);
+        let mut stats = Components::of(&per, &build.areas, &placement);
         // The branch-consistent logs to b, before the split replaces some by swings.
         let full_b: Vec<DVec3> = per
             .iter()
             .map(|t| t.as_ref().map_or(DVec3::ZERO, Tri::log_b))
             .collect();
-        split_twists(&mut per, &order, &placement, &stats);
+        let limbs = limb_axes(&per, &build.areas, x0, &placement, &stats);
+        stats.limb = split_twists(&mut per, &order, &placement, &stats, &limbs);
         drop(order);
         let bends_at_keys = build.bends(&per, &placement);
-        let logs = build.window_pass(
+        let (logs, screws, offsets) = build.window_pass(
             &mut per,
             &full_b,
             &stretch_b,
@@ -490,6 +523,7 @@ impl<'a> SplineTrack<'a> {
             &placement,
             &stats,
         );
+        let use_screws = !offsets.is_empty();
         // Key b's data and the bends at the window's keys are not held into the frames.
         drop((full_b, stretch_b));
         let bends = build.bend_tangents(&bends_at_keys);
@@ -500,7 +534,22 @@ impl<'a> SplineTrack<'a> {
             .zip(&stats.area)
             .map(|(s, w)| (s / w.max(f64::MIN_POSITIVE)).sqrt())
             .collect();
-        let paths = self.paths(&build.win, &logs, &scatter, &placement);
+        let mut paths = self.paths(&build.win, &logs, &scatter, &placement);
+        if use_screws {
+            let win = &build.win;
+            let ia = win.a;
+            let [ta, tb] = &win.tangents;
+            for ((path, sc), &limb) in paths.iter_mut().zip(&screws).zip(&stats.limb) {
+                path.limb = limb;
+                if sc.weight > 0.0 {
+                    let f = |j: usize| sc.pivots[j] / sc.weight;
+                    path.screw = Some((
+                        [f(ia), win.combine(ta, f), f(ia + 1), win.combine(tb, f)],
+                        sc.weight,
+                    ));
+                }
+            }
+        }
         clock::add(Part::Window, t0);
         Ok(SplineSegment {
             // Kept as they are (a triangle of no area is None): collecting the others into a
@@ -509,6 +558,7 @@ impl<'a> SplineTrack<'a> {
             bends,
             placement,
             paths,
+            offsets,
             x: [x0.clone(), x1.clone()],
         })
     }
@@ -567,6 +617,8 @@ impl<'a> SplineTrack<'a> {
                     log: [la, lb, lt],
                     centroids: path(&|j| centroids[j][c]),
                     rigid,
+                    screw: None,
+                    limb: false,
                 }
             })
             .collect()
@@ -685,7 +737,9 @@ impl<'t, 'a> Build<'t, 'a> {
     }
 
     /// The other keys of the window, unrolled outward from a and b, reduced to each triangle's
-    /// tangents at a and b; returns the components' area-weighted mean logs at every window key.
+    /// tangents at a and b; returns the components' area-weighted mean logs at every window key,
+    /// and where a component splits, the sums of its triangles' screws and each triangle's
+    /// screw offset (see [`Screw`]; both empty where none splits).
     fn window_pass(
         &self,
         per: &mut [Option<Tri>],
@@ -694,42 +748,85 @@ impl<'t, 'a> Build<'t, 'a> {
         bends: &[Vec3],
         placement: &Placement,
         stats: &Components,
-    ) -> Vec<[DVec3; MAX_WINDOW]> {
+    ) -> (Vec<[DVec3; MAX_WINDOW]>, Vec<Screw>, Vec<Vec3>) {
+        // Where a component splits, screws of its triangles' bends (see [`Screw`]).
+        let split = per.iter().flatten().any(Tri::split);
+        let mut deg = vec![
+            0u32;
+            if split {
+                self.track.keys[self.a].len()
+            } else {
+                0
+            }
+        ];
+        for tri in per.iter().flatten().filter(|_| split) {
+            for v in tri.corners {
+                deg[v as usize] += 1;
+            }
+        }
+        let mut offsets = vec![Vec3::ZERO; if split { per.len() } else { 0 }];
+        let deg = &deg[..];
         let mut logs = vec![[DVec3::ZERO; MAX_WINDOW]; stats.area.len()];
+        let mut screws = vec![Screw::default(); stats.area.len()];
         let nw = self.win.keys.len();
         // Fixed chunks: the sums, and so the output, do not depend on the number of threads.
         let chunk = 4096;
-        let sums: Vec<std::collections::HashMap<usize, [DVec3; MAX_WINDOW]>> = per
+        type Sums = std::collections::HashMap<usize, ([DVec3; MAX_WINDOW], Screw)>;
+        let sums: Vec<Sums> = per
             .par_chunks_mut(chunk)
             .zip(self.areas.par_chunks(chunk))
             .zip(full_b.par_chunks(chunk))
             .zip(stretch_b.par_chunks(chunk))
             .enumerate()
             .map(|(at, (((tris, areas), full_b), stretch_b))| {
-                let mut sums = std::collections::HashMap::new();
+                let mut sums = Sums::new();
+                let mut offs = Vec::new();
                 let each = tris.iter_mut().zip(areas).zip(full_b).zip(stretch_b);
                 for (k, (((tri, &area), &full_b), &sb)) in each.enumerate() {
                     let Some(tri) = tri.as_mut() else { continue };
                     let t = at * chunk + k;
                     let bend = bends.get(t * nw..(t + 1) * nw);
-                    let Some(log) = self.tangents(tri, full_b, sb, bend) else {
+                    let c = placement.component_of(tri.corners[0] as usize);
+                    let along_limb = c.is_some_and(|c| stats.limb[c]);
+                    let Some((log, screw)) = self.tangents(tri, full_b, sb, bend, deg, along_limb)
+                    else {
                         continue;
                     };
-                    if let Some(c) = placement.component_of(tri.corners[0] as usize) {
-                        let sum: &mut [DVec3; MAX_WINDOW] =
-                            sums.entry(c).or_insert([DVec3::ZERO; MAX_WINDOW]);
+                    if screw.weight > 0.0 {
+                        offs.push((t, screw.offset.as_vec3()));
+                    }
+                    if let Some(c) = c {
+                        let (sum, sc) = sums
+                            .entry(c)
+                            .or_insert(([DVec3::ZERO; MAX_WINDOW], Screw::default()));
                         for (s, l) in sum.iter_mut().zip(&log) {
                             *s += *l * area;
                         }
+                        sc.weight += screw.weight;
+                        for (s, p) in sc.pivots.iter_mut().zip(&screw.pivots) {
+                            *s += *p;
+                        }
                     }
+                }
+                (sums, offs)
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .map(|(sums, offs)| {
+                for (t, o) in offs {
+                    offsets[t] = o;
                 }
                 sums
             })
             .collect();
         for part in sums {
-            for (c, sum) in part {
+            for (c, (sum, sc)) in part {
                 for (l, s) in logs[c].iter_mut().zip(sum) {
                     *l += s;
+                }
+                screws[c].weight += sc.weight;
+                for (s, p) in screws[c].pivots.iter_mut().zip(&sc.pivots) {
+                    *s += *p;
                 }
             }
         }
@@ -738,7 +835,7 @@ impl<'t, 'a> Build<'t, 'a> {
                 *l = l.map(|r| r / *w);
             }
         }
-        logs
+        (logs, screws, offsets)
     }
 
     /// Where `tri` belongs to a split component and faces across its twist axis: its unit
@@ -882,7 +979,9 @@ impl<'t, 'a> Build<'t, 'a> {
         full_b: DVec3,
         sb: DMat3,
         bend: Option<&[Vec3]>,
-    ) -> Option<[DVec3; MAX_WINDOW]> {
+        deg: &[u32],
+        along_limb: bool,
+    ) -> Option<([DVec3; MAX_WINDOW], Screw)> {
         let win = &self.win;
         let (ia, nw) = (win.a, win.keys.len());
         // Recomputed rather than kept from the first pass (72 bytes a triangle).
@@ -930,6 +1029,7 @@ impl<'t, 'a> Build<'t, 'a> {
         unroll(&mut log[..nw], &win.times, ia, closest_branch);
         let mut values = log;
         let [ta, tb] = &win.tangents;
+        let mut twists = [0.0f64; MAX_WINDOW];
         if tri.split() {
             let axis = tri.axis.as_dvec3();
             let mut twist = [0.0; MAX_WINDOW];
@@ -947,6 +1047,7 @@ impl<'t, 'a> Build<'t, 'a> {
                 };
             }
             unroll(&mut twist[..nw], &win.times, ia, nearest_turn);
+            twists = twist;
             tri.twist = [
                 win.combine(ta, |w| twist[w]) as f32,
                 twist[ia + 1] as f32,
@@ -966,8 +1067,94 @@ impl<'t, 'a> Build<'t, 'a> {
             win.combine(tb, |w| stretch[w]),
         ]
         .map(|s| [(s * g[0]).as_vec3(), (s * g[1]).as_vec3()]);
-        Some(log)
+        let screw = match bend {
+            Some(bend) if !deg.is_empty() => {
+                let axis = tri.axis.as_dvec3().normalize_or_zero();
+                let with_twist = !along_limb;
+                // The cross-section's turn: the bend after the twist, or the bend alone.
+                let turn: [DVec3; MAX_WINDOW] = std::array::from_fn(|w| {
+                    let twist = DQuat::from_axis_angle(axis, twists[w]);
+                    match with_twist {
+                        true => quat_log(DQuat::from_scaled_axis(bend[w]) * twist),
+                        false => bend[w],
+                    }
+                });
+                self.screw(tri.corners, &turn, deg)
+            }
+            _ => Screw::default(),
+        };
+        Some((log, screw))
     }
+
+    /// The screw (see [`Screw`]) of the triangle with `corners` from its `bend` logs at the
+    /// window's keys (`deg`: the number of triangles at each vertex).
+    fn screw(&self, corners: [u32; 3], bend: &[DVec3; MAX_WINDOW], deg: &[u32]) -> Screw {
+        let win = &self.win;
+        let (ia, nw) = (win.a, win.keys.len());
+        let omega = corners.map(|v| 1.0 / deg[v as usize].max(1) as f64);
+        let weight: f64 = omega.iter().sum();
+        let centre = |key: usize| {
+            let x = &self.track.keys[key];
+            (0..3)
+                .map(|k| x[corners[k] as usize] * omega[k])
+                .sum::<DVec3>()
+                / weight
+        };
+        let cs: [DVec3; MAX_WINDOW] = std::array::from_fn(|w| {
+            if w < nw {
+                centre(win.keys[w])
+            } else {
+                DVec3::ZERO
+            }
+        });
+        let ca = cs[ia];
+        let axis = bend[ia + 1].normalize_or_zero();
+        let along = DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
+        let mut lhs = DMat3::IDENTITY * SCREW_PULL + along;
+        let mut rhs = ca * SCREW_PULL + along * ca;
+        let knots = ia.saturating_sub(1)..(ia + 3).min(nw);
+        for j in knots.filter(|&j| j != ia) {
+            let r = rotation(bend[j]);
+            let k = DMat3::IDENTITY - r;
+            lhs += k.transpose() * k;
+            rhs += k.transpose() * (cs[j] - r * ca);
+        }
+        let p = lhs.inverse() * rhs;
+        let mut pivots = [DVec3::ZERO; MAX_WINDOW];
+        for w in 0..nw {
+            pivots[w] = if w == ia {
+                p
+            } else {
+                cs[w] - rotation(bend[w]) * (ca - p)
+            } * weight;
+        }
+        Screw {
+            weight,
+            pivots,
+            offset: (ca - p) * weight,
+        }
+    }
+}
+
+/// A split triangle's path as a screw: its weighted centre (corners weighted by one over the
+/// number of triangles at each, so that the sum over a component is the sum of its vertices)
+/// turns with its cross-section (its bend, see [`Build::bends`], after its twist) about a pivot
+/// that follows the window's keys (least squares, as a component's, see [`Build::paths`]).
+/// Where the component twists about its limb's length (see [`limb_axes`]) the bend alone: the
+/// twist turns the centre about the limb's axis, around its cross-section's centre, and with a
+/// twist near whole turns the pivot is ill-conditioned (the tested arm twisting as it bends:
+/// 0.0751 -> 0.1347 of the diagonal with the twist in). Summed over a split component whose
+/// triangles do not turn as one, the component's centroid: a limb bending at a joint keeps its
+/// upper part still and swings the lower on the arc (an arm bent 90 degrees in one key step:
+/// 0.037 of the diagonal off the skinned bend at the middle frame along the line between the
+/// keys' centroids, 0.0015 so).
+#[derive(Clone, Copy, Default)]
+struct Screw {
+    weight: f64,
+    /// weight x pivot at each window key.
+    pivots: [DVec3; MAX_WINDOW],
+    /// weight x (centre in key a - pivot).
+    offset: DVec3,
 }
 
 /// Per component of a segment: area, area-weighted mean log to b, the scatter of its
@@ -979,6 +1166,9 @@ struct Components {
     turn: Vec<f64>,
     /// Area-weighted sum of the outer products of the logs' unit directions.
     directions: Vec<DMat3>,
+    /// Where the component splits about its limb's length (see [`limb_axes`]), set by
+    /// [`split_twists`].
+    limb: Vec<bool>,
 }
 
 impl Components {
@@ -1016,6 +1206,7 @@ impl Components {
             spread,
             turn,
             directions,
+            limb: vec![false; components],
         }
     }
 
@@ -1041,6 +1232,79 @@ impl Components {
     }
 }
 
+/// Each component's limb axis, where it splits (see [`Components::splits`]) and is a straight
+/// limb in key a: its triangles turn by different amounts (not as one, see [`RIGID_SPREAD`]),
+/// its length along the principal direction of its triangles' centres is [`LIMB_ELONGATION`]
+/// times any other (in variance), and its sides (triangles facing less than 60 degrees from
+/// across that direction) face across it within [`LIMB_STRAIGHT`] on average. A twist turns a
+/// limb about its own length; the direction of its triangles' rotation axes (see
+/// [`Components::axis`]) leans towards a bend it makes at the same time. `None` elsewhere (a
+/// bent or already twisted key a: its rotation axes serve).
+fn limb_axes(
+    per: &[Option<Tri>],
+    areas: &[f64],
+    x0: &[DVec3],
+    placement: &Placement,
+    stats: &Components,
+) -> Vec<Option<DVec3>> {
+    let components = placement.component_count();
+    let candidate: Vec<bool> = (0..components)
+        .map(|c| {
+            let angle = stats.mean_b[c].length();
+            let scatter = (stats.spread[c] / stats.area[c].max(f64::MIN_POSITIVE)).sqrt();
+            stats.splits(c) && angle > 0.0 && scatter / angle > RIGID_SPREAD
+        })
+        .collect();
+    if !candidate.contains(&true) {
+        return vec![None; components];
+    }
+    let members = || {
+        per.iter().zip(areas).filter_map(|(tri, &area)| {
+            let tri = tri.as_ref()?;
+            let c = placement.component_of(tri.corners[0] as usize)?;
+            candidate[c].then(|| (tri.corners.map(|v| x0[v as usize]), c, area))
+        })
+    };
+    // Area-weighted moments of the triangles' centres.
+    let mut moments = vec![(0.0f64, DVec3::ZERO, DMat3::ZERO); components];
+    for (p, c, area) in members() {
+        let m = (p[0] + p[1] + p[2]) / 3.0;
+        let (w, sum, outer) = &mut moments[c];
+        *w += area;
+        *sum += m * area;
+        *outer += DMat3::from_cols(m * m.x, m * m.y, m * m.z) * area;
+    }
+    let length: Vec<Option<DVec3>> = moments
+        .iter()
+        .map(|&(w, sum, outer)| {
+            let mean = (w > 0.0).then(|| sum / w)?;
+            let covariance =
+                outer * (1.0 / w) - DMat3::from_cols(mean * mean.x, mean * mean.y, mean * mean.z);
+            let (ev, v) = sym_eigen(&covariance);
+            (ev[0] > LIMB_ELONGATION * ev[1])
+                .then(|| v.x_axis.try_normalize())
+                .flatten()
+        })
+        .collect();
+    let mut sides = vec![(0.0f64, 0.0f64); components];
+    for (p, c, area) in members() {
+        let (Some(axis), Some(n)) = (length[c], (p[1] - p[0]).cross(p[2] - p[0]).try_normalize())
+        else {
+            continue;
+        };
+        let along = n.dot(axis).abs();
+        if along < 0.5 {
+            sides[c].0 += area;
+            sides[c].1 += area * along;
+        }
+    }
+    length
+        .iter()
+        .zip(&sides)
+        .map(|(axis, &(area, along))| axis.filter(|_| area > 0.0 && along < LIMB_STRAIGHT * area))
+        .collect()
+}
+
 /// Components some triangle of which turns past [`SPLIT_ABOVE`], or that turn [`COHERENT`]ly:
 /// each rotation to b becomes a twist about the component's axis and a swing, b's twists
 /// unwrapped over the settling `order` of the branches.
@@ -1049,14 +1313,21 @@ fn split_twists(
     order: &[(u32, u32)],
     placement: &Placement,
     stats: &Components,
-) {
-    let axis: Vec<DVec3> = (0..stats.area.len())
+    limbs: &[Option<DVec3>],
+) -> Vec<bool> {
+    let limb: Vec<Option<DVec3>> = (0..stats.area.len())
         .map(|c| {
-            if stats.splits(c) {
-                stats.axis(c)
-            } else {
-                DVec3::ZERO
-            }
+            let a = stats.axis(c);
+            let limb =
+                limbs[c].filter(|limb| stats.splits(c) && limb.dot(a).abs() > TWIST_ALONG_LIMB)?;
+            Some(if limb.dot(a) < 0.0 { -limb } else { limb })
+        })
+        .collect();
+    let axis: Vec<DVec3> = (0..stats.area.len())
+        .map(|c| match limb[c] {
+            _ if !stats.splits(c) => DVec3::ZERO,
+            Some(limb) => limb,
+            None => stats.axis(c),
         })
         .collect();
     per.par_iter_mut().flatten().for_each(|tri| {
@@ -1081,6 +1352,7 @@ fn split_twists(
             tri.twist[1] = nearest_turn(tri.twist[1] as f64, target) as f32;
         }
     }
+    limb.iter().map(Option::is_some).collect()
 }
 
 impl SplineSegment {
@@ -1107,10 +1379,19 @@ impl SplineSegment {
     fn system(&self, u: f64) -> (Vec<[f64; 3]>, Vec<DVec3>) {
         let w = hermite(u);
         let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
+        let mut turned = vec![
+            DVec3::ZERO;
+            if self.offsets.is_empty() {
+                0
+            } else {
+                self.paths.len()
+            }
+        ];
         for (t, tri) in self.tris.iter().enumerate() {
             let Some(tri) = tri else { continue };
             let [r0, r1, r2] = tri.r.map(|r| r.as_dvec3());
             let r = r0 * w[1] + r1 * w[2] + r2 * w[3];
+            let mut section = DMat3::IDENTITY;
             let rot = if tri.split() {
                 let [t0, t1, t2] = tri.twist.map(f64::from);
                 let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
@@ -1118,13 +1399,24 @@ impl SplineSegment {
                     let [b0, b1, b2] = b.map(|b| b.as_dvec3());
                     b0 * w[1] + b1 * w[2] + b2 * w[3]
                 });
-                let q = glam::DQuat::from_scaled_axis(bend)
-                    * glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist)
-                    * glam::DQuat::from_scaled_axis(r);
+                let along_limb = self
+                    .placement
+                    .component_of(tri.corners[0] as usize)
+                    .is_some_and(|c| self.paths[c].limb);
+                let bend_q = glam::DQuat::from_scaled_axis(bend);
+                let twist_q = glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist);
+                // The screw's turn (see [`Screw`]).
+                section = DMat3::from_quat(if along_limb { bend_q } else { bend_q * twist_q });
+                let q = bend_q * twist_q * glam::DQuat::from_scaled_axis(r);
                 DMat3::from_quat(q)
             } else {
                 rotation(r)
             };
+            if let Some(o) = self.offsets.get(t) {
+                if let Some(c) = self.placement.component_of(tri.corners[0] as usize) {
+                    turned[c] += section * o.as_dvec3();
+                }
+            }
             let v: [DVec3; 2] = std::array::from_fn(|k| {
                 rot * (tri.g[k].as_dvec3() * w[0]
                     + tri.sg[0][k].as_dvec3() * w[1]
@@ -1136,12 +1428,16 @@ impl SplineSegment {
         let centroids: Vec<DVec3> = self
             .paths
             .iter()
-            .map(|path| {
+            .enumerate()
+            .map(|(c, path)| {
                 // The pivot now; the centroid keeps its offset from the pivot, turned.
                 let p = hermite_point(w, path.pivot);
                 let [la, lb, lt] = path.log;
                 let rot = rotation(hermite_point(w, [DVec3::ZERO, la, lb, lt]));
-                let spline = hermite_point(w, path.centroids);
+                let spline = match path.screw {
+                    Some((pivots, weight)) => hermite_point(w, pivots) + turned[c] / weight,
+                    None => hermite_point(w, path.centroids),
+                };
                 spline.lerp(p + rot * (path.centroid - path.pivot[0]), path.rigid)
             })
             .collect();
