@@ -749,16 +749,10 @@ impl<'t, 'a> Build<'t, 'a> {
         placement: &Placement,
         stats: &Components,
     ) -> (Vec<[DVec3; MAX_WINDOW]>, Vec<Screw>, Vec<Vec3>) {
-        // Where a component splits, screws of its triangles' bends (see [`Screw`]).
+        // Where a component splits, its triangles' screws (see [`Screw`]).
         let split = per.iter().flatten().any(Tri::split);
-        let mut deg = vec![
-            0u32;
-            if split {
-                self.track.keys[self.a].len()
-            } else {
-                0
-            }
-        ];
+        let vertices = self.track.keys[self.a].len();
+        let mut deg = vec![0u32; if split { vertices } else { 0 }];
         for tri in per.iter().flatten().filter(|_| split) {
             for v in tri.corners {
                 deg[v as usize] += 1;
