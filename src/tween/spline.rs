@@ -38,11 +38,19 @@ use std::f64::consts::PI;
 /// the noise of single-precision positions (about 1e-7 relative).
 const NO_TURN: f64 = 1e-5;
 
-/// A component some triangle of which turns by more than this (radians, from key a to b)
-/// interpolates its rotations as a twist about the component's axis (see [`Components::axis`])
+/// A component more than [`SPLIT_AREA`] of which turns by more than this (radians, from key a
+/// to b) interpolates its rotations as a twist about the component's axis (see [`Components::axis`])
 /// after a swing (see [`twist_swing`]); below it, as logs (the same to second order, and
 /// measured a little better on the morph-keyframe birds), unless it turns [`COHERENT`]ly.
 const SPLIT_ABOVE: f64 = std::f64::consts::PI;
+
+/// Share of a component's area that must turn past [`SPLIT_ABOVE`] for it to split: a few
+/// triangles folded at a sharp elbow turn by about 180 degrees either side of it by chance of
+/// round-off (the bench's 4M tube: 4e-6 of its area at 3.144 rad, the 1M tube of the same shape
+/// at 3.142 below it), and split the component (window 5.9 -> 2.0 s at 4M) where the same shape
+/// at another resolution does not. A twisted tube's far end past 180 degrees is a share of its
+/// length.
+const SPLIT_AREA: f64 = 0.01;
 
 /// A component whose area-weighted mean rotation log to b is longer than this fraction of its
 /// largest triangle's, and whose largest turns past [`COHERENT_ABOVE`], is split as one past
@@ -1160,6 +1168,8 @@ struct Components {
     turn: Vec<f64>,
     /// Area-weighted sum of the outer products of the logs' unit directions.
     directions: Vec<DMat3>,
+    /// Area of the triangles that turn past [`SPLIT_ABOVE`].
+    past: Vec<f64>,
     /// Where the component splits about its limb's length (see [`limb_axes`]), set by
     /// [`split_twists`].
     limb: Vec<bool>,
@@ -1172,6 +1182,7 @@ impl Components {
         let mut mean_b = vec![DVec3::ZERO; components];
         let mut turn = vec![0.0f64; components];
         let mut directions = vec![DMat3::ZERO; components];
+        let mut past = vec![0.0f64; components];
         let members = || {
             per.iter().zip(areas).filter_map(|(tri, &area)| {
                 let tri = tri.as_ref()?;
@@ -1182,6 +1193,9 @@ impl Components {
             area_of[c] += area;
             mean_b[c] += tri.log_b() * area;
             turn[c] = turn[c].max(tri.log_b().length());
+            if tri.log_b().length() > SPLIT_ABOVE {
+                past[c] += area;
+            }
             let d = tri.log_b().normalize_or_zero() * area.sqrt();
             directions[c] += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
         }
@@ -1200,6 +1214,7 @@ impl Components {
             spread,
             turn,
             directions,
+            past,
             limb: vec![false; components],
         }
     }
@@ -1207,7 +1222,8 @@ impl Components {
     /// Whether component `c` is split into twist and swing (see [`SPLIT_ABOVE`], [`COHERENT`]).
     fn splits(&self, c: usize) -> bool {
         let turn = self.turn[c];
-        turn > SPLIT_ABOVE || (turn > COHERENT_ABOVE && self.mean_b[c].length() > COHERENT * turn)
+        let past = self.past[c] > SPLIT_AREA * self.area[c];
+        past || (turn > COHERENT_ABOVE && self.mean_b[c].length() > COHERENT * turn)
     }
 
     /// Component `c`'s twist axis: the principal direction of its triangles' rotation axes
@@ -1299,9 +1315,9 @@ fn limb_axes(
         .collect()
 }
 
-/// Components some triangle of which turns past [`SPLIT_ABOVE`], or that turn [`COHERENT`]ly:
-/// each rotation to b becomes a twist about the component's axis and a swing, b's twists
-/// unwrapped over the settling `order` of the branches.
+/// Components more than [`SPLIT_AREA`] of which turns past [`SPLIT_ABOVE`], or that turn
+/// [`COHERENT`]ly: each rotation to b becomes a twist about the component's axis and a swing,
+/// b's twists unwrapped over the settling `order` of the branches.
 fn split_twists(
     per: &mut [Option<Tri>],
     order: &[(u32, u32)],
