@@ -14,7 +14,10 @@
 //! a to the keys next to the segment leaves in place, least squares), which itself follows the
 //! spline; its centroid c(u) = p(u) + R(u) (c_a - p), with R(u) the component's area-weighted
 //! mean log interpolated like the triangles'. An arm swinging about the shoulder moves on the
-//! arc, a rigid motion follows its screw, and the keys' centroids are met exactly.
+//! arc, a rigid motion follows its screw, and the keys' centroids are met exactly. Where a
+//! component is split into twists and swings and does not turn as one, its centroid is the sum
+//! of its triangles' own screws instead (see [`Screw`]): a limb bending at a joint keeps its
+//! upper part still.
 //!
 //! Ends: the first and last key of a track that does not loop take their chord's slope (the
 //! tangent a mirrored neighbour would give). A looping track (last key equal to the first)
