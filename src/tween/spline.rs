@@ -1278,10 +1278,12 @@ fn limb_axes(
             candidate[c].then(|| (tri.corners.map(|v| x0[v as usize]), c, area))
         })
     };
-    // Area-weighted moments of the triangles' centres.
+    // Area-weighted moments of the triangles' centres, about the component's vertices' centroid
+    // (no cancellation far from the origin).
+    let origin = placement.centroids(x0);
     let mut moments = vec![(0.0f64, DVec3::ZERO, DMat3::ZERO); components];
     for (p, c, area) in members() {
-        let m = (p[0] + p[1] + p[2]) / 3.0;
+        let m = (p[0] + p[1] + p[2]) / 3.0 - origin[c];
         let (w, sum, outer) = &mut moments[c];
         *w += area;
         *sum += m * area;
