@@ -1330,21 +1330,19 @@ fn split_twists(
     stats: &Components,
     limbs: &[Option<DVec3>],
 ) -> Vec<bool> {
-    let limb: Vec<Option<DVec3>> = (0..stats.area.len())
+    // Each split component's axis (zero where it does not split), and whether it is its limb's.
+    let (axis, limb): (Vec<DVec3>, Vec<bool>) = (0..stats.area.len())
         .map(|c| {
+            if !stats.splits(c) {
+                return (DVec3::ZERO, false);
+            }
             let a = stats.axis(c);
-            let limb =
-                limbs[c].filter(|limb| stats.splits(c) && limb.dot(a).abs() > TWIST_ALONG_LIMB)?;
-            Some(if limb.dot(a) < 0.0 { -limb } else { limb })
+            match limbs[c].filter(|limb| limb.dot(a).abs() > TWIST_ALONG_LIMB) {
+                Some(limb) => (if limb.dot(a) < 0.0 { -limb } else { limb }, true),
+                None => (a, false),
+            }
         })
-        .collect();
-    let axis: Vec<DVec3> = (0..stats.area.len())
-        .map(|c| match limb[c] {
-            _ if !stats.splits(c) => DVec3::ZERO,
-            Some(limb) => limb,
-            None => stats.axis(c),
-        })
-        .collect();
+        .unzip();
     per.par_iter_mut().flatten().for_each(|tri| {
         if let Some(c) = placement.component_of(tri.corners[0] as usize) {
             tri.axis = axis[c].as_vec3();
@@ -1367,7 +1365,7 @@ fn split_twists(
             tri.twist[1] = nearest_turn(tri.twist[1] as f64, target) as f32;
         }
     }
-    limb.iter().map(Option::is_some).collect()
+    limb
 }
 
 impl SplineSegment {
