@@ -42,9 +42,10 @@ use std::f64::consts::PI;
 const NO_TURN: f64 = 1e-5;
 
 /// A component more than [`SPLIT_AREA`] of which turns by more than this (radians, from key a
-/// to b) interpolates its rotations as a twist about the component's axis (see [`Components::axis`])
-/// after a swing (see [`twist_swing`]); below it, as logs (the same to second order, and
-/// measured a little better on the morph-keyframe birds), unless it turns [`COHERENT`]ly.
+/// to b) interpolates its rotations as a twist about the component's axis (see
+/// [`Components::axis`]) after a swing (see [`twist_swing`]); below it, as logs (the same to
+/// second order, and measured a little better on the morph-keyframe birds), unless it turns
+/// [`COHERENT`]ly.
 const SPLIT_ABOVE: f64 = std::f64::consts::PI;
 
 /// Share of a component's area that must turn past [`SPLIT_ABOVE`] for it to split: a few
@@ -534,33 +535,11 @@ impl<'a> SplineTrack<'a> {
             &placement,
             &stats,
         );
-        let use_screws = !offsets.is_empty();
         // Key b's data and the bends at the window's keys are not held into the frames.
         drop((full_b, stretch_b));
         let bends = build.bend_tangents(&bends_at_keys);
         drop(bends_at_keys);
-        let scatter: Vec<f64> = stats
-            .spread
-            .iter()
-            .zip(&stats.area)
-            .map(|(s, w)| (s / w.max(f64::MIN_POSITIVE)).sqrt())
-            .collect();
-        let mut paths = self.paths(&build.win, &logs, &scatter, &placement);
-        if use_screws {
-            let win = &build.win;
-            let ia = win.a;
-            let [ta, tb] = &win.tangents;
-            for ((path, sc), &limb) in paths.iter_mut().zip(&screws).zip(&stats.limb) {
-                path.limb = limb;
-                if sc.weight > 0.0 {
-                    let f = |j: usize| sc.pivots[j] / sc.weight;
-                    path.screw = Some((
-                        [f(ia), win.combine(ta, f), f(ia + 1), win.combine(tb, f)],
-                        sc.weight,
-                    ));
-                }
-            }
-        }
+        let paths = self.paths(&build.win, &logs, &stats, &screws, &placement);
         clock::add(Part::Window, t0);
         Ok(SplineSegment {
             // Kept as they are (a triangle of no area is None): collecting the others into a
@@ -575,12 +554,14 @@ impl<'a> SplineTrack<'a> {
     }
 
     /// Each component's path (see the module) from its mean rotation `logs` relative to key a
-    /// at the window's keys and the `scatter` of its triangles' logs to b about their mean.
+    /// at the window's keys, the scatter of its triangles' logs to b about their mean (see
+    /// [`Components::scatter`]) and, where it splits, the sums of its triangles' `screws`.
     fn paths(
         &self,
         win: &Window,
         logs: &[[DVec3; MAX_WINDOW]],
-        scatter: &[f64],
+        stats: &Components,
+        screws: &[Screw],
         placement: &Placement,
     ) -> Vec<Path> {
         let ia = win.a;
@@ -593,25 +574,12 @@ impl<'a> SplineTrack<'a> {
             .map(|c| {
                 let ca = centroids[ia][c];
                 let log = &logs[c];
-                // Pivot: (I - R_j) p = c_j - R_j c_a for the keys next to the segment and b,
-                // least squares; along the segment's axis (where the turn to b leaves it free)
-                // it stays level with c_a.
-                let axis = log[ia + 1].normalize_or_zero();
-                let along = DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
-                let mut lhs = DMat3::IDENTITY * PIVOT_PULL + along;
-                let mut rhs = ca * PIVOT_PULL + along * ca;
-                let knots = ia.saturating_sub(1)..(ia + 3).min(win.keys.len());
-                for j in knots.filter(|&j| j != ia) {
-                    let r = rotation(log[j]);
-                    let k = DMat3::IDENTITY - r;
-                    lhs += k.transpose() * k;
-                    rhs += k.transpose() * (centroids[j][c] - r * ca);
-                }
-                let p = lhs.inverse() * rhs;
+                let p = pivot(win, log, |j| centroids[j][c], PIVOT_PULL);
                 let pivot = |j: usize| centroids[j][c] - rotation(log[j]) * (ca - p);
                 let angle = log[ia + 1].length();
                 let rigid = if angle > 0.0 {
-                    let x = ((LOOSE_SPREAD - scatter[c] / angle) / (LOOSE_SPREAD - RIGID_SPREAD))
+                    let x = ((LOOSE_SPREAD - stats.scatter(c) / angle)
+                        / (LOOSE_SPREAD - RIGID_SPREAD))
                         .clamp(0.0, 1.0);
                     x * x * (3.0 - 2.0 * x)
                 } else {
@@ -622,18 +590,44 @@ impl<'a> SplineTrack<'a> {
                     [f(ia), win.combine(ta, f), f(ia + 1), win.combine(tb, f)]
                 };
                 let [_, la, lb, lt] = path(&|j| log[j]);
+                let screw = screws.get(c).filter(|s| s.weight > 0.0);
                 Path {
                     centroid: ca,
                     pivot: path(&|j| if j == ia { p } else { pivot(j) }),
                     log: [la, lb, lt],
                     centroids: path(&|j| centroids[j][c]),
                     rigid,
-                    screw: None,
-                    limb: false,
+                    screw: screw.map(|s| (path(&|j| s.pivots[j] / s.weight), s.weight)),
+                    limb: stats.limb[c],
                 }
             })
             .collect()
     }
+}
+
+/// The pivot of a motion from key a over the window `win`: the point p with
+/// (I - R_j) p = c_j - R_j c_a for the keys next to the segment and b (R_j the rotation with
+/// log `log[j]`, c_j = `centre(j)`), least squares with a `pull` towards c_a; along the axis
+/// of the turn to b (which leaves it free) it stays level with c_a.
+fn pivot(
+    win: &Window,
+    log: &[DVec3; MAX_WINDOW],
+    centre: impl Fn(usize) -> DVec3,
+    pull: f64,
+) -> DVec3 {
+    let (ia, ca) = (win.a, centre(win.a));
+    let axis = log[ia + 1].normalize_or_zero();
+    let along = DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
+    let mut lhs = DMat3::IDENTITY * pull + along;
+    let mut rhs = ca * pull + along * ca;
+    let knots = ia.saturating_sub(1)..(ia + 3).min(win.keys.len());
+    for j in knots.filter(|&j| j != ia) {
+        let r = rotation(log[j]);
+        let k = DMat3::IDENTITY - r;
+        lhs += k.transpose() * k;
+        rhs += k.transpose() * (centre(j) - r * ca);
+    }
+    lhs.inverse() * rhs
 }
 
 /// Segment a of a track while it is built: its window, and the reference (key a) triangles'
@@ -1074,14 +1068,13 @@ impl<'t, 'a> Build<'t, 'a> {
         .map(|s| [(s * g[0]).as_vec3(), (s * g[1]).as_vec3()]);
         let screw = match bend {
             Some(bend) if !deg.is_empty() => {
-                let axis = tri.axis.as_dvec3().normalize_or_zero();
-                let with_twist = !along_limb;
-                // The cross-section's turn: the bend after the twist, or the bend alone.
+                // The cross-section's turn: the bend alone along a limb, else after the twist.
                 let turn: [DVec3; MAX_WINDOW] = std::array::from_fn(|w| {
                     let twist = DQuat::from_axis_angle(axis, twists[w]);
-                    match with_twist {
-                        true => quat_log(DQuat::from_scaled_axis(bend[w]) * twist),
-                        false => bend[w],
+                    if along_limb {
+                        bend[w]
+                    } else {
+                        quat_log(DQuat::from_scaled_axis(bend[w]) * twist)
                     }
                 });
                 self.screw(tri.corners, &turn, deg)
@@ -1113,18 +1106,7 @@ impl<'t, 'a> Build<'t, 'a> {
             }
         });
         let ca = cs[ia];
-        let axis = bend[ia + 1].normalize_or_zero();
-        let along = DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
-        let mut lhs = DMat3::IDENTITY * SCREW_PULL + along;
-        let mut rhs = ca * SCREW_PULL + along * ca;
-        let knots = ia.saturating_sub(1)..(ia + 3).min(nw);
-        for j in knots.filter(|&j| j != ia) {
-            let r = rotation(bend[j]);
-            let k = DMat3::IDENTITY - r;
-            lhs += k.transpose() * k;
-            rhs += k.transpose() * (cs[j] - r * ca);
-        }
-        let p = lhs.inverse() * rhs;
+        let p = pivot(win, bend, |j| cs[j], SCREW_PULL);
         let mut pivots = [DVec3::ZERO; MAX_WINDOW];
         for w in 0..nw {
             pivots[w] = if w == ia {
@@ -1222,6 +1204,11 @@ impl Components {
         }
     }
 
+    /// The area-weighted RMS of component `c`'s triangles' logs to b about their mean (radians).
+    fn scatter(&self, c: usize) -> f64 {
+        (self.spread[c] / self.area[c].max(f64::MIN_POSITIVE)).sqrt()
+    }
+
     /// Whether component `c` is split into twist and swing (see [`SPLIT_ABOVE`], [`COHERENT`]).
     fn splits(&self, c: usize) -> bool {
         let turn = self.turn[c];
@@ -1264,8 +1251,7 @@ fn limb_axes(
     let candidate: Vec<bool> = (0..components)
         .map(|c| {
             let angle = stats.mean_b[c].length();
-            let scatter = (stats.spread[c] / stats.area[c].max(f64::MIN_POSITIVE)).sqrt();
-            stats.splits(c) && angle > 0.0 && scatter / angle > RIGID_SPREAD
+            stats.splits(c) && angle > 0.0 && stats.scatter(c) / angle > RIGID_SPREAD
         })
         .collect();
     if !candidate.contains(&true) {
@@ -1392,19 +1378,12 @@ impl SplineSegment {
     fn system(&self, u: f64) -> (Vec<[f64; 3]>, Vec<DVec3>) {
         let w = hermite(u);
         let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
-        let mut turned = vec![
-            DVec3::ZERO;
-            if self.offsets.is_empty() {
-                0
-            } else {
-                self.paths.len()
-            }
-        ];
+        // Each split component's screw offsets turned with their cross-sections (see [`Screw`]).
+        let mut turned = vec![DVec3::ZERO; self.paths.len()];
         for (t, tri) in self.tris.iter().enumerate() {
             let Some(tri) = tri else { continue };
             let [r0, r1, r2] = tri.r.map(|r| r.as_dvec3());
             let r = r0 * w[1] + r1 * w[2] + r2 * w[3];
-            let mut section = DMat3::IDENTITY;
             let rot = if tri.split() {
                 let [t0, t1, t2] = tri.twist.map(f64::from);
                 let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
@@ -1412,24 +1391,19 @@ impl SplineSegment {
                     let [b0, b1, b2] = b.map(|b| b.as_dvec3());
                     b0 * w[1] + b1 * w[2] + b2 * w[3]
                 });
-                let along_limb = self
-                    .placement
-                    .component_of(tri.corners[0] as usize)
-                    .is_some_and(|c| self.paths[c].limb);
                 let bend_q = glam::DQuat::from_scaled_axis(bend);
                 let twist_q = glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist);
-                // The screw's turn (see [`Screw`]).
-                section = DMat3::from_quat(if along_limb { bend_q } else { bend_q * twist_q });
+                let c = self.placement.component_of(tri.corners[0] as usize);
+                if let (Some(c), Some(o)) = (c, self.offsets.get(t)) {
+                    let limb = self.paths[c].limb;
+                    let section = DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
+                    turned[c] += section * o.as_dvec3();
+                }
                 let q = bend_q * twist_q * glam::DQuat::from_scaled_axis(r);
                 DMat3::from_quat(q)
             } else {
                 rotation(r)
             };
-            if let Some(o) = self.offsets.get(t) {
-                if let Some(c) = self.placement.component_of(tri.corners[0] as usize) {
-                    turned[c] += section * o.as_dvec3();
-                }
-            }
             let v: [DVec3; 2] = std::array::from_fn(|k| {
                 rot * (tri.g[k].as_dvec3() * w[0]
                     + tri.sg[0][k].as_dvec3() * w[1]
