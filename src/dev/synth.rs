@@ -17,6 +17,21 @@ pub struct Surface {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// A deterministic stream of numbers for randomised tests (a 64-bit linear congruential
+/// generator, Knuth's MMIX constants): the same values on every run and machine.
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// The next number, uniform in [0, 1) (53 bits).
+    pub fn unit(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 /// A closed tube along +X from 0 to `length`, elliptic cross-section (`ry`, `rz`), with
 /// `rings` rings of `segments` vertices and a fan cap at each end (centre vertex).
 /// Triangles: `2 * segments * (rings - 1) + 2 * segments`.

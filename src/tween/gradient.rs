@@ -155,8 +155,9 @@ pub const AROUND_AXIS_RESIDUAL: f64 = 0.1;
 /// `B^-1 T e` seen along the axis, and `U = (B W)^T T`: returns W's angle in (-pi, pi] and U.
 /// A twisted tube's surface (any cross-section) is turned ring by ring about its axis and
 /// sheared along it, `T = W (I + d f^T)` with f the in-plane direction along the axis and d its
-/// shear and tilt, linear in the twist: U is that shear whole, so interpolating W's angle and U linearly follows the twist exactly, where
-/// [`aligned`] (which keeps the normal) hands an elliptic tube's tilt to the rotation. `None`
+/// shear and tilt, linear in the twist: U is that shear whole, so interpolating W's angle and
+/// U linearly follows the twist exactly, where [`aligned`] (which keeps the normal) hands an
+/// elliptic tube's tilt to the rotation. `None`
 /// where `B^-1 T e` lies along the axis, or where U moves `e` off its line by more than
 /// [`AROUND_AXIS_RESIDUAL`] (the triangle turns some other way too: [`aligned`] serves it).
 pub fn around_axis(t: &DMat3, e: DVec3, axis: DVec3, bend: DQuat) -> Option<(f64, DMat3)> {
@@ -321,13 +322,8 @@ mod tests {
 
     #[test]
     fn polar_of_triangle_matches_polar() {
-        let mut seed = 7u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut lcg = crate::dev::synth::Lcg(7);
+        let mut rnd = || lcg.unit() * 2.0 - 1.0;
         let mut worst = 0.0f64;
         for case in 0..2000 {
             let p: [DVec3; 3] = std::array::from_fn(|_| DVec3::new(rnd(), rnd(), rnd()));

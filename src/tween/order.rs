@@ -179,17 +179,9 @@ mod tests {
     fn scattered_positions_are_refused() {
         let (w, h) = (200usize, 200usize);
         let (start, neighbours) = grid(w, h);
-        let mut state = 12345u64;
+        let mut lcg = crate::dev::synth::Lcg(12345);
         let positions: Vec<DVec3> = (0..w * h)
-            .map(|_| {
-                let mut r = || {
-                    state = state
-                        .wrapping_mul(6364136223846793005)
-                        .wrapping_add(1442695040888963407);
-                    (state >> 11) as f64 / (1u64 << 53) as f64
-                };
-                DVec3::new(r(), r(), r())
-            })
+            .map(|_| DVec3::new(lcg.unit(), lcg.unit(), lcg.unit()))
             .collect();
         assert!(dissect(&positions, &start, &neighbours).is_none());
         let laid_out: Vec<DVec3> = (0..w * h)
