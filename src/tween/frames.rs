@@ -233,8 +233,11 @@ impl<'a> MeshTween<'a> {
             let chunk = threads * if block > 1 { block } else { 2 };
             for start in (i..j).step_by(chunk) {
                 let t0 = Instant::now();
+                let end = (start + chunk).min(j);
+                // A last, shorter chunk is shared out over the threads too.
+                let block = block.min(segment.block(end - start, threads));
                 let computed: Vec<Vec<(Vec<PrimitiveDelta>, Option<FrameReport>)>> = frames
-                    [start..(start + chunk).min(j)]
+                    [start..end]
                     .par_chunks(block)
                     .map(|fs| {
                         let ts: Vec<f64> = fs.iter().map(|f| f.t).collect();
