@@ -1,5 +1,7 @@
 //! Where the set-up time goes, for the summary: process-wide accumulators that the stages add
 //! their wall time to (one job runs per process; figures only, nothing depends on them).
+//! A segment's key gradients and its numeric factorization run side by side, so the parts can
+//! add up to more than the set-up's wall time.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -22,7 +24,7 @@ pub enum Part {
 pub const NAMES: [&str; 4] = [
     "symbolic",
     "key gradients and turns",
-    "numeric factorization",
+    "numeric factorization (beside them)",
     "spline window",
 ];
 

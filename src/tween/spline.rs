@@ -504,18 +504,27 @@ impl<'a> SplineTrack<'a> {
     /// Prepare segment a (keys a and a + 1).
     pub fn segment(&self, a: usize) -> Result<SplineSegment> {
         let (x0, x1) = (&self.keys[a], &self.keys[a + 1]);
-        let t0 = std::time::Instant::now();
         let build = Build::new(self, a);
-        // The system first, from key a alone: the per-triangle data of the keys is not yet
-        // held while the factorization (the largest buffers) runs.
-        let placement = build.placement()?;
-        clock::add(Part::Numeric, t0);
-        let t0 = std::time::Instant::now();
-        // First key b alone: its branches are made consistent across the surface before the
-        // other keys are unrolled from it.
-        let (mut per, stretch_b) = build.first_key();
-        let order = self.consistent_branches(&mut per);
-        clock::add(Part::KeyB, t0);
+        // The system (from key a alone) and key b's triangles side by side: the factorization
+        // and the branch growth are each one thread's work.
+        let (placement, (mut per, stretch_b, order)) = rayon::join(
+            || {
+                let t0 = std::time::Instant::now();
+                let placement = build.placement();
+                clock::add(Part::Numeric, t0);
+                placement
+            },
+            || {
+                let t0 = std::time::Instant::now();
+                // First key b alone: its branches are made consistent across the surface
+                // before the other keys are unrolled from it.
+                let (mut per, stretch_b) = build.first_key();
+                let order = self.consistent_branches(&mut per);
+                clock::add(Part::KeyB, t0);
+                (per, stretch_b, order)
+            },
+        );
+        let placement = placement?;
         let t0 = std::time::Instant::now();
         let mut stats = Components::of(&per, &build.areas, &placement);
         // The branch-consistent logs to b, before the split replaces some by swings.
@@ -1360,7 +1369,7 @@ impl SplineSegment {
     }
 
     pub fn frame(&self, u: f64) -> Vec<DVec3> {
-        let (rhs, centroids) = self.system(u);
+        let (rhs, centroids) = self.systems(&[u]).pop().expect("one frame");
         self.placement
             .place(rhs, &centroids, |v| self.x[0][v].lerp(self.x[1][v], u))
     }
@@ -1368,52 +1377,63 @@ impl SplineSegment {
     /// The frames at `us`, their solves sharing passes over the factor (see
     /// [`Placement::place_block`]): the same positions as [`SplineSegment::frame`] at each.
     pub fn frames(&self, us: &[f64]) -> Vec<Vec<DVec3>> {
-        let (rhs, centroids): (Vec<_>, Vec<_>) = us.iter().map(|&u| self.system(u)).unzip();
+        let (rhs, centroids): (Vec<_>, Vec<_>) = self.systems(us).into_iter().unzip();
         self.placement.place_block(rhs, &centroids, |f, v| {
             self.x[0][v].lerp(self.x[1][v], us[f])
         })
     }
 
-    /// The right-hand side of frame `u` and its components' centroids.
-    fn system(&self, u: f64) -> (Vec<[f64; 3]>, Vec<DVec3>) {
-        let w = hermite(u);
-        let mut rhs = vec![[0.0f64; 3]; self.x[0].len()];
+    /// The right-hand side of each frame of `us` and its components' centroids, in one pass
+    /// over the triangles' data (read once for the frames of a block, not once a frame).
+    fn systems(&self, us: &[f64]) -> Vec<(Vec<[f64; 3]>, Vec<DVec3>)> {
+        let ws: Vec<[f64; 4]> = us.iter().map(|&u| hermite(u)).collect();
+        let mut rhs = vec![vec![[0.0f64; 3]; self.x[0].len()]; us.len()];
         // Each split component's screw offsets turned with their cross-sections (see [`Screw`]).
-        let mut turned = vec![DVec3::ZERO; self.paths.len()];
+        let mut turned = vec![vec![DVec3::ZERO; self.paths.len()]; us.len()];
         for (t, tri) in self.tris.iter().enumerate() {
             let Some(tri) = tri else { continue };
             let [r0, r1, r2] = tri.r.map(|r| r.as_dvec3());
-            let r = r0 * w[1] + r1 * w[2] + r2 * w[3];
-            let rot = if tri.split() {
-                let [t0, t1, t2] = tri.twist.map(f64::from);
-                let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
-                let bend = self.bends.get(t).map_or(DVec3::ZERO, |b| {
-                    let [b0, b1, b2] = b.map(|b| b.as_dvec3());
-                    b0 * w[1] + b1 * w[2] + b2 * w[3]
+            let g = tri.g.map(|g| g.as_dvec3());
+            let sg = tri.sg.map(|s| s.map(|s| s.as_dvec3()));
+            for (f, w) in ws.iter().enumerate() {
+                let r = r0 * w[1] + r1 * w[2] + r2 * w[3];
+                let rot = if tri.split() {
+                    let [t0, t1, t2] = tri.twist.map(f64::from);
+                    let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
+                    let bend = self.bends.get(t).map_or(DVec3::ZERO, |b| {
+                        let [b0, b1, b2] = b.map(|b| b.as_dvec3());
+                        b0 * w[1] + b1 * w[2] + b2 * w[3]
+                    });
+                    let bend_q = glam::DQuat::from_scaled_axis(bend);
+                    let twist_q =
+                        glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist);
+                    let c = self.placement.component_of(tri.corners[0] as usize);
+                    if let (Some(c), Some(o)) = (c, self.offsets.get(t)) {
+                        let limb = self.paths[c].limb;
+                        let section =
+                            DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
+                        turned[f][c] += section * o.as_dvec3();
+                    }
+                    let q = bend_q * twist_q * glam::DQuat::from_scaled_axis(r);
+                    DMat3::from_quat(q)
+                } else {
+                    rotation(r)
+                };
+                let v: [DVec3; 2] = std::array::from_fn(|k| {
+                    rot * (g[k] * w[0] + sg[0][k] * w[1] + sg[1][k] * w[2] + sg[2][k] * w[3])
                 });
-                let bend_q = glam::DQuat::from_scaled_axis(bend);
-                let twist_q = glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist);
-                let c = self.placement.component_of(tri.corners[0] as usize);
-                if let (Some(c), Some(o)) = (c, self.offsets.get(t)) {
-                    let limb = self.paths[c].limb;
-                    let section = DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
-                    turned[c] += section * o.as_dvec3();
-                }
-                let q = bend_q * twist_q * glam::DQuat::from_scaled_axis(r);
-                DMat3::from_quat(q)
-            } else {
-                rotation(r)
-            };
-            let v: [DVec3; 2] = std::array::from_fn(|k| {
-                rot * (tri.g[k].as_dvec3() * w[0]
-                    + tri.sg[0][k].as_dvec3() * w[1]
-                    + tri.sg[1][k].as_dvec3() * w[2]
-                    + tri.sg[2][k].as_dvec3() * w[3])
-            });
-            scatter(&mut rhs, tri.corners, v[0], v[1]);
+                scatter(&mut rhs[f], tri.corners, v[0], v[1]);
+            }
         }
-        let centroids: Vec<DVec3> = self
-            .paths
+        rhs.into_iter()
+            .zip(ws.iter().zip(&turned))
+            .map(|(rhs, (&w, turned))| (rhs, self.centroids(w, turned)))
+            .collect()
+    }
+
+    /// The components' centroids at Hermite weights `w`, `turned` their screw offsets.
+    fn centroids(&self, w: [f64; 4], turned: &[DVec3]) -> Vec<DVec3> {
+        self.paths
             .iter()
             .enumerate()
             .map(|(c, path)| {
@@ -1427,8 +1447,7 @@ impl SplineSegment {
                 };
                 spline.lerp(p + rot * (path.centroid - path.pivot[0]), path.rigid)
             })
-            .collect();
-        (rhs, centroids)
+            .collect()
     }
 }
 
