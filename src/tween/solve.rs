@@ -90,8 +90,13 @@ impl Pattern {
             .collect();
         let sym =
             SymbolicSparseColMat::<u32>::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
-        let symbolic = analyse(sym.as_ref(), positions)?;
-        let (neighbour_start, neighbours) = edge_neighbours(triangles);
+        // The triangles' adjacency beside the analysis (whose minimum degree ordering is one
+        // thread's work).
+        let (symbolic, (neighbour_start, neighbours)) = rayon::join(
+            || analyse(sym.as_ref(), positions),
+            || edge_neighbours(triangles),
+        );
+        let symbolic = symbolic?;
         Ok(Pattern {
             n,
             col_ptr,
