@@ -127,11 +127,11 @@ impl Pattern {
     }
 }
 
-/// Above this many off-diagonal nonzeros in L, only the column-oriented copy is kept (8 bytes
-/// an entry, packed inside the factorization's own buffer, plus the supernodes' explicit zeros)
-/// and the row copy (12 bytes an entry) is not built: a factor of 16M nonzeros then takes about
-/// 140 MiB instead of 320 MiB, and no second buffer is ever allocated.
-pub const TWO_COPIES_MAX_NONZEROS: usize = 16_000_000;
+/// Above this many entries stored below L's diagonal (the supernodes' explicit zeros included),
+/// only the column-oriented copy is kept (8 bytes an entry, packed inside the factorization's
+/// own buffer) and the row copy (12 bytes a nonzero) is not built: a factor of 16M entries
+/// then takes about 140 MiB instead of 320 MiB, and no second buffer is ever allocated.
+pub const TWO_COPIES_MAX_ENTRIES: usize = 16_000_000;
 
 /// Most frames solved in one pass over the factor ([`Placement::place_block`]); 12 right-hand
 /// sides of 8 bytes fill a 96-byte row, one and a half cache lines.
@@ -215,44 +215,38 @@ impl Factor {
             Some(p) => p.arrays().0.to_vec(),
             None => (0..n as u32).collect(),
         };
-        // Off-diagonal nonzeros of L column by column (rows ascending within a column).
-        let mut diag = vec![0.0; n];
-        let for_each_entry = |diag: &mut [f64], emit: &mut dyn FnMut(usize, usize, f64)| {
-            walk_lower(symbolic, n, &mut |j, r, at| {
-                let v = values[at];
-                if r == j {
-                    diag[j] = v;
-                } else if v != 0.0 {
-                    emit(j, r, v);
-                }
-            })
-        };
-        // Row copy (small factors only), built straight from the factor: count, then fill
-        // (columns come in order, so each row's entries are sorted).
-        let mut row_ptr = vec![0usize; n + 1];
-        for_each_entry(&mut diag, &mut |_, r, _| row_ptr[r + 1] += 1);
-        let large = row_ptr.iter().sum::<usize>() > TWO_COPIES_MAX_NONZEROS;
-        if large {
-            row_ptr.clear();
-        }
-        for i in 0..row_ptr.len().saturating_sub(1) {
-            row_ptr[i + 1] += row_ptr[i];
-        }
-        let total = row_ptr.last().copied().unwrap_or(0);
-        let mut next = row_ptr.clone();
-        let mut cols = vec![0u32; total];
-        let mut row_vals = vec![0.0f64; total];
+        // Large factors keep only the column copy: decided on the entries L stores below its
+        // diagonal, so a large one is never walked entry by entry (80 ms at 1M triangles).
+        let large = stored_below(symbolic, n) > TWO_COPIES_MAX_ENTRIES;
+        let (mut row_ptr, mut cols, mut row_vals) = (Vec::new(), Vec::new(), Vec::new());
         if !large {
-            for_each_entry(&mut diag, &mut |j, r, v| {
+            // Row copy, built straight from the factor: count, then fill (columns come in
+            // order, so each row's entries are sorted). Off-diagonal nonzeros only.
+            let for_each_entry = |emit: &mut dyn FnMut(usize, usize, f64)| {
+                walk_lower(symbolic, n, &mut |j, r, at| {
+                    let v = values[at];
+                    if r != j && v != 0.0 {
+                        emit(j, r, v);
+                    }
+                })
+            };
+            row_ptr = vec![0usize; n + 1];
+            for_each_entry(&mut |_, r, _| row_ptr[r + 1] += 1);
+            for i in 0..n {
+                row_ptr[i + 1] += row_ptr[i];
+            }
+            let mut next = row_ptr.clone();
+            cols = vec![0u32; row_ptr[n]];
+            row_vals = vec![0.0f64; row_ptr[n]];
+            for_each_entry(&mut |j, r, v| {
                 cols[next[r]] = j as u32;
                 row_vals[next[r]] = v;
                 next[r] += 1;
             });
         }
-        drop(next);
         // Column copy: compacted in place inside the factor's own buffer (entries only move
         // towards the front), so it costs no second allocation of values.
-        let columns = Columns::pack(symbolic, values, n);
+        let (columns, diag) = Columns::pack(symbolic, values, n);
         Ok(Factor {
             row_ptr,
             cols,
@@ -265,7 +259,7 @@ impl Factor {
     }
 
     /// Keep only the column-oriented copy of L (half the memory, a slower forward pass):
-    /// done for factors over [`TWO_COPIES_MAX_NONZEROS`].
+    /// done for factors over [`TWO_COPIES_MAX_ENTRIES`].
     #[cfg(test)]
     pub fn keep_columns_only(&mut self) {
         self.row_ptr = Vec::new();
@@ -414,7 +408,13 @@ impl Columns {
 
     /// Pack the strictly-lower entries of the factorization's buffer `values` to its front, in
     /// place (every entry moves only forwards: each column drops at least its diagonal).
-    fn pack(symbolic: &SymbolicCholesky<u32>, mut values: Vec<f64>, n: usize) -> Columns {
+    /// Also returns L's diagonal.
+    fn pack(
+        symbolic: &SymbolicCholesky<u32>,
+        mut values: Vec<f64>,
+        n: usize,
+    ) -> (Columns, Vec<f64>) {
+        let mut diag = Vec::with_capacity(n);
         let mut c = Columns {
             col_ptr: Vec::with_capacity(n + 1),
             vals: Vec::new(),
@@ -425,7 +425,10 @@ impl Columns {
         };
         c.col_ptr.push(0);
         let mut w = 0usize;
-        let mut keep = |c: &mut Columns, from: std::ops::Range<usize>| {
+        // Column j: its diagonal at `at` (read before any entry moves over it), its entries
+        // below the diagonal at `from`.
+        let mut keep = |c: &mut Columns, at: usize, from: std::ops::Range<usize>| {
+            diag.push(values[at]);
             let len = from.len();
             values.copy_within(from, w);
             w += len;
@@ -443,7 +446,7 @@ impl Columns {
                     c.end.push(j as u32 + 1);
                     c.below.extend_from_slice(&ri[first..range.end]);
                     c.below_ptr.push(c.below.len());
-                    keep(&mut c, first..range.end);
+                    keep(&mut c, first - 1, first..range.end);
                 }
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
@@ -456,7 +459,7 @@ impl Columns {
                         c.block.push(sn as u32);
                         // Column k of the block is column-major: rows k + 1.. follow its diagonal.
                         let at = block.base + k * nrows;
-                        keep(&mut c, at + k + 1..at + nrows);
+                        keep(&mut c, at + k, at + k + 1..at + nrows);
                     }
                 }
             }
@@ -465,7 +468,7 @@ impl Columns {
         values.shrink_to_fit();
         c.below.shrink_to_fit();
         c.vals = values;
-        c
+        (c, diag)
     }
 }
 
@@ -500,6 +503,19 @@ fn walk_lower(symbolic: &SymbolicCholesky<u32>, n: usize, f: &mut dyn FnMut(usiz
                 }
             }
         }
+    }
+}
+
+/// Entries L stores strictly below its diagonal (what [`Columns::pack`] keeps).
+fn stored_below(symbolic: &SymbolicCholesky<u32>, n: usize) -> usize {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => s.row_idx().len() - n,
+        SymbolicCholeskyRaw::Supernodal(s) => supernodes(s)
+            .map(|b| {
+                let (ncols, nrows) = (b.columns.len(), b.height());
+                ncols * nrows - ncols * (ncols + 1) / 2
+            })
+            .sum(),
     }
 }
 
