@@ -262,6 +262,7 @@ impl<'a> MeshTween<'a> {
                     stats.frames += 1;
                 }
             }
+            segment.recycle(self.pattern.as_ref());
             i = j;
         }
         Ok(())

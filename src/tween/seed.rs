@@ -35,7 +35,7 @@ pub struct SeedSegment {
     x0: Vec<DVec3>,
     x1: Vec<DVec3>,
     triangles: Vec<TriangleTween>,
-    placement: Placement,
+    pub(super) placement: Placement,
     centroid0: Vec<DVec3>,
     centroid1: Vec<DVec3>,
 }

@@ -66,6 +66,16 @@ impl Segment {
         }
     }
 
+    /// Done with: the factor's buffer goes back to `pattern` (see [`Placement::recycle`]).
+    pub fn recycle(self, pattern: Option<&Pattern>) {
+        let Some(pattern) = pattern else { return };
+        match self {
+            Segment::Linear { .. } => {}
+            Segment::Seed(s) => s.placement.recycle(pattern),
+            Segment::Spline(s) => s.placement.recycle(pattern),
+        }
+    }
+
     /// Nonzeros of the Cholesky factor used by the solves (0 for `linear`).
     pub fn factor_nonzeros(&self) -> usize {
         match self {

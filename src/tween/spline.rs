@@ -284,7 +284,7 @@ pub struct SplineSegment {
     /// applied after its twist: tangent at a, b's, tangent at b (a's is zero); empty elsewhere
     /// (beside the triangles rather than in them: only split components pay for it).
     bends: Vec<[Vec3; 3]>,
-    placement: Placement,
+    pub(super) placement: Placement,
     paths: Vec<Path>,
     /// Where a component splits, each triangle's screw offset (see [`Screw`]); empty elsewhere.
     offsets: Vec<Vec3>,
