@@ -30,7 +30,7 @@ use super::gradient::{
     aligned, around_axis, deformation, frame, gradient_operator, polar_of_triangle, quat_log,
     rotation, sym_eigen,
 };
-use super::solve::{scatter, Pattern, Placement};
+use super::solve::{scatter, Pattern, Placement, MAX_BLOCK};
 use super::weld::{bbox_diagonal, rms_rel};
 use anyhow::Result;
 use glam::{DMat3, DQuat, DVec3, Vec3};
@@ -1389,12 +1389,30 @@ impl SplineSegment {
     }
 
     /// The right-hand side of each frame of `us` and its components' centroids, in one pass
-    /// over the triangles' data (read once for the frames of a block, not once a frame).
+    /// over the triangles' data for up to [`MAX_BLOCK`] frames (read once for the frames of a
+    /// block, not once a frame).
     fn systems(&self, us: &[f64]) -> Vec<(Vec<[f64; 3]>, Vec<DVec3>)> {
-        let ws: Vec<[f64; 4]> = us.iter().map(|&u| hermite(u)).collect();
-        let mut rhs = vec![vec![[0.0f64; 3]; self.x[0].len()]; us.len()];
+        let mut out = Vec::with_capacity(us.len());
+        for part in us.chunks(MAX_BLOCK) {
+            match part.len() {
+                1 => out.extend(self.systems_of::<1>(part)),
+                2 => out.extend(self.systems_of::<2>(part)),
+                3 => out.extend(self.systems_of::<3>(part)),
+                _ => out.extend(self.systems_of::<MAX_BLOCK>(part)),
+            }
+        }
+        out
+    }
+
+    /// [`SplineSegment::systems`] for `N` frames (a frame count known to the compiler: one
+    /// frame alone costs what it did before frames shared the pass).
+    fn systems_of<const N: usize>(&self, us: &[f64]) -> [(Vec<[f64; 3]>, Vec<DVec3>); N] {
+        let ws: [[f64; 4]; N] = std::array::from_fn(|f| hermite(us[f]));
+        let mut rhs: [Vec<[f64; 3]>; N] =
+            std::array::from_fn(|_| vec![[0.0f64; 3]; self.x[0].len()]);
         // Each split component's screw offsets turned with their cross-sections (see [`Screw`]).
-        let mut turned = vec![vec![DVec3::ZERO; self.paths.len()]; us.len()];
+        let mut turned: [Vec<DVec3>; N] =
+            std::array::from_fn(|_| vec![DVec3::ZERO; self.paths.len()]);
         for (t, tri) in self.tris.iter().enumerate() {
             let Some(tri) = tri else { continue };
             let [r0, r1, r2] = tri.r.map(|r| r.as_dvec3());
@@ -1430,10 +1448,11 @@ impl SplineSegment {
                 scatter(&mut rhs[f], tri.corners, v[0], v[1]);
             }
         }
-        rhs.into_iter()
-            .zip(ws.iter().zip(&turned))
-            .map(|(rhs, (&w, turned))| (rhs, self.centroids(w, turned)))
-            .collect()
+        let mut rhs = rhs.into_iter();
+        std::array::from_fn(|f| {
+            let rhs = rhs.next().expect("N right-hand sides");
+            (rhs, self.centroids(ws[f], &turned[f]))
+        })
     }
 
     /// The components' centroids at Hermite weights `w`, `turned` their screw offsets.
