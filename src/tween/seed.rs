@@ -35,7 +35,7 @@ pub struct SeedSegment {
     x0: Vec<DVec3>,
     x1: Vec<DVec3>,
     triangles: Vec<TriangleTween>,
-    pub(super) placement: Placement,
+    placement: Placement,
     centroid0: Vec<DVec3>,
     centroid1: Vec<DVec3>,
 }
@@ -90,6 +90,11 @@ impl SeedSegment {
 
     pub fn factor_nonzeros(&self) -> usize {
         self.placement.factor_nonzeros()
+    }
+
+    /// The segment's solve, once its frames are done (see [`Placement::recycle`]).
+    pub fn into_placement(self) -> Placement {
+        self.placement
     }
 
     pub fn frame(&self, t: f64) -> Vec<DVec3> {

@@ -66,13 +66,14 @@ impl Segment {
         }
     }
 
-    /// Done with: the factor's buffer goes back to `pattern` (see [`Placement::recycle`]).
+    /// Done with: the factor's buffer goes back to `pattern` (see
+    /// [`super::solve::Placement::recycle`]).
     pub fn recycle(self, pattern: Option<&Pattern>) {
         let Some(pattern) = pattern else { return };
         match self {
             Segment::Linear { .. } => {}
-            Segment::Seed(s) => s.placement.recycle(pattern),
-            Segment::Spline(s) => s.placement.recycle(pattern),
+            Segment::Seed(s) => s.into_placement().recycle(pattern),
+            Segment::Spline(s) => s.into_placement().recycle(pattern),
         }
     }
 

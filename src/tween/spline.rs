@@ -284,7 +284,7 @@ pub struct SplineSegment {
     /// applied after its twist: tangent at a, b's, tangent at b (a's is zero); empty elsewhere
     /// (beside the triangles rather than in them: only split components pay for it).
     bends: Vec<[Vec3; 3]>,
-    pub(super) placement: Placement,
+    placement: Placement,
     paths: Vec<Path>,
     /// Where a component splits, each triangle's screw offset (see [`Screw`]); empty elsewhere.
     offsets: Vec<Vec3>,
@@ -420,9 +420,10 @@ impl<'a> SplineTrack<'a> {
         // regions are both unrotated (a part turned by exactly 360 degrees), the region listed
         // first in the file stays fixed.
         let key = |r: DVec3| (r.length() * 1e9) as u64;
-        let mut heap: BinaryHeap<Reverse<(u64, u32, u32)>> = BinaryHeap::new(); // (angle, tri, from)
-                                                                                // Keys computed once, sorted in parallel ((key, index) pairs are distinct, so the order
-                                                                                // is the same as a stable sort by key would give).
+        // (angle, triangle, the one it was reached from)
+        let mut heap: BinaryHeap<Reverse<(u64, u32, u32)>> = BinaryHeap::new();
+        // Keys computed once, sorted in parallel ((key, index) pairs are distinct, so the order
+        // is the same as a stable sort by key would give).
         let mut starts: Vec<(u64, u32)> = per
             .par_iter()
             .enumerate()
@@ -1371,6 +1372,11 @@ fn split_twists(
 impl SplineSegment {
     pub fn factor_nonzeros(&self) -> usize {
         self.placement.factor_nonzeros()
+    }
+
+    /// The segment's solve, once its frames are done (see [`Placement::recycle`]).
+    pub fn into_placement(self) -> Placement {
+        self.placement
     }
 
     pub fn frame(&self, u: f64) -> Vec<DVec3> {
