@@ -31,6 +31,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 use glam::DVec3;
+use rayon::prelude::*;
 
 /// The sparsity pattern of a welded mesh's system, analysed once.
 pub struct Pattern {
@@ -80,7 +81,7 @@ impl Pattern {
             s as u32 + row_idx[s..e].binary_search(&r).expect("entry in pattern") as u32
         };
         let slots = triangles
-            .iter()
+            .par_iter()
             .map(|&[a, b, c]| {
                 [
                     slot(a, a),
@@ -963,7 +964,6 @@ fn symmetric_adjacency(n: usize, col_ptr: &[u32], row_idx: &[u32]) -> (Vec<u32>,
 /// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
 /// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
 fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
-    use rayon::prelude::*;
     let mut edges: Vec<(u64, u32)> = triangles
         .par_iter()
         .enumerate()
