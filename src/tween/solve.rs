@@ -1024,6 +1024,52 @@ mod tests {
         (Factor::new(&pattern, grads, pinned).unwrap(), s)
     }
 
+    /// A reused value buffer (left over from an earlier factor: any length, any contents)
+    /// factors bit for bit as a fresh one, and the packed column copy keeps exactly the entries
+    /// `stored_below` counts, in both of faer's layouts.
+    #[test]
+    fn a_reused_buffer_factors_bit_for_bit_and_packing_keeps_what_is_stored() {
+        let mut layouts = Vec::new();
+        for (rings, segments) in [(12, 9), (200, 100)] {
+            let s = crate::dev::synth::tube(rings, segments, 3.0, 0.5, 0.4);
+            let n = s.positions.len();
+            let pattern = Pattern::new(n, &s.triangles, &s.positions).unwrap();
+            let grads: Vec<Option<[DVec3; 3]>> = s
+                .triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|v| s.positions[v as usize]);
+                    frame(a, b, c).map(|v| gradient_operator(&v.inverse()))
+                })
+                .collect();
+            let mut pinned = vec![false; n];
+            pinned[0] = true;
+            let fresh = Factor::new(&pattern, grads.clone(), pinned.clone()).unwrap();
+            layouts.push(matches!(
+                pattern.symbolic.raw(),
+                SymbolicCholeskyRaw::Supernodal(_)
+            ));
+            assert_eq!(fresh.columns.vals.len(), stored_below(&pattern.symbolic, n));
+            assert_eq!(fresh.diag.len(), n);
+            let len = pattern.symbolic.len_val();
+            for spare in [vec![f64::NAN; 3], vec![f64::NAN; 2 * len]] {
+                *pattern.spare.lock().unwrap() = spare;
+                let again = Factor::new(&pattern, grads.clone(), pinned.clone()).unwrap();
+                let bits = |f: &Factor| -> Vec<u64> {
+                    (f.columns.vals.iter().chain(&f.diag).chain(&f.row_vals))
+                        .map(|x| x.to_bits())
+                        .collect()
+                };
+                assert_eq!(bits(&fresh), bits(&again));
+            }
+        }
+        assert_eq!(
+            layouts,
+            [false, true],
+            "one simplicial and one supernodal factor"
+        );
+    }
+
     #[test]
     fn a_block_of_frames_solves_exactly_as_each_frame_alone() {
         let (mut factor, s) = tube_factor();
