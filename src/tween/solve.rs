@@ -342,12 +342,18 @@ impl Factor {
                     let w: [f64; M] = std::array::from_fn(|c| v[c] * d);
                     *y.get_unchecked_mut(j) = w;
                     let (k, inside, below) = self.columns.column(j);
-                    let vals = self.columns.vals.get_unchecked(k..);
-                    for (l, r) in vals
-                        .iter()
-                        .zip(inside.chain(below.iter().map(|&r| r as usize)))
-                    {
+                    let count = inside.len();
+                    // Its rows inside the block (contiguous), then those below it.
+                    for (i, r) in inside.enumerate() {
+                        let l = *self.columns.vals.get_unchecked(k + i);
                         let t = y.get_unchecked_mut(r);
+                        for c in 0..M {
+                            t[c] -= l * w[c];
+                        }
+                    }
+                    for (i, &r) in below.iter().enumerate() {
+                        let l = *self.columns.vals.get_unchecked(k + count + i);
+                        let t = y.get_unchecked_mut(r as usize);
                         for c in 0..M {
                             t[c] -= l * w[c];
                         }
