@@ -1085,10 +1085,10 @@ impl<'t, 'a> Build<'t, 'a> {
             Some(bend) if !deg.is_empty() => {
                 // The cross-section's turn: the bend alone along a limb, else after the twist.
                 let turn: [DVec3; MAX_WINDOW] = std::array::from_fn(|w| {
-                    let twist = DQuat::from_axis_angle(axis, twists[w]);
                     if along_limb {
                         bend[w]
                     } else {
+                        let twist = DQuat::from_axis_angle(axis, twists[w]);
                         quat_log(DQuat::from_scaled_axis(bend[w]) * twist)
                     }
                 });
@@ -1424,24 +1424,31 @@ impl SplineSegment {
             let [r0, r1, r2] = tri.r.map(|r| r.as_dvec3());
             let g = tri.g.map(|g| g.as_dvec3());
             let sg = tri.sg.map(|s| s.map(|s| s.as_dvec3()));
+            // A split triangle's twist, axis, bend and screw offset (with its component and
+            // whether that twists about its limb): the same for every frame.
+            let split = tri.split().then(|| {
+                let twist = tri.twist.map(f64::from);
+                let axis = tri.axis.as_dvec3().normalize();
+                let bend = self.bends.get(t).map(|b| b.map(|b| b.as_dvec3()));
+                let c = self.placement.component_of(tri.corners[0] as usize);
+                let screw = c
+                    .zip(self.offsets.get(t))
+                    .map(|(c, o)| (c, self.paths[c].limb, o.as_dvec3()));
+                (twist, axis, bend, screw)
+            });
             for (f, w) in ws.iter().enumerate() {
                 let r = r0 * w[1] + r1 * w[2] + r2 * w[3];
-                let rot = if tri.split() {
-                    let [t0, t1, t2] = tri.twist.map(f64::from);
+                let rot = if let Some(([t0, t1, t2], axis, bend, screw)) = split {
                     let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
-                    let bend = self.bends.get(t).map_or(DVec3::ZERO, |b| {
-                        let [b0, b1, b2] = b.map(|b| b.as_dvec3());
+                    let bend = bend.map_or(DVec3::ZERO, |[b0, b1, b2]| {
                         b0 * w[1] + b1 * w[2] + b2 * w[3]
                     });
                     let bend_q = glam::DQuat::from_scaled_axis(bend);
-                    let twist_q =
-                        glam::DQuat::from_axis_angle(tri.axis.as_dvec3().normalize(), twist);
-                    let c = self.placement.component_of(tri.corners[0] as usize);
-                    if let (Some(c), Some(o)) = (c, self.offsets.get(t)) {
-                        let limb = self.paths[c].limb;
+                    let twist_q = glam::DQuat::from_axis_angle(axis, twist);
+                    if let Some((c, limb, o)) = screw {
                         let section =
                             DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
-                        turned[f][c] += section * o.as_dvec3();
+                        turned[f][c] += section * o;
                     }
                     let q = bend_q * twist_q * glam::DQuat::from_scaled_axis(r);
                     DMat3::from_quat(q)
