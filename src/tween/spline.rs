@@ -348,6 +348,15 @@ fn hermite_point(w: [f64; 4], v: [DVec3; 4]) -> DVec3 {
     v[0] * w[0] + v[1] * w[1] + v[2] * w[2] + v[3] * w[3]
 }
 
+/// [`hermite_point`] of a value that is zero at key a (a rotation log or twist relative to
+/// it), from its `[tangent at a, value at b, tangent at b]`.
+fn hermite_from_a<T>(w: [f64; 4], [ta, b, tb]: [T; 3]) -> T
+where
+    T: std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>,
+{
+    ta * w[1] + b * w[2] + tb * w[3]
+}
+
 /// True when a track's last key repeats its first (RMS difference below 1e-6 of the first key's
 /// bounding-box diagonal): a cycle the spline wraps around.
 pub fn is_loop(keys: &[Vec<DVec3>]) -> bool {
@@ -1421,7 +1430,7 @@ impl SplineSegment {
             std::array::from_fn(|_| vec![DVec3::ZERO; self.paths.len()]);
         for (t, tri) in self.tris.iter().enumerate() {
             let Some(tri) = tri else { continue };
-            let [r0, r1, r2] = tri.r.map(|r| r.as_dvec3());
+            let r = tri.r.map(|r| r.as_dvec3());
             let g = tri.g.map(|g| g.as_dvec3());
             let sg = tri.sg.map(|s| s.map(|s| s.as_dvec3()));
             // A split triangle's twist, axis, bend and screw offset (with its component and
@@ -1437,12 +1446,10 @@ impl SplineSegment {
                 (twist, axis, bend, screw)
             });
             for (f, w) in ws.iter().enumerate() {
-                let r = r0 * w[1] + r1 * w[2] + r2 * w[3];
-                let rot = if let Some(([t0, t1, t2], axis, bend, screw)) = split {
-                    let twist = t0 * w[1] + t1 * w[2] + t2 * w[3];
-                    let bend = bend.map_or(DVec3::ZERO, |[b0, b1, b2]| {
-                        b0 * w[1] + b1 * w[2] + b2 * w[3]
-                    });
+                let r = hermite_from_a(*w, r);
+                let rot = if let Some((twist, axis, bend, screw)) = split {
+                    let twist = hermite_from_a(*w, twist);
+                    let bend = bend.map_or(DVec3::ZERO, |b| hermite_from_a(*w, b));
                     let bend_q = glam::DQuat::from_scaled_axis(bend);
                     let twist_q = glam::DQuat::from_axis_angle(axis, twist);
                     if let Some((c, limb, o)) = screw {
@@ -1477,7 +1484,7 @@ impl SplineSegment {
                 // The pivot now; the centroid keeps its offset from the pivot, turned.
                 let p = hermite_point(w, path.pivot);
                 let [la, lb, lt] = path.log;
-                let rot = rotation(hermite_point(w, [DVec3::ZERO, la, lb, lt]));
+                let rot = rotation(hermite_from_a(w, [la, lb, lt]));
                 let spline = match path.screw {
                     Some((pivots, weight)) => hermite_point(w, pivots) + turned[c] / weight,
                     None => hermite_point(w, path.centroids),
