@@ -149,6 +149,20 @@ impl Window {
         let first = terms.next().expect("a window holds keys a and b");
         terms.fold(first, |s, x| s + x)
     }
+
+    /// A quantity known at the window's keys (`value(j)`) as a segment stores it: `[tangent at
+    /// a, value at b, tangent at b]` (its value at a is the caller's).
+    fn ends<T>(&self, value: impl Fn(usize) -> T) -> [T; 3]
+    where
+        T: std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>,
+    {
+        let [ta, tb] = &self.tangents;
+        [
+            self.combine(ta, &value),
+            value(self.a + 1),
+            self.combine(tb, &value),
+        ]
+    }
 }
 
 /// Weights over the values at knots `t` of the derivative at knot `at` of the C2 cubic spline
@@ -609,9 +623,9 @@ impl<'a> SplineTrack<'a> {
                 } else {
                     0.0
                 };
-                let [ta, tb] = &win.tangents;
                 let path = |f: &dyn Fn(usize) -> DVec3| {
-                    [f(ia), win.combine(ta, f), f(ia + 1), win.combine(tb, f)]
+                    let [ta, b, tb] = win.ends(f);
+                    [f(ia), ta, b, tb]
                 };
                 let [_, la, lb, lt] = path(&|j| log[j]);
                 let screw = screws.get(c).filter(|s| s.weight > 0.0);
@@ -982,13 +996,9 @@ impl<'t, 'a> Build<'t, 'a> {
     /// b, as [`SplineSegment::bends`] keeps them.
     fn bend_tangents(&self, bends: &[Vec3]) -> Vec<[Vec3; 3]> {
         let (win, nw) = (&self.win, self.win.keys.len());
-        let [ta, tb] = &win.tangents;
         bends
             .par_chunks(nw)
-            .map(|b| {
-                let at = |w: usize| b[w].as_dvec3();
-                [win.combine(ta, at), at(win.a + 1), win.combine(tb, at)].map(|r| r.as_vec3())
-            })
+            .map(|b| win.ends(|w| b[w].as_dvec3()).map(|r| r.as_vec3()))
             .collect()
     }
 
@@ -1051,7 +1061,6 @@ impl<'t, 'a> Build<'t, 'a> {
         }
         unroll(&mut log[..nw], &win.times, ia, closest_branch);
         let mut values = log;
-        let [ta, tb] = &win.tangents;
         let mut twists = [0.0f64; MAX_WINDOW];
         if tri.split() {
             let axis = tri.axis.as_dvec3();
@@ -1071,25 +1080,13 @@ impl<'t, 'a> Build<'t, 'a> {
             }
             unroll(&mut twist[..nw], &win.times, ia, nearest_turn);
             twists = twist;
-            tri.twist = [
-                win.combine(ta, |w| twist[w]) as f32,
-                twist[ia + 1] as f32,
-                win.combine(tb, |w| twist[w]) as f32,
-            ];
+            tri.twist = win.ends(|w| twist[w]).map(|t| t as f32);
         }
-        tri.r = [
-            win.combine(ta, |w| values[w]),
-            values[ia + 1],
-            win.combine(tb, |w| values[w]),
-        ]
-        .map(|r| r.as_vec3());
+        tri.r = win.ends(|w| values[w]).map(|r| r.as_vec3());
         let g = tri.g.map(|g| g.as_dvec3());
-        tri.sg = [
-            win.combine(ta, |w| stretch[w]),
-            stretch[ia + 1],
-            win.combine(tb, |w| stretch[w]),
-        ]
-        .map(|s| [(s * g[0]).as_vec3(), (s * g[1]).as_vec3()]);
+        tri.sg = win
+            .ends(|w| stretch[w])
+            .map(|s| [(s * g[0]).as_vec3(), (s * g[1]).as_vec3()]);
         let screw = match bend {
             Some(bend) if !deg.is_empty() => {
                 // The cross-section's turn: the bend alone along a limb, else after the twist.
