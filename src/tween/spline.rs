@@ -947,7 +947,10 @@ impl<'t, 'a> Build<'t, 'a> {
     }
 
     /// Each vertex's twist at the window's keys: the area-weighted mean of its split triangles'
-    /// (see [`Build::tangents`]); zero where no split triangle touches it.
+    /// (see [`Build::tangents`]), where their component takes the field (see [`Field`]); zero
+    /// elsewhere. The triangles' decompositions at the window's keys are made here once more
+    /// (their twists are needed before any triangle's tangents): only where a component
+    /// takes the field.
     fn vertex_twists(
         &self,
         per: &[Option<Tri>],
