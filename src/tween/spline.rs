@@ -349,6 +349,21 @@ fn nearest_turn(angle: f64, target: f64) -> f64 {
     angle + 2.0 * PI * ((target - angle) / (2.0 * PI)).round()
 }
 
+/// The number of valid triangles at each vertex where some component splits (empty where
+/// none does).
+fn split_degrees(per: &[Option<Tri>], vertices: usize) -> Vec<u32> {
+    if !per.iter().flatten().any(Tri::split) {
+        return Vec::new();
+    }
+    let mut deg = vec![0u32; vertices];
+    for tri in per.iter().flatten() {
+        for v in tri.corners {
+            deg[v as usize] += 1;
+        }
+    }
+    deg
+}
+
 /// The deformation gradient (reference frame inverse `v_inv`) taking a triangle with corners
 /// `p` to the same corners each turned by `delta` (radians) about the line through `centre`
 /// along unit `axis` (see [`Field`]).
@@ -581,13 +596,24 @@ impl<'a> SplineTrack<'a> {
             .map(|t| t.as_ref().map_or(DVec3::ZERO, Tri::log_b))
             .collect();
         let limbs = limb_axes(&per, &build.areas, x0, &placement, &stats);
-        stats.limb = split_twists(&mut per, &order, &placement, &stats, &limbs);
+        let local = local_axes(&per, &build.areas, x0, &placement, &stats, &limbs);
+        stats.limb = split_twists(&mut per, &order, &placement, &stats, &limbs, &local);
         // A straight limb that turns about an axis across its length bends (see [`Field`]).
         stats.field = (0..stats.area.len())
-            .map(|c| stats.splits(c) && (limbs[c].is_none() || stats.limb[c]))
+            .map(|c| {
+                let straight = limbs[c].and_then(Limb::straight);
+                stats.splits(c) && (straight.is_none() || stats.limb[c])
+            })
             .collect();
         drop(order);
-        let bends_at_keys = build.bends(&per, &placement);
+        let slices: Vec<Option<DVec3>> = (limbs.iter())
+            .zip(&stats.limb)
+            .map(|(l, &limb)| match l {
+                Some(Limb::Bent(axis)) if limb && !local.is_empty() => Some(*axis),
+                _ => None,
+            })
+            .collect();
+        let bends_at_keys = build.bends(&per, &placement, &slices);
         let WindowSums {
             logs,
             screws,
@@ -596,11 +622,11 @@ impl<'a> SplineTrack<'a> {
             after,
         } = build.window_pass(
             &mut per,
-            &full_b,
-            &stretch_b,
+            (&full_b, &stretch_b),
             &bends_at_keys,
             &placement,
             &stats,
+            &local,
         );
         // Key b's data and the bends at the window's keys are not held into the frames.
         drop((full_b, stretch_b));
@@ -620,6 +646,9 @@ impl<'a> SplineTrack<'a> {
                     .collect()
             },
             after,
+            lines: (local.iter())
+                .map(|l| l.map(|(_, p)| p.as_vec3()))
+                .collect(),
         };
         clock::add(Part::Window, t0);
         Ok(SplineSegment {
@@ -828,21 +857,15 @@ impl<'t, 'a> Build<'t, 'a> {
     fn window_pass(
         &self,
         per: &mut [Option<Tri>],
-        full_b: &[DVec3],
-        stretch_b: &[DMat3],
+        (full_b, stretch_b): (&[DVec3], &[DMat3]),
         bends: &[Vec3],
         placement: &Placement,
         stats: &Components,
+        local: &[Option<(DVec3, DVec3)>],
     ) -> WindowSums {
         // Where a component splits, its triangles' screws (see [`Screw`]).
         let split = per.iter().flatten().any(Tri::split);
-        let vertices = self.track.keys[self.a].len();
-        let mut deg = vec![0u32; if split { vertices } else { 0 }];
-        for tri in per.iter().flatten().filter(|_| split) {
-            for v in tri.corners {
-                deg[v as usize] += 1;
-            }
-        }
+        let deg = split_degrees(per, self.track.keys[self.a].len());
         let mut offsets = vec![Vec3::ZERO; if split { per.len() } else { 0 }];
         let limb = split && stats.limb.contains(&true);
         let mut after = vec![[glam::Mat3::ZERO; 3]; if limb { per.len() } else { 0 }];
@@ -855,6 +878,11 @@ impl<'t, 'a> Build<'t, 'a> {
             placement.centroids(&self.track.keys[self.a])
         } else {
             Vec::new()
+        };
+        // The point of triangle t's axis line, in component c: its own on a bent limb.
+        let line = |t: usize, c: usize| {
+            let own = local.get(t).copied().flatten();
+            own.map_or(centres[c], |(_, p)| p)
         };
         let mut logs = vec![[DVec3::ZERO; MAX_WINDOW]; stats.area.len()];
         let mut screws = vec![Screw::default(); stats.area.len()];
@@ -881,7 +909,7 @@ impl<'t, 'a> Build<'t, 'a> {
                     let along_limb = c.is_some_and(|c| stats.limb[c]);
                     let field = (field.as_ref())
                         .zip(c.filter(|&c| stats.field[c]))
-                        .map(|(f, c)| (&f[..], centres[c]));
+                        .map(|(f, c)| (&f[..], line(t, c)));
                     let Some(Unrolled {
                         log, screw, after, ..
                     }) = self.tangents(tri, (full_b, sb), bend, deg, along_limb, field)
@@ -1050,12 +1078,19 @@ impl<'t, 'a> Build<'t, 'a> {
     /// The bend of each triangle of a split component at every window key (`nw` a triangle,
     /// empty where no component splits): the swing its rotation makes after its twist
     /// ([`swing_after_twist`]), averaged, weighted by area, over the component's triangles whose
-    /// centroids in key a lie within [`CROSS_SECTION`] of its own along the twist axis. A limb's
+    /// centroids in key a lie within [`CROSS_SECTION`] of its own along the twist axis (along a
+    /// bent limb's principal direction where its triangles twist about their own axes, see
+    /// [`local_axes`]: `slices`, per component). A limb's
     /// bend is shared by its cross-section; the small tilt a twist gives each triangle (a flat
     /// triangle between two rings turned apart) turns with the surface around the axis and
     /// averages out over it. Single precision and running sums: 2 x 12 bytes a triangle and
     /// window key at the peak.
-    fn bends(&self, per: &[Option<Tri>], placement: &Placement) -> Vec<Vec3> {
+    fn bends(
+        &self,
+        per: &[Option<Tri>],
+        placement: &Placement,
+        slices: &[Option<DVec3>],
+    ) -> Vec<Vec3> {
         if !per.iter().flatten().any(Tri::split) {
             return Vec::new();
         }
@@ -1075,7 +1110,7 @@ impl<'t, 'a> Build<'t, 'a> {
                     swing[w] = swing_after_twist(log, axis).as_vec3();
                 }
                 let centroid = tri.corners.map(|v| x[v as usize]).iter().sum::<DVec3>() / 3.0;
-                *position = centroid.dot(axis);
+                *position = centroid.dot(slices[c].unwrap_or(axis));
                 Some(c)
             })
             .collect();
@@ -1384,8 +1419,10 @@ struct Screw {
 /// leaves, interpolated linearly. Without D a triangle's edge between two rings turned delta
 /// apart followed the key's chord half way: r cos(delta / 2) from the axis instead of r (10
 /// x 16 tube, radii 1 / 0.6, length 2, twisted 720 degrees in one key step: 0.0251 of the
-/// diagonal off at the middle frame, 0.0036 with the field). Along a limb twisting about its
-/// length (see [`limb_axes`]) the stretch is taken after the twist, B S W X D: what is left
+/// diagonal off at the middle frame, 0.0036 with the field). The axis line is the component's
+/// through its vertex centroid in key a, or on a bent limb each triangle's own (see
+/// [`local_axes`]). Along a limb twisting about its length (see [`limb_axes`], [`local_axes`])
+/// the stretch is taken after the twist, B S W X D: what is left
 /// there is a bend's (its compression at a joint lies in the bent limb's frame, which the
 /// twist turns as it goes; the arm bent 90 degrees and twisted 720 in one key step: 0.0093 ->
 /// 0.0022). A straight limb turning about an axis across its length bends rather than twists
@@ -1402,6 +1439,9 @@ struct Field {
     /// Along a limb, each triangle's stretch after its twist: tangent at a, b's, tangent at b
     /// (a's is I); empty where no split component is a limb's.
     after: Vec<[glam::Mat3; 3]>,
+    /// On a bent limb, each triangle's point of its own axis line (see [`local_axes`]); empty
+    /// where no component is a bent limb.
+    lines: Vec<Option<Vec3>>,
 }
 
 /// A split triangle's part of the [`Field`], in double precision for a block of frames.
@@ -1519,21 +1559,21 @@ impl Components {
     }
 }
 
-/// Each component's limb axis, where it splits (see [`Components::splits`]) and is a straight
-/// limb in key a: its triangles turn by different amounts (not as one, see [`RIGID_SPREAD`]),
-/// its length along the principal direction of its triangles' centres is [`LIMB_ELONGATION`]
-/// times any other (in variance), and its sides (triangles facing less than 60 degrees from
-/// across that direction) face across it within [`LIMB_STRAIGHT`] on average. A twist turns a
-/// limb about its own length; the direction of its triangles' rotation axes (see
-/// [`Components::axis`]) leans towards a bend it makes at the same time. `None` elsewhere (a
-/// bent or already twisted key a: its rotation axes serve).
+/// Each component's limb, where it splits (see [`Components::splits`]) and is a limb in key
+/// a: its triangles turn by different amounts (not as one, see [`RIGID_SPREAD`]) and its
+/// length along the principal direction of its triangles' centres is [`LIMB_ELONGATION`]
+/// times any other (in variance). Straight where its sides (triangles facing less than 60
+/// degrees from across that direction) face across it within [`LIMB_STRAIGHT`] on average,
+/// bent otherwise (see [`local_axes`]). A twist turns a limb about its own length; the
+/// direction of its triangles' rotation axes (see [`Components::axis`]) leans towards a bend
+/// it makes at the same time. `None` elsewhere (its rotation axes serve).
 fn limb_axes(
     per: &[Option<Tri>],
     areas: &[f64],
     x0: &[DVec3],
     placement: &Placement,
     stats: &Components,
-) -> Vec<Option<DVec3>> {
+) -> Vec<Option<Limb>> {
     let components = placement.component_count();
     let candidate: Vec<bool> = (0..components)
         .map(|c| {
@@ -1589,8 +1629,131 @@ fn limb_axes(
     length
         .iter()
         .zip(&sides)
-        .map(|(axis, &(area, along))| axis.filter(|_| area > 0.0 && along < LIMB_STRAIGHT * area))
+        .map(|(axis, &(area, along))| {
+            let straight = area > 0.0 && along < LIMB_STRAIGHT * area;
+            axis.map(|axis| {
+                if straight {
+                    Limb::Straight(axis)
+                } else {
+                    Limb::Bent(axis)
+                }
+            })
+        })
         .collect()
+}
+
+/// A component's shape in key a where it may be a limb (see [`limb_axes`]).
+#[derive(Clone, Copy, Debug)]
+enum Limb {
+    /// A straight limb along this direction.
+    Straight(DVec3),
+    /// A limb ([`LIMB_ELONGATION`] times longer than wide) that is not straight (bent or
+    /// twisted in key a), with its principal direction.
+    Bent(DVec3),
+}
+
+impl Limb {
+    fn straight(self) -> Option<DVec3> {
+        match self {
+            Limb::Straight(axis) => Some(axis),
+            Limb::Bent(_) => None,
+        }
+    }
+}
+
+/// Share of a bent limb's length each side of a triangle over which its centreline's direction
+/// is taken (see [`local_axes`]): a tenth covers the tested arm's elbow (1.5 units each side
+/// of 12) without reaching far past it.
+const LOCAL_SPAN: f64 = 0.1;
+
+/// Where a split component is a bent limb (see [`Limb::Bent`]) twisting about its length (its
+/// rotations' axis within 45 degrees of its principal direction): each triangle's own twist
+/// axis, the direction of the limb's centreline at it (from the centroid of its triangles
+/// within [`LOCAL_SPAN`] of its length behind it, along the principal direction, to that of
+/// those ahead), and a point of that line (the centroid of its cross-section, within
+/// [`CROSS_SECTION`]), the line of its twist field (see [`Field`]). One axis for the whole limb
+/// suits neither side of a bent joint: an arm bent 30 degrees in key a, bending 30 more and
+/// twisting 240 degrees to key b, was 0.0146 of the diagonal off the analytic pose half way,
+/// mostly its forearm swung 2.2 degrees out of the bend's plane; 0.0020 with the local axes.
+/// A straight limb keeps its one length (see [`limb_axes`]). Empty where no component is such
+/// a limb.
+fn local_axes(
+    per: &[Option<Tri>],
+    areas: &[f64],
+    x0: &[DVec3],
+    placement: &Placement,
+    stats: &Components,
+    limbs: &[Option<Limb>],
+) -> Vec<Option<(DVec3, DVec3)>> {
+    let bent: Vec<Option<DVec3>> = (0..stats.area.len())
+        .map(|c| match limbs[c] {
+            Some(Limb::Bent(l))
+                if stats.splits(c) && l.dot(stats.axis(c)).abs() > TWIST_ALONG_LIMB =>
+            {
+                Some(if l.dot(stats.axis(c)) < 0.0 { -l } else { l })
+            }
+            _ => None,
+        })
+        .collect();
+    if bent.iter().all(Option::is_none) {
+        return Vec::new();
+    }
+    // Each such limb's triangles: component, position along its direction, centre, area, index.
+    struct Member {
+        c: usize,
+        s: f64,
+        centre: DVec3,
+        area: f64,
+        t: usize,
+    }
+    let mut members: Vec<Member> = (per.iter().zip(areas).enumerate())
+        .filter_map(|(t, (tri, &area))| {
+            let tri = tri.as_ref()?;
+            let c = placement.component_of(tri.corners[0] as usize)?;
+            let centre = tri.corners.map(|v| x0[v as usize]).iter().sum::<DVec3>() / 3.0;
+            Some(Member {
+                c,
+                s: centre.dot(bent[c]?),
+                centre,
+                area,
+                t,
+            })
+        })
+        .collect();
+    members.sort_unstable_by(|p, q| {
+        (p.c.cmp(&q.c))
+            .then(p.s.total_cmp(&q.s))
+            .then(p.t.cmp(&q.t))
+    });
+    let mut out = vec![None; per.len()];
+    for run in members.chunk_by(|p, q| p.c == q.c) {
+        // Prefix sums of area and area x centre along the limb.
+        let mut area = vec![0.0f64; run.len() + 1];
+        let mut moment = vec![DVec3::ZERO; run.len() + 1];
+        for (i, m) in run.iter().enumerate() {
+            area[i + 1] = area[i] + m.area;
+            moment[i + 1] = moment[i] + m.centre * m.area;
+        }
+        // The centroid of the triangles positioned in [a, b] (at least one).
+        let centroid = |a: f64, b: f64| {
+            let i = run.partition_point(|m| m.s < a).min(run.len() - 1);
+            let j = run.partition_point(|m| m.s <= b).max(i + 1);
+            (moment[j] - moment[i]) / (area[j] - area[i]).max(f64::MIN_POSITIVE)
+        };
+        let (lo, hi) = (run[0].s, run[run.len() - 1].s);
+        let (span, half) = (LOCAL_SPAN * (hi - lo), CROSS_SECTION * (hi - lo));
+        let l = bent[run[0].c].expect("a bent limb");
+        for m in run {
+            let (a, b) = ((m.s - span).max(lo), (m.s + span).min(hi));
+            let mid = 0.5 * (a + b);
+            let dir = (centroid(mid, b) - centroid(a, mid))
+                .try_normalize()
+                .unwrap_or(l);
+            let dir = if dir.dot(l) < 0.0 { -dir } else { dir };
+            out[m.t] = Some((dir, centroid(m.s - half, m.s + half)));
+        }
+    }
+    out
 }
 
 /// Components more than [`SPLIT_AREA`] of which turns past [`SPLIT_ABOVE`], or that turn
@@ -1601,26 +1764,41 @@ fn split_twists(
     order: &[(u32, u32)],
     placement: &Placement,
     stats: &Components,
-    limbs: &[Option<DVec3>],
+    limbs: &[Option<Limb>],
+    local: &[Option<(DVec3, DVec3)>],
 ) -> Vec<bool> {
     // Each split component's axis (zero where it does not split), and whether it is its limb's.
-    let (axis, limb): (Vec<DVec3>, Vec<bool>) = (0..stats.area.len())
+    let (axis, mut limb): (Vec<DVec3>, Vec<bool>) = (0..stats.area.len())
         .map(|c| {
             if !stats.splits(c) {
                 return (DVec3::ZERO, false);
             }
             let a = stats.axis(c);
-            match limbs[c].filter(|limb| limb.dot(a).abs() > TWIST_ALONG_LIMB) {
+            let straight = limbs[c].and_then(Limb::straight);
+            match straight.filter(|limb| limb.dot(a).abs() > TWIST_ALONG_LIMB) {
                 Some(limb) => (if limb.dot(a) < 0.0 { -limb } else { limb }, true),
                 None => (a, false),
             }
         })
         .unzip();
-    per.par_iter_mut().flatten().for_each(|tri| {
+    // A bent limb twisting about its length: each triangle about its own (see [`local_axes`]).
+    for (tri, l) in per.iter().zip(local) {
+        if let (Some(tri), Some(_)) = (tri, l) {
+            if let Some(c) = placement.component_of(tri.corners[0] as usize) {
+                limb[c] = true;
+            }
+        }
+    }
+    per.par_iter_mut().enumerate().for_each(|(t, tri)| {
+        let Some(tri) = tri else { return };
         if let Some(c) = placement.component_of(tri.corners[0] as usize) {
-            tri.axis = axis[c].as_vec3();
+            let own = match local.get(t).copied().flatten() {
+                Some((own, _)) if axis[c] != DVec3::ZERO => own,
+                _ => axis[c],
+            };
+            tri.axis = own.as_vec3();
             if tri.split() {
-                let (twist, swing) = twist_swing(tri.log_b(), axis[c]);
+                let (twist, swing) = twist_swing(tri.log_b(), own);
                 tri.twist[1] = twist as f32;
                 tri.r[1] = swing.as_vec3();
             }
@@ -1759,7 +1937,10 @@ impl SplineSegment {
             twists: tri.corners.map(|v| field.twists[v as usize].map(f64::from)),
             corners,
             v_inv,
-            centre: field.centres[c]?,
+            centre: match field.lines.get(t).copied().flatten() {
+                Some(p) => p.as_dvec3(),
+                None => field.centres[c]?,
+            },
             after: (self.paths[c].limb).then(|| field.after[t].map(|m| m.as_dmat3())),
         })
     }
