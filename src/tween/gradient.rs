@@ -31,6 +31,7 @@ pub fn frame(a: DVec3, b: DVec3, c: DVec3) -> Option<DMat3> {
 
 /// The frame of a triangle that may be degenerate (used for the deformed pose only): a
 /// collapsed triangle gets a zero normal column, so T loses rank instead of becoming NaN.
+#[inline]
 pub fn frame_any(a: DVec3, b: DVec3, c: DVec3) -> DMat3 {
     let e1 = b - a;
     let e2 = c - a;
@@ -233,6 +234,7 @@ pub fn quat_log(q: DQuat) -> DVec3 {
 }
 
 /// Deformation gradient of a triangle from a reference frame inverse to a deformed triangle.
+#[inline]
 pub fn deformation(v_inv: &DMat3, a: DVec3, b: DVec3, c: DVec3) -> DMat3 {
     frame_any(a, b, c) * *v_inv
 }

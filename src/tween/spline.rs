@@ -27,8 +27,8 @@
 
 use super::clock::{self, Part};
 use super::gradient::{
-    aligned, around_axis, axis_angle_matrix, deformation, frame, gradient_operator,
-    polar_of_triangle, quat_log, rotation, sym_eigen,
+    aligned, around_axis, deformation, frame, gradient_operator, polar_of_triangle, quat_log,
+    rotation, sin_cos, sym_eigen,
 };
 use super::solve::{scatter, Pattern, Placement, MAX_BLOCK};
 use super::weld::{bbox_diagonal, rms_rel};
@@ -104,7 +104,7 @@ const SCREW_PULL: f64 = 0.01;
 
 /// A triangle's corners' turns about its cross-section's axis line are measured (see
 /// [`Build::vertex_twists`]) only where each corner's distance from the line changes by at
-/// most this fraction: a twist keeps them (0 to round-off on the tested tubes and arms; the
+/// most this fraction of the farthest corner's at every key: a twist keeps them (0 to round-off on the tested tubes and arms; the
 /// skinned elbow's compression moves them by a few percent), a part moving some other way
 /// does not (SimpleMorph's one triangle: 0.53 -> 0.97).
 const FIELD_RADIAL: f64 = 0.1;
@@ -251,7 +251,6 @@ pub struct SplineTrack<'a> {
 /// Per valid triangle of a segment. Held in single precision (172 bytes with its `Option`
 /// instead of 336: at 4M triangles 0.69 GB instead of 1.34 GB through every frame), as the
 /// output's vertices are; computed and used in double precision.
-#[derive(Clone)]
 struct Tri {
     corners: [u32; 3],
     /// Rotation logs relative to key a (whose own is zero): the tangent at a, b's log, the
@@ -371,19 +370,39 @@ fn split_degrees(per: &[Option<Tri>], vertices: usize) -> Vec<u32> {
     deg
 }
 
-/// The deformation gradient (reference frame inverse `v_inv`) taking a triangle with corners
-/// `p` to the same corners each turned by `delta` (radians) about the line through `centre`
-/// along unit `axis` (see [`Field`]).
-fn field_gradient(
-    v_inv: &DMat3,
-    p: [DVec3; 3],
-    centre: DVec3,
-    axis: DVec3,
-    delta: [f64; 3],
-) -> DMat3 {
-    let q: [DVec3; 3] =
-        std::array::from_fn(|k| centre + axis_angle_matrix(axis, delta[k]) * (p[k] - centre));
-    deformation(v_inv, q[0], q[1], q[2])
+/// A triangle's corners `p` seen from the line through `centre` along unit `axis` (see
+/// [`Field`]): each corner's foot on the line, its offset across the line and that offset
+/// turned a quarter about the axis, so that a corner turned by delta about the line is
+/// `foot + cos(delta) offset + sin(delta) quarter`.
+#[derive(Clone, Copy)]
+struct TwistLine {
+    foot: [DVec3; 3],
+    offset: [DVec3; 3],
+    quarter: [DVec3; 3],
+}
+
+impl TwistLine {
+    fn new(p: [DVec3; 3], centre: DVec3, axis: DVec3) -> TwistLine {
+        let offset = p.map(|p| {
+            let d = p - centre;
+            d - axis * axis.dot(d)
+        });
+        TwistLine {
+            foot: std::array::from_fn(|k| p[k] - offset[k]),
+            offset,
+            quarter: offset.map(|o| axis.cross(o)),
+        }
+    }
+
+    /// The deformation gradient (reference frame inverse `v_inv`) taking the triangle to its
+    /// corners each turned by `delta` (radians) about the line.
+    fn gradient(&self, v_inv: &DMat3, delta: [f64; 3]) -> DMat3 {
+        let q: [DVec3; 3] = std::array::from_fn(|k| {
+            let (sin, cos) = sin_cos(delta[k]);
+            self.foot[k] + self.offset[k] * cos + self.quarter[k] * sin
+        });
+        deformation(v_inv, q[0], q[1], q[2])
+    }
 }
 
 /// Cubic Hermite basis at u in [0, 1]: the weights of the value at a, the tangent at a, the
@@ -883,7 +902,7 @@ impl<'t, 'a> Build<'t, 'a> {
         // The twist field (see [`Field`]): the vertices' twists, from a first pass over the
         // split triangles' twists at the window's keys.
         let field = (stats.field.contains(&true))
-            .then(|| self.vertex_twists(per, (full_b, stretch_b), sections, placement, stats));
+            .then(|| self.vertex_twists(per, sections, placement, stats));
         let bends = &sections.bend[..];
         let nw = self.win.keys.len();
         // The point of triangle t's axis line: its cross-section's centroid in key a.
@@ -978,30 +997,33 @@ impl<'t, 'a> Build<'t, 'a> {
     }
 
     /// Each vertex's twist at the window's keys, where its component takes the field (see
-    /// [`Field`]); zero elsewhere. Each triangle at the vertex measures it: the angle about the
-    /// triangle's axis from the vertex's offset to its cross-section's centroid in key a to the
-    /// same offset at the key, unbent (see [`Sections`]), on the turn nearest the triangle's
-    /// own twist, where the triangle turns about that line (see [`FIELD_RADIAL`]; elsewhere
-    /// its own twist, barely weighed); the measures are averaged, weighted by area. Exact for a
-    /// twist about the cross-sections' centroids at any tessellation, where the mean of the
-    /// triangles' twists is not (a tube of 12 unevenly spaced rings twisted 720 degrees in one
-    /// step: 0.0035 of the diagonal off half way with that mean, 0.0009 without the field,
-    /// 0.0000 so). The triangles' decompositions at the window's keys are made here once more
-    /// (their unrolled twists are needed before any triangle's tangents): only where a
-    /// component takes the field.
+    /// [`Field`]); zero elsewhere, NaN where no triangle measured it. Each triangle at the
+    /// vertex measures it: the angle about the triangle's axis from the vertex's offset to its
+    /// cross-section's centroid in key a to the same offset at the key, unbent (see
+    /// [`Sections`]), b's on the turn nearest the triangle's settled twist and the other keys'
+    /// unrolled from a and b (as the triangles' own twists are), where the triangle turns about
+    /// that line at every key (see [`FIELD_RADIAL`]); a corner on the line turns with the
+    /// others. The measures are averaged, weighted by area. Exact for a twist about the
+    /// cross-sections' centroids at any tessellation, where the mean of the triangles' own
+    /// twists is not (a tube of 12 unevenly spaced rings twisted 720 degrees in one step:
+    /// 0.0035 of the diagonal off half way with that mean, 0.0009 without the field, 0.0000
+    /// so), and no decomposition is made again (with the triangles' own twists, which need
+    /// them, the 288k-triangle arm's window took 1.8 s, against 1.35 s now and 0.95 s without
+    /// the field).
     fn vertex_twists(
         &self,
         per: &[Option<Tri>],
-        (full_b, stretch_b): (&[DVec3], &[DMat3]),
         sections: &Sections,
         placement: &Placement,
         stats: &Components,
     ) -> Vec<[f64; MAX_WINDOW]> {
         let (win, nw) = (&self.win, self.win.keys.len());
         let x0 = &self.track.keys[self.a];
-        // Each field triangle's measures of its corners' twists at each key, and their weights.
-        type Measures = [[(f64, f64); MAX_WINDOW]; 3];
-        let measures: Vec<Option<Measures>> = (per.par_iter().enumerate())
+        // Each field triangle's measures of its corners' twists at the window's keys, unrolled
+        // outward from b's (on the turn nearest the triangle's settled twist), where it turns
+        // about its line at every key.
+        let times = &win.times[..nw];
+        let measures: Vec<Option<[[f64; MAX_WINDOW]; 3]>> = (per.par_iter().enumerate())
             .map(|(t, tri)| {
                 let tri = tri.as_ref().filter(|tri| tri.split())?;
                 let c = placement.component_of(tri.corners[0] as usize)?;
@@ -1009,69 +1031,65 @@ impl<'t, 'a> Build<'t, 'a> {
                     return None;
                 }
                 let bend = sections.bend.get(t * nw..(t + 1) * nw);
-                let mut copy = tri.clone();
-                let own = self
-                    .tangents(
-                        &mut copy,
-                        (full_b[t], stretch_b[t]),
-                        bend,
-                        &[],
-                        stats.limb[c],
-                        None,
-                    )?
-                    .twist;
                 let axis = tri.axis.as_dvec3().normalize();
                 let across = |v: DVec3| v - axis * axis.dot(v);
                 let centre = |w: usize| sections.centre[t * nw + w].as_dvec3();
-                let area = self.areas[t];
-                let mut out = [[(0.0, area); MAX_WINDOW]; 3];
+                let from = tri.corners.map(|v| across(x0[v as usize] - centre(win.a)));
+                let mut out = [[0.0f64; MAX_WINDOW]; 3];
                 for (w, &key) in win.keys.iter().enumerate().filter(|&(w, _)| w != win.a) {
                     let unbend = bend.map_or(DQuat::IDENTITY, |b| {
                         DQuat::from_scaled_axis(b[w].as_dvec3()).conjugate()
                     });
                     let x = &self.track.keys[key];
-                    let offsets = tri.corners.map(|v| {
-                        let from = across(x0[v as usize] - centre(win.a));
-                        (from, across(unbend * (x[v as usize] - centre(w))))
+                    let to = tri
+                        .corners
+                        .map(|v| across(unbend * (x[v as usize] - centre(w))));
+                    // A twist keeps every corner's distance from the line (to a share of the
+                    // farthest corner's: a corner on the line may be off it by round-off).
+                    let far = from.iter().map(|f| f.length()).fold(0.0, f64::max);
+                    let turned = from.iter().zip(&to).all(|(from, to)| {
+                        (to.length() - from.length()).abs() <= FIELD_RADIAL * far
                     });
-                    // A twist keeps every corner's distance from the line.
-                    let turned = offsets.iter().all(|(from, to)| {
-                        (to.length() - from.length()).abs() <= FIELD_RADIAL * from.length()
-                    });
-                    for (k, (from, to)) in offsets.into_iter().enumerate() {
-                        out[k][w] = if turned && from.length() > 0.0 {
-                            let angle = axis.dot(from.cross(to)).atan2(from.dot(to));
-                            (nearest_turn(angle, own[w]), area)
-                        } else {
-                            // On the line, or not turned about it: the triangle's own twist,
-                            // barely weighed.
-                            (own[w], area * 1e-9)
-                        };
+                    if !turned {
+                        return None;
                     }
+                    let angle: [Option<f64>; 3] = std::array::from_fn(|k| {
+                        (from[k].length() > 0.0)
+                            .then(|| axis.dot(from[k].cross(to[k])).atan2(from[k].dot(to[k])))
+                    });
+                    // A corner on the line turns with the others.
+                    let (sum, n) = angle
+                        .iter()
+                        .flatten()
+                        .fold((0.0, 0.0), |(s, n), a| (s + a, n + 1.0));
+                    for k in 0..3 {
+                        out[k][w] = angle[k].unwrap_or(sum / f64::max(n, 1.0));
+                    }
+                }
+                for twist in out.iter_mut() {
+                    twist[win.a + 1] = nearest_turn(twist[win.a + 1], tri.twist[1] as f64);
+                    unroll(&mut twist[..nw], times, win.a, nearest_turn);
                 }
                 Some(out)
             })
             .collect();
         let mut sum = vec![[0.0f64; MAX_WINDOW]; x0.len()];
-        let mut weight = vec![[0.0f64; MAX_WINDOW]; x0.len()];
-        for (tri, m) in per.iter().zip(&measures) {
+        let mut weight = vec![0.0f64; x0.len()];
+        for ((tri, m), &area) in per.iter().zip(&measures).zip(&self.areas) {
             let (Some(tri), Some(m)) = (tri, m) else {
                 continue;
             };
             for (k, &v) in tri.corners.iter().enumerate() {
-                let (sum, weight) = (&mut sum[v as usize], &mut weight[v as usize]);
-                for (w, &(twist, by)) in m[k].iter().enumerate() {
-                    sum[w] += twist * by;
-                    weight[w] += by;
+                weight[v as usize] += area;
+                for (s, t) in sum[v as usize].iter_mut().zip(&m[k]) {
+                    *s += t * area;
                 }
             }
         }
-        for (s, w) in sum.iter_mut().zip(&weight) {
-            for (s, &w) in s.iter_mut().zip(w) {
-                if w > 0.0 {
-                    *s /= w;
-                }
-            }
+        // A vertex no triangle measures takes no field (NaN: its triangles keep their own
+        // twist, see [`Build::unfield`]).
+        for (s, &w) in sum.iter_mut().zip(&weight) {
+            *s = s.map(|x| if w > 0.0 { x / w } else { f64::NAN });
         }
         sum
     }
@@ -1332,12 +1350,7 @@ impl<'t, 'a> Build<'t, 'a> {
             }
             _ => Screw::default(),
         };
-        Some(Unrolled {
-            log,
-            screw,
-            twist: twists,
-            after,
-        })
+        Some(Unrolled { log, screw, after })
     }
 
     /// The stretches at the window's keys of a split triangle (`corners`, frame inverse `v_inv`
@@ -1353,12 +1366,19 @@ impl<'t, 'a> Build<'t, 'a> {
         stretch: &mut [DMat3; MAX_WINDOW],
     ) -> Option<[glam::Mat3; 3]> {
         let win = &self.win;
+        // A corner no triangle measured (see [`Build::vertex_twists`]): no field.
+        if corners
+            .iter()
+            .any(|&v| vertex[v as usize].iter().any(|t| t.is_nan()))
+        {
+            return None;
+        }
         let x = &self.track.keys[self.a];
-        let p = corners.map(|v| x[v as usize]);
+        let line = TwistLine::new(corners.map(|v| x[v as usize]), centre, axis);
         let mut after = [DMat3::IDENTITY; MAX_WINDOW];
         for w in (0..win.keys.len()).filter(|&w| w != win.a) {
             let delta = corners.map(|v| vertex[v as usize][w] - twist[w]);
-            let d = field_gradient(v_inv, p, centre, axis, delta);
+            let d = line.gradient(v_inv, delta);
             // A field that collapses the triangle (turns apart by half a turn) takes nothing.
             let d_inv = if d.determinant().abs() > 1e-12 {
                 d.inverse()
@@ -1453,8 +1473,6 @@ struct Unrolled {
     /// The triangle's logs at the window's keys, unrolled.
     log: [DVec3; MAX_WINDOW],
     screw: Screw,
-    /// Its twists at the window's keys (zero where it does not split).
-    twist: [f64; MAX_WINDOW],
     /// Along a limb, its stretch after the twist (see [`Field::after`]).
     after: Option<[glam::Mat3; 3]>,
 }
@@ -1517,19 +1535,17 @@ struct Field {
 #[derive(Clone, Copy)]
 struct FieldTri {
     twists: [[f64; 3]; 3],
-    corners: [DVec3; 3],
+    line: TwistLine,
     v_inv: DMat3,
-    centre: DVec3,
     after: Option<[DMat3; 3]>,
 }
 
 impl FieldTri {
-    /// At Hermite weights `w`, with the triangle's own `twist` about unit `axis` then: the
-    /// field's gradient D relative to the triangle's twist, and along a limb the stretch after
-    /// the twist.
-    fn at(&self, w: [f64; 4], twist: f64, axis: DVec3) -> (DMat3, Option<DMat3>) {
+    /// At Hermite weights `w`, with the triangle's own `twist` then: the field's gradient D
+    /// relative to the triangle's twist, and along a limb the stretch after the twist.
+    fn at(&self, w: [f64; 4], twist: f64) -> (DMat3, Option<DMat3>) {
         let delta = self.twists.map(|t| hermite_from_a(w, t) - twist);
-        let d = field_gradient(&self.v_inv, self.corners, self.centre, axis, delta);
+        let d = self.line.gradient(&self.v_inv, delta);
         let after = self
             .after
             .map(|after| DMat3::IDENTITY * w[0] + hermite_from_a(w, after));
@@ -1987,7 +2003,7 @@ impl SplineSegment {
                     // B W X D, or B S W X D along a limb (see [`Field`]).
                     let swing = glam::DQuat::from_scaled_axis(r);
                     let rot = || DMat3::from_quat(bend_q * twist_q * swing);
-                    match field.map(|f| f.at(*w, twist, axis)) {
+                    match field.map(|f| f.at(*w, twist)) {
                         Some((d, Some(s))) => {
                             DMat3::from_quat(bend_q) * s * DMat3::from_quat(twist_q * swing) * d
                         }
@@ -2019,14 +2035,15 @@ impl SplineSegment {
         let corners = tri.corners.map(|v| self.x[0][v as usize]);
         let v_inv = frame(corners[0], corners[1], corners[2])?.inverse();
         let c = self.placement.component_of(tri.corners[0] as usize)?;
-        if !field.on[c] {
+        let twists = tri.corners.map(|v| field.twists[v as usize].map(f64::from));
+        if !field.on[c] || twists.iter().flatten().any(|t| t.is_nan()) {
             return None;
         }
+        let axis = tri.axis.as_dvec3().normalize();
         Some(FieldTri {
-            twists: tri.corners.map(|v| field.twists[v as usize].map(f64::from)),
-            corners,
+            twists,
+            line: TwistLine::new(corners, field.lines[t].as_dvec3(), axis),
             v_inv,
-            centre: field.lines[t].as_dvec3(),
             after: (self.paths[c].limb).then(|| field.after[t].map(|m| m.as_dmat3())),
         })
     }
