@@ -1512,7 +1512,7 @@ struct Screw {
 /// middle frame; 0.0001 with the field). Along a limb twisting about its length (see
 /// [`limb_axes`], [`local_axes`]) S is taken after the twist, B S W X D: what is left there is
 /// a bend's (its compression at a joint lies in the bent limb's frame, which the twist turns as
-/// it goes; the arm bent 90 degrees and twisted 720 in one key step: 0.0093 -> 0.0022). A
+/// it goes; the arm bent 90 degrees and twisted 720 in one key step: 0.0093 -> 0.0025). A
 /// straight limb turning about an axis across its length bends rather than twists and takes no
 /// field: its triangles' turns about that axis carry each one's shear from the bend, not its
 /// corners' turns (tube_bend: up to 0.33 rad past its rings' turn; with a field from those
