@@ -104,9 +104,10 @@ const SCREW_PULL: f64 = 0.01;
 
 /// A triangle's corners' turns about its cross-section's axis line are measured (see
 /// [`Build::vertex_twists`]) only where each corner's distance from the line changes by at
-/// most this fraction of the farthest corner's at every key: a twist keeps them (0 to round-off on the tested tubes and arms; the
-/// skinned elbow's compression moves them by a few percent), a part moving some other way
-/// does not (SimpleMorph's one triangle: 0.53 -> 0.97).
+/// most this fraction of the farthest corner's at every key: a twist keeps them (0 to
+/// round-off on the tested tubes and arms; the skinned elbow's compression moves them by a
+/// few percent), a part moving some other way does not (SimpleMorph's one triangle: 0.53 ->
+/// 0.97).
 const FIELD_RADIAL: f64 = 0.1;
 
 /// Weight each triangle's term by its reference area.
@@ -899,8 +900,7 @@ impl<'t, 'a> Build<'t, 'a> {
         let limb = split && stats.limb.contains(&true);
         let mut after = vec![[glam::Mat3::ZERO; 3]; if limb { per.len() } else { 0 }];
         let deg = &deg[..];
-        // The twist field (see [`Field`]): the vertices' twists, from a first pass over the
-        // split triangles' twists at the window's keys.
+        // The twist field (see [`Field`]): the vertices' twists, measured from the keys.
         let field = (stats.field.contains(&true))
             .then(|| self.vertex_twists(per, sections, placement, stats));
         let bends = &sections.bend[..];
@@ -1057,11 +1057,11 @@ impl<'t, 'a> Build<'t, 'a> {
                         (from[k].length() > 0.0)
                             .then(|| axis.dot(from[k].cross(to[k])).atan2(from[k].dot(to[k])))
                     });
-                    // A corner on the line turns with the others.
-                    let (sum, n) = angle
-                        .iter()
-                        .flatten()
-                        .fold((0.0, 0.0), |(s, n), a| (s + a, n + 1.0));
+                    // A corner on the line turns with the others (their mean, on one turn).
+                    let first = angle.iter().flatten().next().copied().unwrap_or(0.0);
+                    let (sum, n) = (angle.iter().flatten()).fold((0.0, 0.0), |(s, n), &a| {
+                        (s + nearest_turn(a, first), n + 1.0)
+                    });
                     for k in 0..3 {
                         out[k][w] = angle[k].unwrap_or(sum / f64::max(n, 1.0));
                     }
