@@ -459,7 +459,11 @@ fn sweep_case(
     keys: usize,
     pose: &dyn Fn(&[DVec3], f64) -> Vec<DVec3>,
 ) -> f64 {
-    let s = synth::tube(rings, segments, len, ry, rz);
+    middle_error(synth::tube(rings, segments, len, ry, rz), keys, pose)
+}
+
+/// [`sweep_case`] for any surface `s`.
+fn middle_error(s: Surface, keys: usize, pose: &dyn Fn(&[DVec3], f64) -> Vec<DVec3>) -> f64 {
     let poses: Vec<Vec<DVec3>> = (1..=keys)
         .map(|k| pose(&s.positions, k as f64 / keys as f64))
         .collect();
@@ -667,17 +671,6 @@ fn a_bent_and_twisted_arm_counts_its_turns_at_every_resolution() {
 /// (the code before issue 16's twist field) the arm 0.0134.
 #[test]
 fn twists_of_other_shapes_stay_on_the_analytic_pose() {
-    let middle_error = |s: Surface, keys: usize, pose: &dyn Fn(&[DVec3], f64) -> Vec<DVec3>| {
-        let poses: Vec<Vec<DVec3>> = (1..=keys)
-            .map(|k| pose(&s.positions, k as f64 / keys as f64))
-            .collect();
-        let (_dir, path) = write_keys(s.clone(), poses);
-        let meshes = common::morph_meshes(&path);
-        let (k, f) = frames(&meshes[0], Method::default(), 1);
-        let middle = f.len() / 2;
-        let want = pose(&k[0], middle as f64 / (f.len() - 1) as f64);
-        rms(&f[middle], &want) / common::diag(&k[0])
-    };
     let mut ribbon = synth::grid(48, 4, 12.0, 1.0);
     for p in ribbon.positions.iter_mut() {
         p.y -= 0.5;
