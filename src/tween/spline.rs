@@ -645,7 +645,7 @@ impl<'a> SplineTrack<'a> {
             logs,
             screws,
             offsets,
-            vertex_twists,
+            deltas,
             after,
         } = build.window_pass(
             &mut per,
@@ -658,7 +658,7 @@ impl<'a> SplineTrack<'a> {
         drop((full_b, stretch_b));
         let bends = build.bend_tangents(&sections.bend);
         let nw = build.win.keys.len();
-        let lines: Vec<Vec3> = if vertex_twists.is_empty() {
+        let lines: Vec<Vec3> = if deltas.is_empty() {
             Vec::new()
         } else {
             (0..per.len())
@@ -674,10 +674,7 @@ impl<'a> SplineTrack<'a> {
         drop(sections);
         let paths = self.paths(&build.win, &logs, &stats, &screws, &placement);
         let field = Field {
-            twists: (vertex_twists.par_iter())
-                .map(|t| build.win.ends(|w| t[w]).map(|x| x as f32))
-                .collect(),
-            on: stats.field.clone(),
+            deltas,
             after,
             lines,
         };
@@ -899,10 +896,11 @@ impl<'t, 'a> Build<'t, 'a> {
         let mut offsets = vec![Vec3::ZERO; if split { per.len() } else { 0 }];
         let limb = split && stats.limb.contains(&true);
         let mut after = vec![[glam::Mat3::ZERO; 3]; if limb { per.len() } else { 0 }];
+        let fields = stats.field.contains(&true);
+        let mut deltas = vec![None; if fields { per.len() } else { 0 }];
         let deg = &deg[..];
         // The twist field (see [`Field`]): the vertices' twists, measured from the keys.
-        let field = (stats.field.contains(&true))
-            .then(|| self.vertex_twists(per, sections, placement, stats));
+        let field = fields.then(|| self.vertex_twists(per, sections, placement, stats));
         let bends = &sections.bend[..];
         let nw = self.win.keys.len();
         // The point of triangle t's axis line: its cross-section's centroid in key a.
@@ -921,7 +919,7 @@ impl<'t, 'a> Build<'t, 'a> {
             .map(|(at, (((tris, areas), full_b), stretch_b))| {
                 let mut sums = Sums::new();
                 let mut offs = Vec::new();
-                let mut afters = Vec::new();
+                let mut found = Vec::new();
                 let each = tris.iter_mut().zip(areas).zip(full_b).zip(stretch_b);
                 for (k, (((tri, &area), &full_b), &sb)) in each.enumerate() {
                     let Some(tri) = tri.as_mut() else { continue };
@@ -932,14 +930,13 @@ impl<'t, 'a> Build<'t, 'a> {
                     let field = (field.as_ref())
                         .zip(c.filter(|&c| stats.field[c]))
                         .map(|(f, _)| (&f[..], line(t)));
-                    let Some(Unrolled {
-                        log, screw, after, ..
-                    }) = self.tangents(tri, (full_b, sb), bend, deg, along_limb, field)
+                    let Some(Unrolled { log, screw, field }) =
+                        self.tangents(tri, (full_b, sb), bend, deg, along_limb, field)
                     else {
                         continue;
                     };
-                    if let Some(after) = after {
-                        afters.push((t, after));
+                    if let Some(field) = field {
+                        found.push((t, field));
                     }
                     if screw.weight > 0.0 {
                         offs.push((t, screw.offset.as_vec3()));
@@ -957,16 +954,19 @@ impl<'t, 'a> Build<'t, 'a> {
                         }
                     }
                 }
-                (sums, offs, afters)
+                (sums, offs, found)
             })
             .collect::<Vec<_>>()
             .into_iter()
-            .map(|(sums, offs, afters)| {
+            .map(|(sums, offs, found)| {
                 for (t, o) in offs {
                     offsets[t] = o;
                 }
-                for (t, a) in afters {
-                    after[t] = a;
+                for (t, field) in found {
+                    deltas[t] = Some(field.deltas);
+                    if let Some(a) = field.after {
+                        after[t] = a;
+                    }
                 }
                 sums
             })
@@ -991,7 +991,7 @@ impl<'t, 'a> Build<'t, 'a> {
             logs,
             screws,
             offsets,
-            vertex_twists: field.unwrap_or_default(),
+            deltas,
             after,
         }
     }
@@ -1070,19 +1070,32 @@ impl<'t, 'a> Build<'t, 'a> {
                     twist[win.a + 1] = nearest_turn(twist[win.a + 1], tri.twist[1] as f64);
                     unroll(&mut twist[..nw], times, win.a, nearest_turn);
                 }
+                // The corners on the first's turns (unrolling can part them at a far key).
+                let first = out[0];
+                for twist in out.iter_mut().skip(1) {
+                    for (t, f) in twist.iter_mut().zip(&first) {
+                        *t = nearest_turn(*t, *f);
+                    }
+                }
                 Some(out)
             })
             .collect();
         let mut sum = vec![[0.0f64; MAX_WINDOW]; x0.len()];
         let mut weight = vec![0.0f64; x0.len()];
+        // Each vertex's measures on the turns of its first (see [`Build::unfield`]).
+        let mut first = vec![[0.0f64; MAX_WINDOW]; x0.len()];
         for ((tri, m), &area) in per.iter().zip(&measures).zip(&self.areas) {
             let (Some(tri), Some(m)) = (tri, m) else {
                 continue;
             };
             for (k, &v) in tri.corners.iter().enumerate() {
-                weight[v as usize] += area;
-                for (s, t) in sum[v as usize].iter_mut().zip(&m[k]) {
-                    *s += t * area;
+                let v = v as usize;
+                if weight[v] == 0.0 {
+                    first[v] = m[k];
+                }
+                weight[v] += area;
+                for ((s, t), f) in sum[v].iter_mut().zip(&m[k]).zip(&first[v]) {
+                    *s += nearest_turn(*t, *f) * area;
                 }
             }
         }
@@ -1305,7 +1318,7 @@ impl<'t, 'a> Build<'t, 'a> {
         unroll(&mut log[..nw], &win.times, ia, closest_branch);
         let mut values = log;
         let mut twists = [0.0f64; MAX_WINDOW];
-        let mut after = None;
+        let mut fielded = None;
         if tri.split() {
             let axis = tri.axis.as_dvec3();
             let mut twist = [0.0; MAX_WINDOW];
@@ -1327,7 +1340,7 @@ impl<'t, 'a> Build<'t, 'a> {
             tri.twist = win.ends(|w| twist[w]).map(|t| t as f32);
             if let Some(field) = field {
                 let unfield = (tri.corners, &v_inv, axis.normalize(), &twist, &log);
-                after = self.unfield(unfield, field, along_limb, &mut stretch);
+                fielded = self.unfield(unfield, field, along_limb, &mut stretch);
             }
         }
         tri.r = win.ends(|w| values[w]).map(|r| r.as_vec3());
@@ -1350,21 +1363,26 @@ impl<'t, 'a> Build<'t, 'a> {
             }
             _ => Screw::default(),
         };
-        Some(Unrolled { log, screw, after })
+        Some(Unrolled {
+            log,
+            screw,
+            field: fielded,
+        })
     }
 
     /// The stretches at the window's keys of a split triangle (`corners`, frame inverse `v_inv`
-    /// in key a, its component's unit `axis`, its `twist` and unrolled `log` at the window's
-    /// keys) with the twist field's part taken out (see [`Field`]), given the vertices' twists
-    /// at the window's keys and the component's centre; along a limb all of them I and the
-    /// stretches after the twist returned (tangent at a, b's, tangent at b).
+    /// in key a, its unit `axis`, its `twist` and unrolled `log` at the window's keys) with the
+    /// twist field's part taken out (see [`Field`]), given the vertices' twists at the window's
+    /// keys and the point of its axis line; along a limb all of them I. Returns its corners'
+    /// turns relative to its own twist and along a limb its stretches after the twist (`None`
+    /// where a corner was not measured: no field).
     fn unfield(
         &self,
         (corners, v_inv, axis, twist, log): Unfield,
         (vertex, centre): (&[[f64; MAX_WINDOW]], DVec3),
         along_limb: bool,
         stretch: &mut [DMat3; MAX_WINDOW],
-    ) -> Option<[glam::Mat3; 3]> {
+    ) -> Option<FieldOf> {
         let win = &self.win;
         // A corner no triangle measured (see [`Build::vertex_twists`]): no field.
         if corners
@@ -1376,8 +1394,14 @@ impl<'t, 'a> Build<'t, 'a> {
         let x = &self.track.keys[self.a];
         let line = TwistLine::new(corners.map(|v| x[v as usize]), centre, axis);
         let mut after = [DMat3::IDENTITY; MAX_WINDOW];
+        let mut deltas = [[0.0f64; MAX_WINDOW]; 3];
         for w in (0..win.keys.len()).filter(|&w| w != win.a) {
-            let delta = corners.map(|v| vertex[v as usize][w] - twist[w]);
+            // A corner's turn relative to the triangle's, on the nearest turn (the vertex and
+            // the triangle may have unrolled a far key onto different turns).
+            let delta = corners.map(|v| nearest_turn(vertex[v as usize][w] - twist[w], 0.0));
+            for (k, d) in delta.iter().enumerate() {
+                deltas[k][w] = *d;
+            }
             let d = line.gradient(v_inv, delta);
             // A field that collapses the triangle (turns apart by half a turn) takes nothing.
             let d_inv = if d.determinant().abs() > 1e-12 {
@@ -1394,7 +1418,10 @@ impl<'t, 'a> Build<'t, 'a> {
                 stretch[w] = d_inv * stretch[w];
             }
         }
-        along_limb.then(|| win.ends(|w| after[w]).map(|m| m.as_mat3()))
+        Some(FieldOf {
+            deltas: deltas.map(|d| win.ends(|w| d[w]).map(|x| x as f32)),
+            after: along_limb.then(|| win.ends(|w| after[w]).map(|m| m.as_mat3())),
+        })
     }
 
     /// The screw (see [`Screw`]) of the triangle with `corners` from its `bend` logs at the
@@ -1448,14 +1475,14 @@ struct Sections {
 
 /// What [`Build::window_pass`] finds besides the triangles' tangents: the components'
 /// area-weighted mean logs at every window key, and where a component splits, the sums of its
-/// triangles' screws, each triangle's screw offset (see [`Screw`]), each vertex's twist at the
-/// window's keys and along a limb each triangle's stretch after its twist (see [`Field`]; all
+/// triangles' screws, each triangle's screw offset (see [`Screw`]), each triangle's corners'
+/// turns relative to its own and along a limb its stretch after its twist (see [`Field`]; all
 /// four empty where none splits).
 struct WindowSums {
     logs: Vec<[DVec3; MAX_WINDOW]>,
     screws: Vec<Screw>,
     offsets: Vec<Vec3>,
-    vertex_twists: Vec<[f64; MAX_WINDOW]>,
+    deltas: Vec<Option<[[f32; 3]; 3]>>,
     after: Vec<[glam::Mat3; 3]>,
 }
 
@@ -1473,6 +1500,14 @@ struct Unrolled {
     /// The triangle's logs at the window's keys, unrolled.
     log: [DVec3; MAX_WINDOW],
     screw: Screw,
+    /// Where it takes the twist field, its part of it.
+    field: Option<FieldOf>,
+}
+
+/// A triangle's part of the twist field (see [`Field`]), as [`Build::unfield`] finds it.
+struct FieldOf {
+    /// Each corner's turn relative to the triangle's own twist: tangent at a, b's, tangent at b.
+    deltas: [[f32; 3]; 3],
     /// Along a limb, its stretch after the twist (see [`Field::after`]).
     after: Option<[glam::Mat3; 3]>,
 }
@@ -1519,10 +1554,9 @@ struct Screw {
 /// turns it lost 1.7% of its volume in between, against 0.24% gained without).
 #[derive(Default)]
 struct Field {
-    /// Each vertex's twist: tangent at a, b's, tangent at b (a's is zero).
-    twists: Vec<[f32; 3]>,
-    /// Whether each component takes the field.
-    on: Vec<bool>,
+    /// Each triangle's corners' turns relative to its own twist (tangent at a, b's, tangent at
+    /// b; a's are zero), where it takes the field.
+    deltas: Vec<Option<[[f32; 3]; 3]>>,
     /// Along a limb, each triangle's stretch after its twist: tangent at a, b's, tangent at b
     /// (a's is I); empty where no split component is a limb's.
     after: Vec<[glam::Mat3; 3]>,
@@ -1534,17 +1568,17 @@ struct Field {
 /// A split triangle's part of the [`Field`], in double precision for a block of frames.
 #[derive(Clone, Copy)]
 struct FieldTri {
-    twists: [[f64; 3]; 3],
+    deltas: [[f64; 3]; 3],
     line: TwistLine,
     v_inv: DMat3,
     after: Option<[DMat3; 3]>,
 }
 
 impl FieldTri {
-    /// At Hermite weights `w`, with the triangle's own `twist` then: the field's gradient D
-    /// relative to the triangle's twist, and along a limb the stretch after the twist.
-    fn at(&self, w: [f64; 4], twist: f64) -> (DMat3, Option<DMat3>) {
-        let delta = self.twists.map(|t| hermite_from_a(w, t) - twist);
+    /// At Hermite weights `w`: the field's gradient D relative to the triangle's twist, and
+    /// along a limb the stretch after the twist.
+    fn at(&self, w: [f64; 4]) -> (DMat3, Option<DMat3>) {
+        let delta = self.deltas.map(|t| hermite_from_a(w, t));
         let d = self.line.gradient(&self.v_inv, delta);
         let after = self
             .after
@@ -2003,7 +2037,7 @@ impl SplineSegment {
                     // B W X D, or B S W X D along a limb (see [`Field`]).
                     let swing = glam::DQuat::from_scaled_axis(r);
                     let rot = || DMat3::from_quat(bend_q * twist_q * swing);
-                    match field.map(|f| f.at(*w, twist)) {
+                    match field.map(|f| f.at(*w)) {
                         Some((d, Some(s))) => {
                             DMat3::from_quat(bend_q) * s * DMat3::from_quat(twist_q * swing) * d
                         }
@@ -2029,19 +2063,13 @@ impl SplineSegment {
     /// Split triangle `t`'s part of the twist field (see [`Field`]).
     fn field_of(&self, t: usize, tri: &Tri) -> Option<FieldTri> {
         let field = &self.field;
-        if field.twists.is_empty() {
-            return None;
-        }
+        let deltas = field.deltas.get(t).copied().flatten()?;
         let corners = tri.corners.map(|v| self.x[0][v as usize]);
         let v_inv = frame(corners[0], corners[1], corners[2])?.inverse();
         let c = self.placement.component_of(tri.corners[0] as usize)?;
-        let twists = tri.corners.map(|v| field.twists[v as usize].map(f64::from));
-        if !field.on[c] || twists.iter().flatten().any(|t| t.is_nan()) {
-            return None;
-        }
         let axis = tri.axis.as_dvec3().normalize();
         Some(FieldTri {
-            twists,
+            deltas: deltas.map(|d| d.map(f64::from)),
             line: TwistLine::new(corners, field.lines[t].as_dvec3(), axis),
             v_inv,
             after: (self.paths[c].limb).then(|| field.after[t].map(|m| m.as_dmat3())),
