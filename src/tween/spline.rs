@@ -10,6 +10,13 @@
 //! morph-keyframe birds (`inbetween eval`) come out 32% / 24% closer on Flamingo at step 2 / 3
 //! and 7% closer on Parrot at step 2, 1.2% further at step 3 (four keys per wing beat).
 //!
+//! Twists: a component that turns past half a turn, or one way on the whole (see
+//! [`SPLIT_ABOVE`], [`COHERENT`]), interpolates each triangle's rotation as a bend, a twist
+//! about the component's axis (a limb's own length, or on a bent limb its centreline where the
+//! triangle lies, see [`local_axes`]) and a swing; its vertices' own turns about that axis
+//! (the twist field, see [`Field`]) keep the edges between rings turned far apart on their
+//! chords, so a twist comes out right at any tessellation.
+//!
 //! Paths: every connected component turns about a pivot (the point its mean rotation from key
 //! a to the keys next to the segment leaves in place, least squares), which itself follows the
 //! spline; its centroid c(u) = p(u) + R(u) (c_a - p), with R(u) the component's area-weighted
