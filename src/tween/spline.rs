@@ -643,7 +643,8 @@ impl<'a> SplineTrack<'a> {
         let slices: Vec<Option<DVec3>> = (limbs.iter())
             .zip(&stats.limb)
             .map(|(l, &limb)| match l {
-                Some(Limb::Bent(axis)) if limb && !local.is_empty() => Some(*axis),
+                // A bent limb is its limb's only through its local axes.
+                Some(Limb::Bent(axis)) if limb => Some(*axis),
                 _ => None,
             })
             .collect();
@@ -652,7 +653,7 @@ impl<'a> SplineTrack<'a> {
             logs,
             screws,
             offsets,
-            deltas,
+            parts,
             after,
         } = build.window_pass(
             &mut per,
@@ -664,27 +665,9 @@ impl<'a> SplineTrack<'a> {
         // Key b's data and the bends at the window's keys are not held into the frames.
         drop((full_b, stretch_b));
         let bends = build.bend_tangents(&sections.bend);
-        let nw = build.win.keys.len();
-        let lines: Vec<Vec3> = if deltas.is_empty() {
-            Vec::new()
-        } else {
-            (0..per.len())
-                .map(|t| {
-                    sections
-                        .centre
-                        .get(t * nw + build.win.a)
-                        .copied()
-                        .unwrap_or_default()
-                })
-                .collect()
-        };
         drop(sections);
         let paths = self.paths(&build.win, &logs, &stats, &screws, &placement);
-        let field = Field {
-            deltas,
-            after,
-            lines,
-        };
+        let field = Field { parts, after };
         clock::add(Part::Window, t0);
         Ok(SplineSegment {
             // Kept as they are (a triangle of no area is None): collecting the others into a
@@ -904,7 +887,7 @@ impl<'t, 'a> Build<'t, 'a> {
         let limb = split && stats.limb.contains(&true);
         let mut after = vec![[glam::Mat3::ZERO; 3]; if limb { per.len() } else { 0 }];
         let fields = stats.field.contains(&true);
-        let mut deltas = vec![None; if fields { per.len() } else { 0 }];
+        let mut parts = vec![None; if fields { per.len() } else { 0 }];
         let deg = &deg[..];
         // The twist field (see [`Field`]): the vertices' twists, measured from the keys.
         let field = fields.then(|| self.vertex_twists(per, sections, placement, stats));
@@ -970,7 +953,7 @@ impl<'t, 'a> Build<'t, 'a> {
                     offsets[t] = o;
                 }
                 for (t, field) in found {
-                    deltas[t] = Some(field.deltas);
+                    parts[t] = Some(field.own);
                     if let Some(a) = field.after {
                         after[t] = a;
                     }
@@ -998,7 +981,7 @@ impl<'t, 'a> Build<'t, 'a> {
             logs,
             screws,
             offsets,
-            deltas,
+            parts,
             after,
         }
     }
@@ -1041,7 +1024,8 @@ impl<'t, 'a> Build<'t, 'a> {
                 let axis = tri.axis.as_dvec3().normalize();
                 let across = |v: DVec3| v - axis * axis.dot(v);
                 let centre = |w: usize| sections.centre[t * nw + w].as_dvec3();
-                let from = tri.corners.map(|v| across(x0[v as usize] - centre(win.a)));
+                let corners = tri.corners.map(|v| x0[v as usize]);
+                let from = TwistLine::new(corners, centre(win.a), axis).offset;
                 let mut out = [[0.0f64; MAX_WINDOW]; 3];
                 for (w, &key) in win.keys.iter().enumerate().filter(|&(w, _)| w != win.a) {
                     let unbend = bend.map_or(DQuat::IDENTITY, |b| {
@@ -1426,7 +1410,10 @@ impl<'t, 'a> Build<'t, 'a> {
             }
         }
         Some(FieldOf {
-            deltas: deltas.map(|d| win.ends(|w| d[w]).map(|x| x as f32)),
+            own: FieldPart {
+                deltas: deltas.map(|d| win.ends(|w| d[w]).map(|x| x as f32)),
+                line: centre.as_vec3(),
+            },
             after: along_limb.then(|| win.ends(|w| after[w]).map(|m| m.as_mat3())),
         })
     }
@@ -1482,14 +1469,14 @@ struct Sections {
 
 /// What [`Build::window_pass`] finds besides the triangles' tangents: the components'
 /// area-weighted mean logs at every window key, and where a component splits, the sums of its
-/// triangles' screws, each triangle's screw offset (see [`Screw`]), each triangle's corners'
-/// turns relative to its own and along a limb its stretch after its twist (see [`Field`]; all
-/// four empty where none splits).
+/// triangles' screws, each triangle's screw offset (see [`Screw`]), each triangle's part of the
+/// twist field and along a limb its stretch after its twist (see [`Field`]; all four empty
+/// where none splits).
 struct WindowSums {
     logs: Vec<[DVec3; MAX_WINDOW]>,
     screws: Vec<Screw>,
     offsets: Vec<Vec3>,
-    deltas: Vec<Option<[[f32; 3]; 3]>>,
+    parts: Vec<Option<FieldPart>>,
     after: Vec<[glam::Mat3; 3]>,
 }
 
@@ -1513,10 +1500,18 @@ struct Unrolled {
 
 /// A triangle's part of the twist field (see [`Field`]), as [`Build::unfield`] finds it.
 struct FieldOf {
-    /// Each corner's turn relative to the triangle's own twist: tangent at a, b's, tangent at b.
-    deltas: [[f32; 3]; 3],
+    own: FieldPart,
     /// Along a limb, its stretch after the twist (see [`Field::after`]).
     after: Option<[glam::Mat3; 3]>,
+}
+
+/// A triangle's part of the twist field as a segment keeps it (see [`Field`]).
+#[derive(Clone, Copy)]
+struct FieldPart {
+    /// Each corner's turn relative to the triangle's own twist: tangent at a, b's, tangent at b.
+    deltas: [[f32; 3]; 3],
+    /// The point of its axis line: its cross-section's centroid in key a.
+    line: Vec3,
 }
 
 /// A split triangle's path as a screw: its weighted centre (corners weighted by one over the
@@ -1561,15 +1556,11 @@ struct Screw {
 /// turns it lost 1.7% of its volume in between, against 0.24% gained without).
 #[derive(Default)]
 struct Field {
-    /// Each triangle's corners' turns relative to its own twist (tangent at a, b's, tangent at
-    /// b; a's are zero), where it takes the field.
-    deltas: Vec<Option<[[f32; 3]; 3]>>,
+    /// Each triangle's part, where it takes the field.
+    parts: Vec<Option<FieldPart>>,
     /// Along a limb, each triangle's stretch after its twist: tangent at a, b's, tangent at b
     /// (a's is I); empty where no split component is a limb's.
     after: Vec<[glam::Mat3; 3]>,
-    /// Each triangle's point of its axis line: its cross-section's centroid in key a (see
-    /// [`Build::bends`]).
-    lines: Vec<Vec3>,
 }
 
 /// A split triangle's part of the [`Field`], in double precision for a block of frames.
@@ -2070,14 +2061,14 @@ impl SplineSegment {
     /// Split triangle `t`'s part of the twist field (see [`Field`]).
     fn field_of(&self, t: usize, tri: &Tri) -> Option<FieldTri> {
         let field = &self.field;
-        let deltas = field.deltas.get(t).copied().flatten()?;
+        let part = field.parts.get(t).copied().flatten()?;
         let corners = tri.corners.map(|v| self.x[0][v as usize]);
         let v_inv = frame(corners[0], corners[1], corners[2])?.inverse();
         let c = self.placement.component_of(tri.corners[0] as usize)?;
         let axis = tri.axis.as_dvec3().normalize();
         Some(FieldTri {
-            deltas: deltas.map(|d| d.map(f64::from)),
-            line: TwistLine::new(corners, field.lines[t].as_dvec3(), axis),
+            deltas: part.deltas.map(|d| d.map(f64::from)),
+            line: TwistLine::new(corners, part.line.as_dvec3(), axis),
             v_inv,
             after: (self.paths[c].limb).then(|| field.after[t].map(|m| m.as_dmat3())),
         })
