@@ -110,21 +110,9 @@ impl Warp {
             }
         }
         knots.push([1.0, 1.0, 1.0]);
-        // Knots that would play a clip faster than MAX_WARP_SLOPE times its cycle's own rate (or
-        // slower than its inverse) are dropped, the one whose loss evens the map most first.
-        while knots.len() > 2 && steepest(&knots) > MAX_WARP_SLOPE.ln() {
-            let without = |k: usize| {
-                let mut v = knots.clone();
-                v.remove(k);
-                steepest(&v)
-            };
-            let (_, best) = (1..knots.len() - 1)
-                .map(|k| (without(k), k))
-                .min_by(|p, q| p.0.total_cmp(&q.0))
-                .unwrap();
-            knots.remove(best);
+        Warp {
+            knots: gentlest(&knots),
         }
-        Warp { knots }
     }
 
     /// Phases in A and B at blended phase `u` in [0, 1].
@@ -143,6 +131,46 @@ impl Warp {
         };
         (p[1] + f * (q[1] - p[1]), p[2] + f * (q[2] - p[2]))
     }
+}
+
+/// The most knots of `knots` (first and last kept) no segment between which plays a clip
+/// faster than [`MAX_WARP_SLOPE`] times its cycle's rate or slower than its inverse; of as
+/// many, the gentlest (least steep segment the steepest).
+fn gentlest(knots: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let n = knots.len();
+    let limit = MAX_WARP_SLOPE.ln() + 1e-12;
+    // best[j]: (knots kept up to j, steepest so far, previous kept knot).
+    let mut best: Vec<Option<(usize, f64, usize)>> = vec![None; n];
+    best[0] = Some((1, 0.0, 0));
+    for j in 1..n {
+        for i in 0..j {
+            let Some((count, steep, _)) = best[i] else {
+                continue;
+            };
+            let s = steepest(&[knots[i], knots[j]]);
+            if s > limit {
+                continue;
+            }
+            let cand = (count + 1, steep.max(s), i);
+            let better = match best[j] {
+                None => true,
+                Some((c, st, _)) => cand.0 > c || (cand.0 == c && cand.1 < st),
+            };
+            if better {
+                best[j] = Some(cand);
+            }
+        }
+    }
+    let mut out = vec![knots[n - 1]];
+    let mut j = n - 1;
+    while j > 0 {
+        j = best[j]
+            .expect("the first and last knots are always within the limit")
+            .2;
+        out.push(knots[j]);
+    }
+    out.reverse();
+    out
 }
 
 /// The largest |ln slope| of A's or B's phase against the blended phase over `knots`.
@@ -224,5 +252,68 @@ mod tests {
         let b = [ev(1, Kind::Touchdown, 0.45), ev(1, Kind::Liftoff, 0.15)];
         let a = [ev(1, Kind::Touchdown, 0.5), ev(1, Kind::Liftoff, 0.1)];
         assert_eq!(Warp::new(&a, &b, 0.5).knots.len(), 4);
+    }
+
+    #[test]
+    fn of_as_many_matched_events_the_gentlest_warp_is_kept() {
+        // RobotExpressive's walk (A) and run (B), weight 0.25: left lift-off, right touchdown
+        // and lift-off. Only one pair fits the slope bound at a time; the right touchdowns
+        // (0.504 and 0.513) warp least, where dropping the steepest knot first kept the right
+        // lift-offs (0.835 against 0.548: B played at 0.72 then 1.9 times its rate).
+        let a = [
+            ev(0, Kind::Liftoff, 0.487),
+            ev(1, Kind::Touchdown, 0.504),
+            ev(1, Kind::Liftoff, 0.835),
+        ];
+        let b = [
+            ev(0, Kind::Liftoff, 0.06),
+            ev(1, Kind::Touchdown, 0.513),
+            ev(1, Kind::Liftoff, 0.548),
+        ];
+        let warp = Warp::new(&a, &b, 0.25);
+        assert_eq!(warp.knots.len(), 3, "{:?}", warp.knots);
+        assert_eq!(warp.knots[1][1], 0.504);
+        assert_eq!(warp.knots[1][2], 0.513);
+    }
+
+    #[test]
+    fn the_most_knots_within_the_slope_bound_are_kept() {
+        // Random increasing knots against every subset: none keeps more within the bound.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..300 {
+            let n = 1 + (next() * 7.0) as usize;
+            let mut pa: Vec<f64> = (0..n).map(|_| next()).collect();
+            let mut pb: Vec<f64> = (0..n).map(|_| next()).collect();
+            pa.sort_by(f64::total_cmp);
+            pb.sort_by(f64::total_cmp);
+            let w = next();
+            let mut knots = vec![[0.0, 0.0, 0.0]];
+            knots.extend(
+                pa.iter()
+                    .zip(&pb)
+                    .map(|(a, b)| [(1.0 - w) * a + w * b, *a, *b]),
+            );
+            knots.push([1.0, 1.0, 1.0]);
+            let kept = gentlest(&knots);
+            assert!(steepest(&kept) <= MAX_WARP_SLOPE.ln() + 1e-12);
+            assert_eq!(kept.first(), knots.first());
+            assert_eq!(kept.last(), knots.last());
+            let most = (0..1u32 << n)
+                .filter_map(|mask| {
+                    let mut v = vec![knots[0]];
+                    v.extend((0..n).filter(|i| mask >> i & 1 == 1).map(|i| knots[i + 1]));
+                    v.push(knots[n + 1]);
+                    (steepest(&v) <= MAX_WARP_SLOPE.ln() + 1e-12).then_some(v.len())
+                })
+                .max()
+                .unwrap();
+            assert_eq!(kept.len(), most);
+        }
     }
 }
