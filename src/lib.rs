@@ -5,7 +5,7 @@
 //! [`gltf`] (read and write glTF) -> [`tween`] (keys -> frames -> morph animation) -> [`usd`]
 //! (point caches); [`blend`] (skeletal clips); [`inspect`] (what a file holds). Shared rooms: `output` (the one way files are
 //! written: staged, then renamed together), `progress` (what the user sees while it runs) and
-//! `memory` (peak and available memory).
+//! `memory` (peak and available memory, and the allocator kept from unmapping freed blocks).
 //! Developer tools apart: [`synth`], [`eval`], [`bench`].
 
 pub mod blend;
@@ -20,3 +20,4 @@ pub mod tween;
 pub mod usd;
 
 pub use dev::{bench, eval, fuzz, synth};
+pub use memory::keep_freed_memory;

@@ -8,6 +8,7 @@ use inbetween::{bench, blend, eval, inspect, preview, tween};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    inbetween::keep_freed_memory();
     match Cli::parse().command {
         Command::Tween(args) => {
             set_threads(args.threads);
