@@ -8,7 +8,7 @@
 
 use super::keys::MorphMesh;
 use glam::DVec3;
-use std::collections::HashMap;
+use rayon::prelude::*;
 
 /// Largest difference between two welded vertices' target deltas, relative to the bounding-box
 /// diagonal of the base mesh (unitless).
@@ -47,28 +47,55 @@ impl Welded {
                 (da - db).abs().max_element() <= tol
             })
         };
-        let mut by_position: HashMap<[u64; 3], Vec<u32>> = HashMap::with_capacity(base.len());
-        let mut of_vertex = Vec::with_capacity(base.len());
-        let mut representative: Vec<u32> = Vec::new();
-        for (v, p) in base.iter().enumerate() {
-            // +0.0 and -0.0 are the same place.
-            let key = [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
-            let candidates = by_position.entry(key).or_default();
-            let found = candidates
-                .iter()
-                .copied()
-                .find(|&w| deltas_agree(representative[w as usize] as usize, v));
-            let w = match found {
-                Some(w) => w,
-                None => {
-                    let w = representative.len() as u32;
-                    representative.push(v as u32);
-                    candidates.push(w);
-                    w
-                }
-            };
-            of_vertex.push(w);
+        // Vertices sorted by position (bit patterns; +0.0 and -0.0 are the same place), then
+        // by index: each run of one position is welded on its own, in parallel.
+        let keys: Vec<[u64; 3]> = base
+            .par_iter()
+            .map(|p| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits))
+            .collect();
+        let mut order: Vec<u32> = (0..base.len() as u32).collect();
+        order.par_sort_unstable_by_key(|&v| (keys[v as usize], v));
+        let starts: Vec<usize> = (0..order.len())
+            .into_par_iter()
+            .filter(|&i| i == 0 || keys[order[i] as usize] != keys[order[i - 1] as usize])
+            .collect();
+        // Per vertex in `order`: the vertex it welds onto, the first of its run whose deltas
+        // agree with it (itself where none does), as taking the vertices in input order would.
+        let onto_sorted: Vec<u32> = starts
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(k, &start)| {
+                let end = starts.get(k + 1).copied().unwrap_or(order.len());
+                let mut firsts: Vec<u32> = Vec::new();
+                order[start..end]
+                    .iter()
+                    .map(|&v| {
+                        let found = firsts
+                            .iter()
+                            .copied()
+                            .find(|&w| deltas_agree(w as usize, v as usize));
+                        found.unwrap_or_else(|| {
+                            firsts.push(v);
+                            v
+                        })
+                    })
+                    .collect::<Vec<u32>>()
+            })
+            .collect();
+        let mut onto = vec![0u32; base.len()];
+        for (&v, &w) in order.iter().zip(&onto_sorted) {
+            onto[v as usize] = w;
         }
+        // Welded vertices numbered in the order of their first input vertex.
+        let mut number = vec![u32::MAX; base.len()];
+        let mut representative: Vec<u32> = Vec::new();
+        for (v, &w) in onto.iter().enumerate() {
+            if w as usize == v {
+                number[v] = representative.len() as u32;
+                representative.push(v as u32);
+            }
+        }
+        let of_vertex: Vec<u32> = onto.iter().map(|&w| number[w as usize]).collect();
         let mut input_triangles = Vec::new();
         let mut offset = 0u32;
         for p in &mesh.primitives {
@@ -128,4 +155,100 @@ pub fn rms_rel(a: &[DVec3], b: &[DVec3], diag: f64) -> f64 {
         .map(|(p, q)| (*p - *q).length_squared())
         .sum();
     (s / a.len() as f64).sqrt() / diag
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tween::keys::Primitive;
+
+    /// The weld as a scan in input order: each vertex joins the first earlier welded vertex
+    /// at its position whose deltas agree, else starts one.
+    fn welded_in_order(mesh: &MorphMesh, tol: f64) -> Vec<u32> {
+        let all: Vec<(DVec3, Vec<DVec3>)> = mesh
+            .primitives
+            .iter()
+            .flat_map(|p| {
+                (0..p.base.len()).map(|i| (p.base[i], p.target_pos.iter().map(|t| t[i]).collect()))
+            })
+            .collect();
+        let mut firsts: Vec<usize> = Vec::new();
+        all.iter()
+            .enumerate()
+            .map(|(v, (p, d))| {
+                let same = |w: &usize| {
+                    let (q, e) = &all[*w];
+                    *q == *p
+                        && d.iter()
+                            .zip(e)
+                            .all(|(a, b)| (*a - *b).abs().max_element() <= tol)
+                };
+                match firsts.iter().position(same) {
+                    Some(k) => k as u32,
+                    None => {
+                        firsts.push(v);
+                        (firsts.len() - 1) as u32
+                    }
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn welds_as_a_scan_in_input_order_would() {
+        // Two primitives over a few positions (+0.0 and -0.0 among them), two targets whose
+        // deltas agree on some duplicates and not on others.
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |n: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed % n
+        };
+        let spots = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(-0.0, 0.0, -0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(1.0, 1.0, 2.0),
+        ];
+        let moves = [DVec3::ZERO, DVec3::X, DVec3::new(0.0, 1e-9, 0.0)];
+        let primitive = |index: usize, count: usize, next: &mut dyn FnMut(u64) -> u64| {
+            let base: Vec<DVec3> = (0..count).map(|_| spots[next(5) as usize]).collect();
+            let target_pos = (0..2)
+                .map(|_| (0..count).map(|_| moves[next(3) as usize]).collect())
+                .collect();
+            Primitive {
+                index,
+                base,
+                normals: None,
+                tangents: None,
+                target_pos,
+                target_nrm: vec![None, None],
+                target_tan: vec![None, None],
+                triangles: (0..count as u32 / 3)
+                    .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                    .collect(),
+            }
+        };
+        let primitives = vec![primitive(0, 300, &mut next), primitive(1, 240, &mut next)];
+        let mesh = MorphMesh {
+            mesh: 0,
+            name: "m".into(),
+            primitives,
+            target_count: 2,
+            tracks: Vec::new(),
+            dropped_channels: Vec::new(),
+        };
+        let welded = Welded::build(&mesh);
+        let diag = bbox_diagonal(&mesh.pose(&[0.0, 0.0]));
+        let want = welded_in_order(&mesh, DELTA_TOLERANCE * diag);
+        assert_eq!(welded.of_vertex, want);
+        assert_eq!(welded.n, *want.iter().max().unwrap() as usize + 1);
+        // Every position and delta pair appears, so some duplicates weld and some do not.
+        assert!(welded.n > 5 && welded.n < 540, "{}", welded.n);
+        for (w, &v) in welded.representative.iter().enumerate() {
+            assert_eq!(welded.of_vertex[v as usize], w as u32);
+        }
+    }
 }
