@@ -1,6 +1,7 @@
 //! The output document under construction: the input's JSON plus one binary buffer that new
 //! buffer views and accessors are appended to.
 
+use rayon::prelude::*;
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
@@ -30,7 +31,28 @@ impl BinBuilder {
         self.views.push(v);
         self.views.len() - 1
     }
+
+    /// [`BinBuilder::push_view`] of f32 values (little-endian), converted in parallel straight
+    /// into the buffer.
+    pub fn push_f32_view(&mut self, data: &[f32], target: Option<u32>) -> usize {
+        let view = self.push_view(&[], target);
+        self.views[view]["byteLength"] = json!(data.len() * 4);
+        let start = self.bytes.len();
+        self.bytes.resize(start + data.len() * 4, 0);
+        self.bytes[start..]
+            .par_chunks_mut(4 * PARALLEL_CHUNK)
+            .zip(data.par_chunks(PARALLEL_CHUNK))
+            .for_each(|(out, values)| {
+                for (o, x) in out.chunks_exact_mut(4).zip(values) {
+                    o.copy_from_slice(&x.to_le_bytes());
+                }
+            });
+        view
+    }
 }
+
+/// Values a parallel task takes at once where a frame's arrays are converted or scanned.
+const PARALLEL_CHUNK: usize = 1 << 16;
 
 /// How a VEC3 array of a morph target is stored.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,15 +121,27 @@ fn f32_json(values: &[f32]) -> Value {
 
 /// Per component, the smallest and largest of `data` (elements of `ncomp` values).
 fn min_max(data: &[f32], ncomp: usize) -> (Vec<f32>, Vec<f32>) {
-    let mut lo = vec![f32::INFINITY; ncomp];
-    let mut hi = vec![f32::NEG_INFINITY; ncomp];
-    for e in data.chunks_exact(ncomp) {
-        for c in 0..ncomp {
-            lo[c] = lo[c].min(e[c]);
-            hi[c] = hi[c].max(e[c]);
-        }
-    }
-    (lo, hi)
+    let none = || (vec![f32::INFINITY; ncomp], vec![f32::NEG_INFINITY; ncomp]);
+    let whole = data.len() - data.len() % ncomp;
+    data[..whole]
+        .par_chunks(ncomp * PARALLEL_CHUNK)
+        .map(|part| {
+            let (mut lo, mut hi) = none();
+            for e in part.chunks_exact(ncomp) {
+                for c in 0..ncomp {
+                    lo[c] = lo[c].min(e[c]);
+                    hi[c] = hi[c].max(e[c]);
+                }
+            }
+            (lo, hi)
+        })
+        .reduce(none, |(mut lo, mut hi), (l, h)| {
+            for c in 0..ncomp {
+                lo[c] = lo[c].min(l[c]);
+                hi[c] = hi[c].max(h[c]);
+            }
+            (lo, hi)
+        })
 }
 
 /// Set accessor `acc`'s min and max to those of `data` (elements of `ncomp` values), as f32.
@@ -148,8 +182,7 @@ impl Output {
         bounds: bool,
         target: Option<u32>,
     ) -> usize {
-        let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
-        let view = self.bin.push_view(&bytes, target);
+        let view = self.bin.push_f32_view(data, target);
         let count = data.len() / ncomp;
         let mut acc =
             json!({ "bufferView": view, "componentType": 5126, "count": count, "type": ty });

@@ -26,6 +26,7 @@ use crate::gltf::{
 };
 use anyhow::Result;
 use glam::DVec3;
+use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeSet;
 
@@ -263,19 +264,33 @@ pub fn apply_frames(
 /// The frame's value of one attribute as the new target stores it: its delta from the base,
 /// less the authored targets' deltas blended by `weights`.
 fn correction(delta: &[[f32; 3]], authored: &[Option<&Vec<DVec3>>], weights: &[f64]) -> Vec<f32> {
-    let mut out: Vec<DVec3> = delta
+    let used: Vec<(f64, &Vec<DVec3>)> = weights
         .iter()
-        .map(|d| DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64))
+        .zip(authored)
+        .filter(|(w, _)| **w != 0.0)
+        .filter_map(|(w, t)| Some((*w, (*t)?)))
         .collect();
-    for (w, target) in weights.iter().zip(authored) {
-        if let (true, Some(t)) = (*w != 0.0, target) {
-            for (o, d) in out.iter_mut().zip(t.iter()) {
-                *o -= *w * *d;
+    let mut out = vec![0.0f32; 3 * delta.len()];
+    out.par_chunks_mut(3 * CHUNK)
+        .zip(delta.par_chunks(CHUNK))
+        .enumerate()
+        .for_each(|(k, (out, delta))| {
+            for (i, (o, d)) in out.chunks_exact_mut(3).zip(delta).enumerate() {
+                let v = k * CHUNK + i;
+                let mut x = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
+                for (w, t) in &used {
+                    if let Some(d) = t.get(v) {
+                        x -= *w * *d;
+                    }
+                }
+                o.copy_from_slice(&x.as_vec3().to_array());
             }
-        }
-    }
-    out.iter().flat_map(|v| v.as_vec3().to_array()).collect()
+        });
+    out
 }
+
+/// Vertices a parallel task corrects at once.
+const CHUNK: usize = 1 << 14;
 
 /// The new targets of one primitive: one per frame played by its own target.
 fn new_targets(
