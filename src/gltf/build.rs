@@ -19,26 +19,17 @@ impl BinBuilder {
 
     /// Append `data` as a new buffer view (4-byte aligned) and return its index.
     pub fn push_view(&mut self, data: &[u8], target: Option<u32>) -> usize {
-        while !self.bytes.len().is_multiple_of(4) {
-            self.bytes.push(0);
-        }
-        let mut v =
-            json!({ "buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len() });
-        if let Some(t) = target {
-            v["target"] = json!(t);
-        }
+        let view = self.open_view(data.len(), target);
         self.bytes.extend_from_slice(data);
-        self.views.push(v);
-        self.views.len() - 1
+        view
     }
 
     /// [`BinBuilder::push_view`] of f32 values (little-endian), converted in parallel straight
     /// into the buffer.
     pub fn push_f32_view(&mut self, data: &[f32], target: Option<u32>) -> usize {
-        let view = self.push_view(&[], target);
-        self.views[view]["byteLength"] = json!(data.len() * 4);
+        let view = self.open_view(4 * data.len(), target);
         let start = self.bytes.len();
-        self.bytes.resize(start + data.len() * 4, 0);
+        self.bytes.resize(start + 4 * data.len(), 0);
         self.bytes[start..]
             .par_chunks_mut(4 * PARALLEL_CHUNK)
             .zip(data.par_chunks(PARALLEL_CHUNK))
@@ -48,6 +39,20 @@ impl BinBuilder {
                 }
             });
         view
+    }
+
+    /// A new view of `len` bytes starting at the buffer's end (padded to 4 bytes), to be
+    /// filled by the caller; its index.
+    fn open_view(&mut self, len: usize, target: Option<u32>) -> usize {
+        while !self.bytes.len().is_multiple_of(4) {
+            self.bytes.push(0);
+        }
+        let mut v = json!({ "buffer": 0, "byteOffset": self.bytes.len(), "byteLength": len });
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.views.push(v);
+        self.views.len() - 1
     }
 }
 

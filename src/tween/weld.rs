@@ -55,35 +55,24 @@ impl Welded {
             .collect();
         let mut order: Vec<u32> = (0..base.len() as u32).collect();
         order.par_sort_unstable_by_key(|&v| (keys[v as usize], v));
-        let starts: Vec<usize> = (0..order.len())
-            .into_par_iter()
-            .filter(|&i| i == 0 || keys[order[i] as usize] != keys[order[i - 1] as usize])
-            .collect();
-        // Per vertex in `order`: the vertex it welds onto, the first of its run whose deltas
+        // Per vertex (in `order`): the vertex it welds onto, the first of its run whose deltas
         // agree with it (itself where none does), as taking the vertices in input order would.
-        let onto_sorted: Vec<u32> = starts
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(k, &start)| {
-                let end = starts.get(k + 1).copied().unwrap_or(order.len());
-                let mut firsts: Vec<u32> = Vec::new();
-                order[start..end]
-                    .iter()
-                    .map(|&v| {
-                        let found = firsts
-                            .iter()
-                            .copied()
-                            .find(|&w| deltas_agree(w as usize, v as usize));
-                        found.unwrap_or_else(|| {
-                            firsts.push(v);
-                            v
-                        })
-                    })
-                    .collect::<Vec<u32>>()
-            })
-            .collect();
+        let mut onto_sorted: Vec<(u32, u32)> = order.iter().map(|&v| (v, v)).collect();
+        onto_sorted
+            .par_chunk_by_mut(|p, q| keys[p.0 as usize] == keys[q.0 as usize])
+            .for_each(|run| {
+                for i in 1..run.len() {
+                    let v = run[i].0 as usize;
+                    if let Some(&(first, _)) = run[..i]
+                        .iter()
+                        .find(|(w, onto)| w == onto && deltas_agree(*w as usize, v))
+                    {
+                        run[i].1 = first;
+                    }
+                }
+            });
         let mut onto = vec![0u32; base.len()];
-        for (&v, &w) in order.iter().zip(&onto_sorted) {
+        for &(v, w) in &onto_sorted {
             onto[v as usize] = w;
         }
         // Welded vertices numbered in the order of their first input vertex.
