@@ -106,7 +106,7 @@ fn planted_feet_slide_less_than_the_sources_and_a_fifth_of_a_naive_blend() {
                 // clean-up), the C1 ease with the knee kept on its side (Fox was up to 1.33) and,
                 // at 0.5, contacts from the mean of the sources' touchdowns to the mean of their
                 // lift-offs (Fox was 1.18: either source's contact pinned the hind foot on 21 of
-                // 23 frames) bring every case to 0.65-0.92.
+                // 23 frames) bring every case to 0.40-0.93.
                 let goal = 1.15;
                 assert!(jerk <= goal, "jerk ratio {jerk} > {goal}");
                 // Before clean-up the warped, aligned blend slides less than the naive one, but
@@ -170,11 +170,14 @@ fn cesium_man_walks_with_itself_half_a_cycle_later() {
         let jerk = r["result"]["jerk_ratio"].as_f64().unwrap();
         eprintln!(
             "CesiumMan walk + walk half a cycle later w={w}: naive {naive:.4}, before clean-up \
-             {before:.4}, after {after:.1e}, jerk ratio {jerk:.2} (not asserted: the IK bends \
-             knees near full extension, issue 17)"
+             {before:.4}, after {after:.1e}, jerk ratio {jerk:.2} (not asserted: 1.17-1.24, the \
+             IK turning knees held near full extension in stance, issue 17)"
         );
         assert_eq!(r["clips"][0]["cycles"].as_array().unwrap().len(), 1);
-        assert!(before < 0.8 * naive, "before clean-up {before} against naive {naive}");
+        assert!(
+            before < 0.8 * naive,
+            "before clean-up {before} against naive {naive}"
+        );
         assert!(after <= 1e-3, "after clean-up {after}");
         assert!(r["result"]["looping"].as_bool().unwrap());
     }

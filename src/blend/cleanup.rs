@@ -138,10 +138,36 @@ pub fn smoothstep(x: f64) -> f64 {
     x * x * (3.0 - 2.0 * x)
 }
 
+/// A foot's correction on one frame: the offset that moves the foot onto its target, and how
+/// much of it applies. A pin's correction fades out in the swing through `weight`, applied to
+/// the leg's joint rotations, not to the foot's position: near a straight knee a small change
+/// of the foot's distance from the hip turns the knee a lot, and a fading position made
+/// CesiumMan's straight-legged walk bend and straighten its knees within a few frames.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Correction {
+    pub offset: DVec3,
+    pub weight: f64,
+}
+
+impl Correction {
+    fn full(offset: DVec3) -> Correction {
+        Correction {
+            offset,
+            weight: 1.0,
+        }
+    }
+
+    /// The part of the offset that applies to the foot's position.
+    pub fn applied(&self) -> DVec3 {
+        self.offset * self.weight
+    }
+}
+
 /// The correction (target minus the foot's own position `ends`) per frame: in contact, what
 /// moves the foot onto its target; in the swing around it, the contact's first or last correction
-/// carried on at the rate it was changing and faded out with a smoothstep over the ease window,
-/// so the foot's path keeps its position and velocity where a pin starts or ends (no pop).
+/// carried on at the rate it was changing, its weight faded out with a smoothstep over the ease
+/// window, so the foot's path keeps its position and velocity where a pin starts or ends (no
+/// pop); between two contacts nearer than two ease windows, one cubic at full weight.
 /// `None` where no correction applies. On a looping clip (last frame = first) gaps wrap.
 pub fn corrections(
     planted: &[bool],
@@ -149,7 +175,7 @@ pub fn corrections(
     ends: &[DVec3],
     dt: f64,
     looping: bool,
-) -> Vec<Option<DVec3>> {
+) -> Vec<Option<Correction>> {
     let n = planted.len();
     let distinct = if looping && n > 1 { n - 1 } else { n };
     let off = |j: usize| target[j] - ends[j];
@@ -179,10 +205,10 @@ pub fn corrections(
             .filter(|&k| planted[k])
             .map_or(DVec3::ZERO, |k| off(i) - off(k))
     };
-    let mut out: Vec<Option<DVec3>> = (0..distinct)
+    let mut out: Vec<Option<Correction>> = (0..distinct)
         .map(|j| {
             if planted[j] {
-                return Some(off(j));
+                return Some(Correction::full(off(j)));
             }
             let (back, ahead) = (nearest(j, -1), nearest(j, 1));
             if let (Some((i0, d0)), Some((i1, d1))) = (back, ahead) {
@@ -192,26 +218,34 @@ pub fn corrections(
                     // both corrections and their rates.
                     let t = d0 as f64 / gap;
                     let (t2, t3) = (t * t, t * t * t);
-                    return Some(
+                    return Some(Correction::full(
                         off(i0) * (2.0 * t3 - 3.0 * t2 + 1.0)
                             + rate(i0, -1) * gap * (t3 - 2.0 * t2 + t)
                             + off(i1) * (3.0 * t2 - 2.0 * t3)
                             - rate(i1, 1) * gap * (t3 - t2),
-                    );
+                    ));
                 }
             }
-            // A long swing: each neighbouring contact's correction, carried on at its rate,
-            // fades out over the ease window.
-            let mut sum = None;
-            for (found, inward) in [(back, -1i64), (ahead, 1)] {
-                let Some((i, d)) = found else { continue };
-                let x = d as f64 / ease;
-                if x < 1.0 {
-                    let fade = 1.0 - smoothstep(x);
-                    *sum.get_or_insert(DVec3::ZERO) += (off(i) + rate(i, inward) * d as f64) * fade;
-                }
+            // A long swing: the neighbouring contact's correction, carried on at its rate, its
+            // weight fading out over the ease window (only one contact is that near).
+            let fading: Vec<Correction> = [(back, -1i64), (ahead, 1)]
+                .into_iter()
+                .filter_map(|(found, inward)| {
+                    let (i, d) = found?;
+                    let x = d as f64 / ease;
+                    (x < 1.0).then(|| Correction {
+                        offset: off(i) + rate(i, inward) * d as f64,
+                        weight: 1.0 - smoothstep(x),
+                    })
+                })
+                .collect();
+            match fading[..] {
+                [] => None,
+                [one] => Some(one),
+                _ => Some(Correction::full(
+                    fading.iter().map(Correction::applied).sum(),
+                )),
             }
-            sum
         })
         .collect();
     if looping && n > 1 {
@@ -232,7 +266,8 @@ pub fn clean(
 ) -> Vec<f64> {
     let n = frames.len();
     let ends: Vec<Vec<DVec3>> = frames.iter().map(|p| rig.positions(p)).collect();
-    let wants: Vec<Vec<Option<DVec3>>> = legs
+    // Per leg and frame: where the IK puts the foot, and how much of that pose applies.
+    let wants: Vec<Vec<Option<(DVec3, f64)>>> = legs
         .iter()
         .zip(goals)
         .map(|(leg, g)| {
@@ -240,7 +275,7 @@ pub fn clean(
             corrections(&g.planted, &g.target, &own, dt, looping)
                 .into_iter()
                 .zip(&own)
-                .map(|(c, e)| c.map(|c| *e + c))
+                .map(|(c, e)| c.map(|c| (*e + c.offset, c.weight)))
                 .collect()
         })
         .collect();
@@ -252,9 +287,10 @@ pub fn clean(
     let mut need = vec![0.0f64; n];
     for (j, p) in ends.iter().enumerate() {
         for (leg, want) in legs.iter().zip(&wants) {
-            let (Some([a, b, c]), Some(want)) = (leg.ik, want[j]) else {
+            let (Some([a, b, c]), Some((want, weight))) = (leg.ik, want[j]) else {
                 continue;
             };
+            let want = p[leg.end()].lerp(want, weight);
             let reach = MAX_STRETCH * ((p[b] - p[a]).length() + (p[c] - p[b]).length());
             let ankle = want - (p[leg.end()] - p[c]);
             let d = p[a] - ankle;
@@ -292,9 +328,17 @@ pub fn clean(
             super::align::move_skeleton(rig, pose, &DMat4::from_translation(-UP * drop[j]));
         }
         for (l, (leg, want)) in legs.iter().zip(&wants).enumerate() {
-            if let Some(want) = want[j] {
-                let world = rig.world(pose);
-                reach(rig, leg, pose, &world, want, bend[l]);
+            let Some((want, weight)) = want[j] else {
+                continue;
+            };
+            let world = rig.world(pose);
+            let before = pose.clone();
+            reach(rig, leg, pose, &world, want, bend[l]);
+            if weight < 1.0 {
+                // Part of the way: the leg's joints turned that part of the IK's turn.
+                for &k in leg.ik.iter().flatten() {
+                    pose.local[k].r = before.local[k].r.slerp(pose.local[k].r, weight);
+                }
             }
         }
     }
@@ -393,6 +437,9 @@ mod tests {
         let n = planted.len();
         let target: Vec<DVec3> = (0..n).map(|j| DVec3::X * j as f64).collect();
         corrections(planted, &target, &vec![DVec3::ZERO; n], 1.0 / 24.0, false)
+            .into_iter()
+            .map(|c| c.map(|c| c.applied()))
+            .collect()
     }
 
     #[test]
@@ -411,6 +458,14 @@ mod tests {
             assert!((c[4 + d] - (4.0 + d as f64) * fade).abs() < 1e-12);
         }
         assert!(c[7..].iter().all(|&x| x == 0.0));
+        // The fade is in the weight (applied to the leg's joint rotations); the offset is the
+        // carried-on correction in full.
+        let target: Vec<DVec3> = (0..12).map(|j| DVec3::X * j as f64).collect();
+        let full = corrections(&planted, &target, &[DVec3::ZERO; 12], 1.0 / 24.0, false);
+        assert_eq!(full[4].unwrap().weight, 1.0);
+        let c5 = full[5].unwrap();
+        assert!((c5.offset.x - 5.0).abs() < 1e-12);
+        assert!((c5.weight - (1.0 - smoothstep(1.0 / 3.0))).abs() < 1e-12);
         // A swing of one frame between two contacts: the cubic through both, matching rates.
         let planted = [true, true, true, false, true, true];
         let c = ramp(&planted);
