@@ -332,12 +332,12 @@ pub fn clean(
                 continue;
             };
             let world = rig.world(pose);
-            let before = pose.clone();
+            let unclean = leg.ik.map(|joints| joints.map(|k| (k, pose.local[k].r)));
             reach(rig, leg, pose, &world, want, bend[l]);
             if weight < 1.0 {
                 // Part of the way: the leg's joints turned that part of the IK's turn.
-                for &k in leg.ik.iter().flatten() {
-                    pose.local[k].r = before.local[k].r.slerp(pose.local[k].r, weight);
+                for (k, r) in unclean.into_iter().flatten() {
+                    pose.local[k].r = r.slerp(pose.local[k].r, weight);
                 }
             }
         }
