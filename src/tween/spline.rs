@@ -363,12 +363,8 @@ fn nearest_turn(angle: f64, target: f64) -> f64 {
     angle + 2.0 * PI * ((target - angle) / (2.0 * PI)).round()
 }
 
-/// The number of valid triangles at each vertex where some component splits (empty where
-/// none does).
-fn split_degrees(per: &[Option<Tri>], vertices: usize) -> Vec<u32> {
-    if !per.iter().flatten().any(Tri::split) {
-        return Vec::new();
-    }
+/// The number of valid triangles at each vertex.
+fn degrees(per: &[Option<Tri>], vertices: usize) -> Vec<u32> {
     let mut deg = vec![0u32; vertices];
     for tri in per.iter().flatten() {
         for v in tri.corners {
@@ -880,9 +876,13 @@ impl<'t, 'a> Build<'t, 'a> {
         placement: &Placement,
         stats: &Components,
     ) -> WindowSums {
-        // Where a component splits, its triangles' screws (see [`Screw`]).
-        let split = per.iter().flatten().any(Tri::split);
-        let deg = split_degrees(per, self.track.keys[self.a].len());
+        // Where a component splits (its cross-sections found), its triangles' screws (see
+        // [`Screw`]).
+        let split = !sections.bend.is_empty();
+        let deg = match split {
+            true => degrees(per, self.track.keys[self.a].len()),
+            false => Vec::new(),
+        };
         let mut offsets = vec![Vec3::ZERO; if split { per.len() } else { 0 }];
         let limb = split && stats.limb.contains(&true);
         let mut after = vec![[glam::Mat3::ZERO; 3]; if limb { per.len() } else { 0 }];
@@ -1026,6 +1026,7 @@ impl<'t, 'a> Build<'t, 'a> {
                 let centre = |w: usize| sections.centre[t * nw + w].as_dvec3();
                 let corners = tri.corners.map(|v| x0[v as usize]);
                 let from = TwistLine::new(corners, centre(win.a), axis).offset;
+                let far = from.iter().map(|f| f.length()).fold(0.0, f64::max);
                 let mut out = [[0.0f64; MAX_WINDOW]; 3];
                 for (w, &key) in win.keys.iter().enumerate().filter(|&(w, _)| w != win.a) {
                     let unbend = bend.map_or(DQuat::IDENTITY, |b| {
@@ -1037,7 +1038,6 @@ impl<'t, 'a> Build<'t, 'a> {
                         .map(|v| across(unbend * (x[v as usize] - centre(w))));
                     // A twist keeps every corner's distance from the line (to a share of the
                     // farthest corner's: a corner on the line may be off it by round-off).
-                    let far = from.iter().map(|f| f.length()).fold(0.0, f64::max);
                     let turned = from.iter().zip(&to).all(|(from, to)| {
                         (to.length() - from.length()).abs() <= FIELD_RADIAL * far
                     });
