@@ -666,9 +666,10 @@ fn a_bent_and_twisted_arm_counts_its_turns_at_every_resolution() {
 /// next), and an arm bent 60 degrees at an elbow a third of the way along while twisting, 180
 /// to 720 degrees in one, three and five key steps. Every case within 0.002 of the diagonal
 /// (0.0000-0.0012). With the vertices' twists the mean of their triangles' (not measured from
-/// their positions) the uneven tube was 0.0035 off; with a local axis wherever a limb's key a
-/// is not straight, the ribbon twisted in key a 0.0014; with one twist axis for the bent arm
-/// (the code before issue 16's twist field) the arm 0.0134.
+/// their positions) the uneven tube was 0.0035 off (its rings from an earlier sequence of the
+/// same spread); with a local axis wherever a limb's key a is not straight, the ribbon twisted
+/// in key a 0.0014; with one twist axis for the bent arm (the code before issue 16's twist
+/// field) the arm 0.0134.
 #[test]
 fn twists_of_other_shapes_stay_on_the_analytic_pose() {
     let mut ribbon = synth::grid(48, 4, 12.0, 1.0);
@@ -676,16 +677,11 @@ fn twists_of_other_shapes_stay_on_the_analytic_pose() {
         p.y -= 0.5;
     }
     // Rings moved along the tube by up to a quarter of their spacing and turned by up to 0.3
-    // rad each (a fixed xorshift sequence), the end rings moved only in turn.
+    // rad each (a fixed sequence), the end rings moved only in turn.
     let rings = 12;
     let mut uneven = synth::tube(rings, 16, 6.0, 0.5, 0.3);
-    let mut state = 12345u64;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state % 10000) as f64 / 10000.0 - 0.5
-    };
+    let mut lcg = synth::Lcg(12345);
+    let mut next = || lcg.unit() - 0.5;
     let spacing = 6.0 / (rings - 1) as f64;
     let moves: Vec<(f64, f64)> = (0..rings)
         .map(|_| (next() * 0.5 * spacing, next() * 0.6))

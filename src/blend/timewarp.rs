@@ -279,13 +279,8 @@ mod tests {
     #[test]
     fn the_most_knots_within_the_slope_bound_are_kept() {
         // Random increasing knots against every subset: none keeps more within the bound.
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut lcg = crate::dev::synth::Lcg(0x2545_f491_4f6c_dd1d);
+        let mut next = || lcg.unit();
         for _ in 0..300 {
             let n = 1 + (next() * 7.0) as usize;
             let mut pa: Vec<f64> = (0..n).map(|_| next()).collect();

@@ -187,13 +187,8 @@ mod tests {
     fn welds_as_a_scan_in_input_order_would() {
         // Two primitives over a few positions (+0.0 and -0.0 among them), two targets whose
         // deltas agree on some duplicates and not on others.
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = |n: u64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed % n
-        };
+        let mut lcg = crate::dev::synth::Lcg(0x9e37_79b9_7f4a_7c15);
+        let mut next = |n: u64| (lcg.unit() * n as f64) as u64;
         let spots = [
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(-0.0, 0.0, -0.0),
