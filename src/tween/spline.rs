@@ -363,6 +363,11 @@ fn nearest_turn(angle: f64, target: f64) -> f64 {
     angle + 2.0 * PI * ((target - angle) / (2.0 * PI)).round()
 }
 
+/// The centroid of the triangle with `corners` at positions `x`.
+fn centroid(corners: [u32; 3], x: &[DVec3]) -> DVec3 {
+    corners.map(|v| x[v as usize]).iter().sum::<DVec3>() / 3.0
+}
+
 /// The number of valid triangles at each vertex.
 fn degrees(per: &[Option<Tri>], vertices: usize) -> Vec<u32> {
     let mut deg = vec![0u32; vertices];
@@ -1176,15 +1181,13 @@ impl<'t, 'a> Build<'t, 'a> {
                 let (axis, across) = (tri.axis.as_dvec3().normalize(), self.across(tri));
                 for (w, &key) in win.keys.iter().enumerate() {
                     let y = &self.track.keys[key];
-                    centre[w] =
-                        (tri.corners.map(|v| y[v as usize]).iter().sum::<DVec3>() / 3.0).as_vec3();
+                    centre[w] = centroid(tri.corners, y).as_vec3();
                     if w != win.a {
                         let (log, _) = self.rs_across(&v_inv, tri.corners, key, across);
                         swing[w] = swing_after_twist(log, axis).as_vec3();
                     }
                 }
-                let centroid = tri.corners.map(|v| x[v as usize]).iter().sum::<DVec3>() / 3.0;
-                *position = centroid.dot(slices[c].unwrap_or(axis));
+                *position = centroid(tri.corners, x).dot(slices[c].unwrap_or(axis));
                 Some(c)
             })
             .collect();
@@ -1832,7 +1835,7 @@ fn local_axes(
         .filter_map(|(t, (tri, &area))| {
             let tri = tri.as_ref()?;
             let c = placement.component_of(tri.corners[0] as usize)?;
-            let centre = tri.corners.map(|v| x0[v as usize]).iter().sum::<DVec3>() / 3.0;
+            let centre = centroid(tri.corners, x0);
             Some(Member {
                 c,
                 s: centre.dot(bent[c]?),
