@@ -5,8 +5,13 @@
 //! the correction (pin minus the foot's own position) is carried on at the rate it was changing
 //! and faded out over [`EASE_SECONDS`] (a swing shorter than two eases gets one cubic from one
 //! contact's correction to the next), so the foot keeps its position and velocity where a pin
-//! starts or ends: no pop. Where a leg cannot reach, the root is lowered just enough, eased the
-//! same way. Joints outside the legs keep their rotations.
+//! starts or ends: no pop. Before the IK the root takes up what the legs share, as smooth
+//! curves over the clip: a horizontal shift toward the planted feet's corrections
+//! ([`root_shift`]) and a rise or fall that keeps each stance leg as long as it was
+//! ([`root_rise`]), so that a nearly straight knee, where a small change of the hip-foot
+//! distance turns the knee a lot, is left as the blend had it. Where a leg still cannot reach,
+//! the root is lowered just enough, eased the same way. Joints outside the legs keep their
+//! rotations.
 
 use super::legs::Leg;
 use super::rig::{flat, Pose, Rig, UP};
@@ -18,8 +23,37 @@ const MIN_BONE: f64 = 1e-12;
 /// sine of the knee angle, unitless) is straight: it bends about the leg's knee axis.
 const STRAIGHT_LEG: f64 = 1e-9;
 
-/// A leg is stretched to at most this fraction of its hip-knee-ankle length.
+/// A leg is stretched to at most this fraction of its hip-knee-ankle length, or as far as the
+/// pose being cleaned stretches it, up to [`FULL_STRETCH`].
 pub const MAX_STRETCH: f64 = 0.999;
+
+/// The most a leg that the blend already stretches past [`MAX_STRETCH`] is left stretched
+/// (fraction of its hip-knee-ankle length): clamping it back to `MAX_STRETCH` bent knees that
+/// the blend held at 176-179 degrees to 175 within a frame.
+pub const FULL_STRETCH: f64 = 0.99995;
+
+/// Time scale (seconds) of the root's horizontal shift: the weight of its second differences
+/// is `(SHIFT_SECONDS / dt)^4` against one planted foot's correction (see [`smooth`]).
+pub const SHIFT_SECONDS: f64 = 0.1;
+
+/// Time scale (seconds) of the root's rise or fall that keeps the stance legs' lengths.
+pub const RISE_SECONDS: f64 = 0.05;
+
+/// A stance leg asks the root to rise or fall by at most this fraction of its length; a leg
+/// whose target is farther off (a foot pinned far from where the blend put it) is left to the
+/// IK.
+const MAX_RISE: f64 = 0.05;
+
+/// A stance leg asks the root to rise or fall only where its hip is above its target by at
+/// least this cosine of the hip-target line's angle from the vertical (else a height change
+/// hardly changes the leg's length).
+const MIN_UPRIGHT: f64 = 0.3;
+
+/// How long a leg may be (scene units) in a frame where it stands `own` from hip to ankle, its
+/// bones `lab` and `lcb` long.
+fn longest(lab: f64, lcb: f64, own: f64) -> f64 {
+    (MAX_STRETCH * (lab + lcb)).max(own.min(FULL_STRETCH * (lab + lcb)))
+}
 
 /// What one leg should do: per output frame, whether it is planted and where its end should be.
 pub struct LegGoal {
@@ -254,7 +288,8 @@ pub fn corrections(
     out
 }
 
-/// Apply the clean-up to `frames` in place. Returns the root drop per frame (world units).
+/// Apply the clean-up to `frames` in place. Returns how far the root is lowered per frame
+/// (world units; by [`root_rise`] and where a leg cannot reach).
 pub fn clean(
     rig: &Rig,
     legs: &[Leg],
@@ -265,7 +300,13 @@ pub fn clean(
     looping: bool,
 ) -> Vec<f64> {
     let n = frames.len();
-    let ends: Vec<Vec<DVec3>> = frames.iter().map(|p| rig.positions(p)).collect();
+    let positions =
+        |frames: &[Pose]| -> Vec<Vec<DVec3>> { frames.iter().map(|p| rig.positions(p)).collect() };
+    let shift = root_shift(legs, goals, &positions(frames), dt, looping);
+    move_roots(rig, frames, &shift);
+    let rise = root_rise(legs, goals, &positions(frames), dt, looping);
+    move_roots(rig, frames, &rise);
+    let ends = positions(frames);
     // Per leg and frame: where the IK puts the foot, and how much of that pose applies.
     let wants: Vec<Vec<Option<(DVec3, f64)>>> = legs
         .iter()
@@ -291,7 +332,11 @@ pub fn clean(
                 continue;
             };
             let want = p[leg.end()].lerp(want, weight);
-            let reach = MAX_STRETCH * ((p[b] - p[a]).length() + (p[c] - p[b]).length());
+            let reach = longest(
+                (p[b] - p[a]).length(),
+                (p[c] - p[b]).length(),
+                (p[c] - p[a]).length(),
+            );
             let ankle = want - (p[leg.end()] - p[c]);
             let d = p[a] - ankle;
             if d.length() <= reach {
@@ -342,7 +387,158 @@ pub fn clean(
             }
         }
     }
-    drop
+    drop.iter()
+        .zip(&rise)
+        .map(|(d, r)| (d - r.dot(UP)).max(0.0))
+        .collect()
+}
+
+/// Move each frame's skeleton by its `offset` (world units).
+fn move_roots(rig: &Rig, frames: &mut [Pose], offset: &[DVec3]) {
+    for (pose, o) in frames.iter_mut().zip(offset) {
+        if *o != DVec3::ZERO {
+            super::align::move_skeleton(rig, pose, &DMat4::from_translation(*o));
+        }
+    }
+}
+
+/// The root's horizontal shift per frame (world units): a smooth curve ([`smooth`],
+/// [`SHIFT_SECONDS`]) through the mean horizontal correction (target minus the foot's own
+/// position in `ends`) of the feet planted at each frame. In single support it takes up the
+/// stance foot's correction, so the hip moves with it and the leg keeps its shape.
+fn root_shift(
+    legs: &[Leg],
+    goals: &[LegGoal],
+    ends: &[Vec<DVec3>],
+    dt: f64,
+    looping: bool,
+) -> Vec<DVec3> {
+    let m = distinct(ends.len(), looping);
+    let mut weight = vec![0.0f64; m];
+    let mut sum = vec![DVec3::ZERO; m];
+    for (leg, g) in legs.iter().zip(goals) {
+        for j in (0..m).filter(|&j| g.planted[j]) {
+            weight[j] += 1.0;
+            sum[j] += flat(g.target[j] - ends[j][leg.end()]);
+        }
+    }
+    smooth(&weight, &sum, SHIFT_SECONDS / dt, looping)
+}
+
+/// The root's rise (fall where negative) per frame (world units, along [`UP`]): a smooth curve
+/// ([`smooth`], [`RISE_SECONDS`]) through the heights that keep each leg's hip-ankle distance
+/// as the blend had it while its foot is moved onto its target, in contact and in the eases
+/// around it (weighted by how much of the correction applies there). Each leg weighs by how
+/// straight it is, 1 / (1.0001 - extension): the nearer the knee is to straight, the more a
+/// change of the leg's length would turn it.
+fn root_rise(
+    legs: &[Leg],
+    goals: &[LegGoal],
+    ends: &[Vec<DVec3>],
+    dt: f64,
+    looping: bool,
+) -> Vec<DVec3> {
+    let m = distinct(ends.len(), looping);
+    let mut weight = vec![0.0f64; m];
+    let mut sum = vec![DVec3::ZERO; m];
+    for (leg, g) in legs.iter().zip(goals) {
+        let Some([a, b, c]) = leg.ik else {
+            continue;
+        };
+        let own: Vec<DVec3> = ends.iter().map(|p| p[leg.end()]).collect();
+        let corrections = corrections(&g.planted, &g.target, &own, dt, looping);
+        for (j, correction) in corrections.iter().enumerate().take(m) {
+            let (Some(correction), p) = (correction, &ends[j]) else {
+                continue;
+            };
+            let length = (p[b] - p[a]).length() + (p[c] - p[b]).length();
+            let kept = (p[c] - p[a]).length();
+            let to = p[a] - (p[c] + correction.offset);
+            let upright = UP.dot(to) / to.length();
+            if !(length > 0.0 && upright >= MIN_UPRIGHT) {
+                continue;
+            }
+            // The height change that makes the hip-target distance `kept` (to first order).
+            let rise = (kept - to.length()) / upright;
+            if rise.abs() > MAX_RISE * length {
+                continue;
+            }
+            let w = correction.weight / (1.0001 - kept / length).max(1e-4);
+            weight[j] += w;
+            sum[j] += UP * (rise * w);
+        }
+    }
+    smooth(&weight, &sum, RISE_SECONDS / dt, looping)
+}
+
+/// Frames of a clip of `n` that are distinct (a loop's last frame repeats its first).
+fn distinct(n: usize, looping: bool) -> usize {
+    if looping && n > 1 {
+        n - 1
+    } else {
+        n
+    }
+}
+
+/// The curve x over a clip's distinct frames that minimises sum_j (weight_j |x_j|^2 -
+/// 2 x_j . sum_j) + lambda sum_j |x_{j-1} - 2 x_j + x_{j+1}|^2 (the weighted least squares
+/// through the values `sum_j / weight_j`, second differences wrapping on a loop), lambda =
+/// `frames^4` times the mean positive weight: `frames` is the time scale of the smoothing in
+/// frames. Solved by conjugate gradients (the system is small and banded); zero where no frame
+/// has a weight. On a loop the last frame repeats the first.
+fn smooth(weight: &[f64], sum: &[DVec3], frames: f64, looping: bool) -> Vec<DVec3> {
+    let m = weight.len();
+    let weighted = weight.iter().filter(|&&w| w > 0.0).count();
+    let mut x = vec![DVec3::ZERO; m];
+    if weighted > 0 && m >= 3 {
+        let lambda = frames.powi(4) * weight.iter().sum::<f64>() / weighted as f64;
+        let at = |j: i64| -> Option<usize> {
+            if looping {
+                Some(j.rem_euclid(m as i64) as usize)
+            } else {
+                usize::try_from(j).ok().filter(|&j| j < m)
+            }
+        };
+        let apply = |x: &[DVec3]| -> Vec<DVec3> {
+            let mut y: Vec<DVec3> = x.iter().zip(weight).map(|(x, w)| *x * *w).collect();
+            for c in 0..m as i64 {
+                let (Some(p), Some(q), Some(r)) = (at(c - 1), at(c), at(c + 1)) else {
+                    continue;
+                };
+                let d = (x[p] - 2.0 * x[q] + x[r]) * lambda;
+                y[p] += d;
+                y[q] -= 2.0 * d;
+                y[r] += d;
+            }
+            y
+        };
+        let dot = |a: &[DVec3], b: &[DVec3]| a.iter().zip(b).map(|(a, b)| a.dot(*b)).sum::<f64>();
+        let mut r = sum.to_vec();
+        let mut p = r.clone();
+        let mut rr = dot(&r, &r);
+        let stop = rr * 1e-24;
+        for _ in 0..4 * m {
+            if rr <= stop {
+                break;
+            }
+            let ap = apply(&p);
+            let alpha = rr / dot(&p, &ap);
+            for ((x, r), (p, ap)) in x.iter_mut().zip(&mut r).zip(p.iter().zip(&ap)) {
+                *x += *p * alpha;
+                *r -= *ap * alpha;
+            }
+            let next = dot(&r, &r);
+            let beta = next / rr;
+            rr = next;
+            for (p, r) in p.iter_mut().zip(&r) {
+                *p = *r + *p * beta;
+            }
+        }
+    }
+    if looping && m > 0 {
+        x.push(x[0]);
+    }
+    x
 }
 
 /// The side a leg's knee bends to over the clip (unit axis of the thigh-to-shin turn, weighted
@@ -388,7 +584,7 @@ fn reach(rig: &Rig, leg: &Leg, pose: &mut Pose, world: &[DMat4], want: DVec3, be
     // way round) leaves no range to clamp into, and the leg is left as it is.
     let (shortest, longest) = (
         (lab - lcb).abs() * 1.001 + MIN_BONE,
-        MAX_STRETCH * (lab + lcb),
+        longest(lab, lcb, (pc - pa).length()),
     );
     if shortest > longest {
         return;
@@ -470,5 +666,30 @@ mod tests {
         let planted = [true, true, true, false, true, true];
         let c = ramp(&planted);
         assert!((c[3].unwrap().x - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn smooth_curves_follow_lines_and_stay_at_zero_without_weights() {
+        // Values on a line at every frame: second differences of a line are zero, so the
+        // curve is the line itself at any smoothing.
+        let m = 12;
+        let line = |j: usize| DVec3::new(0.5 * j as f64 - 1.0, 0.0, 2.0 - 0.1 * j as f64);
+        let sum: Vec<DVec3> = (0..m).map(|j| line(j) * 3.0).collect();
+        let x = smooth(&[3.0; 12], &sum, 4.0, false);
+        assert!((0..m).all(|j| (x[j] - line(j)).length() < 1e-9), "{x:?}");
+        // Weights on a few frames only: the curve passes near them and is smooth between.
+        let mut weight = vec![0.0; m];
+        let mut sum = vec![DVec3::ZERO; m];
+        for j in [2, 3, 8, 9] {
+            weight[j] = 1.0;
+            sum[j] = DVec3::X;
+        }
+        let x = smooth(&weight, &sum, 1.0, true);
+        assert_eq!(x.len(), m + 1, "a loop's last frame repeats its first");
+        assert_eq!(x[m], x[0]);
+        assert!((0..m).all(|j| (x[j].x - 1.0).abs() < 1e-9), "{x:?}");
+        // No weight anywhere: no shift.
+        let x = smooth(&[0.0; 12], &[DVec3::ZERO; 12], 2.0, false);
+        assert!(x.iter().all(|v| *v == DVec3::ZERO));
     }
 }
