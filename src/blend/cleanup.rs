@@ -677,7 +677,8 @@ mod tests {
         let sum: Vec<DVec3> = (0..m).map(|j| line(j) * 3.0).collect();
         let x = smooth(&[3.0; 12], &sum, 4.0, false);
         assert!((0..m).all(|j| (x[j] - line(j)).length() < 1e-9), "{x:?}");
-        // Weights on a few frames only: the curve passes near them and is smooth between.
+        // On a loop, the same value on a few frames only: a constant has no second differences,
+        // so the curve is that value everywhere (nothing pulls the unweighted frames to zero).
         let mut weight = vec![0.0; m];
         let mut sum = vec![DVec3::ZERO; m];
         for j in [2, 3, 8, 9] {

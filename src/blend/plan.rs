@@ -92,7 +92,8 @@ pub struct ResultReport {
     pub after_cleanup: Figures,
     /// Jerk of the blend over the weighted jerk of the sources.
     pub jerk_ratio: f64,
-    /// Largest root drop the clean-up needed, in leg scales.
+    /// Largest drop of the root the clean-up made (where a leg could not reach, and where the
+    /// root fell to keep a stance leg's length), in leg scales.
     pub max_root_drop: f64,
 }
 
