@@ -302,9 +302,18 @@ pub fn clean(
     let n = frames.len();
     let positions =
         |frames: &[Pose]| -> Vec<Vec<DVec3>> { frames.iter().map(|p| rig.positions(p)).collect() };
-    let shift = root_shift(legs, goals, &positions(frames), dt, looping);
+    let stance = |ends| Stance {
+        legs,
+        goals,
+        ends,
+        dt,
+        looping,
+    };
+    let before = positions(frames);
+    let shift = stance(&before).root_shift();
     move_roots(rig, frames, &shift);
-    let rise = root_rise(legs, goals, &positions(frames), dt, looping);
+    let shifted = positions(frames);
+    let rise = stance(&shifted).root_rise();
     move_roots(rig, frames, &rise);
     let ends = positions(frames);
     // Per leg and frame: where the IK puts the foot, and how much of that pose applies.
@@ -402,51 +411,63 @@ fn move_roots(rig: &Rig, frames: &mut [Pose], offset: &[DVec3]) {
     }
 }
 
-/// The root's horizontal shift per frame (world units): a smooth curve ([`smooth`],
-/// [`SHIFT_SECONDS`]) through the mean horizontal correction (target minus the foot's own
-/// position in `ends`) of the feet planted at each frame. In single support it takes up the
-/// stance foot's correction, so the hip moves with it and the leg keeps its shape.
-fn root_shift(
-    legs: &[Leg],
-    goals: &[LegGoal],
-    ends: &[Vec<DVec3>],
+/// The legs' goals over a clip whose joints are at `ends` per frame (`dt` seconds apart; on a
+/// loop the last frame repeats the first): what the root's curves are found from.
+struct Stance<'a> {
+    legs: &'a [Leg],
+    goals: &'a [LegGoal],
+    ends: &'a [Vec<DVec3>],
     dt: f64,
     looping: bool,
-) -> Vec<DVec3> {
-    let m = distinct(ends.len(), looping);
-    let mut weight = vec![0.0f64; m];
-    let mut sum = vec![DVec3::ZERO; m];
-    for (leg, g) in legs.iter().zip(goals) {
-        for j in (0..m).filter(|&j| g.planted[j]) {
-            weight[j] += 1.0;
-            sum[j] += flat(g.target[j] - ends[j][leg.end()]);
-        }
-    }
-    smooth(&weight, &sum, SHIFT_SECONDS / dt, looping)
 }
 
-/// The root's rise (fall where negative) per frame (world units, along [`UP`]): a smooth curve
-/// ([`smooth`], [`RISE_SECONDS`]) through the heights that keep each leg's hip-ankle distance
-/// as the blend had it while its foot is moved onto its target, in contact and in the eases
-/// around it (weighted by how much of the correction applies there). Each leg weighs by how
-/// straight it is, 1 / (1.0001 - extension): the nearer the knee is to straight, the more a
-/// change of the leg's length would turn it.
-fn root_rise(
-    legs: &[Leg],
-    goals: &[LegGoal],
-    ends: &[Vec<DVec3>],
-    dt: f64,
-    looping: bool,
-) -> Vec<DVec3> {
-    let m = distinct(ends.len(), looping);
-    let mut weight = vec![0.0f64; m];
-    let mut sum = vec![DVec3::ZERO; m];
-    for (leg, g) in legs.iter().zip(goals) {
+impl Stance<'_> {
+    /// The smooth curve ([`smooth`], time scale `seconds`) through the values that `add`
+    /// gives each distinct frame, as `(weight, weight x value)` sums.
+    fn curve(&self, seconds: f64, add: impl FnOnce(usize, &mut [f64], &mut [DVec3])) -> Vec<DVec3> {
+        let m = distinct(self.ends.len(), self.looping);
+        let (mut weight, mut sum) = (vec![0.0f64; m], vec![DVec3::ZERO; m]);
+        add(m, &mut weight, &mut sum);
+        smooth(&weight, &sum, seconds / self.dt, self.looping)
+    }
+
+    /// The root's horizontal shift per frame (world units): a smooth curve
+    /// ([`SHIFT_SECONDS`]) through the mean horizontal correction (target minus the foot's own
+    /// position) of the feet planted at each frame. In single support it takes up the stance
+    /// foot's correction, so the hip moves with it and the leg keeps its shape.
+    fn root_shift(&self) -> Vec<DVec3> {
+        self.curve(SHIFT_SECONDS, |m, weight, sum| {
+            for (leg, g) in self.legs.iter().zip(self.goals) {
+                for j in (0..m).filter(|&j| g.planted[j]) {
+                    weight[j] += 1.0;
+                    sum[j] += flat(g.target[j] - self.ends[j][leg.end()]);
+                }
+            }
+        })
+    }
+
+    /// The root's rise (fall where negative) per frame (world units, along [`UP`]): a smooth
+    /// curve ([`RISE_SECONDS`]) through the heights that keep each leg's hip-ankle distance as
+    /// the blend had it while its foot is moved onto its target, in contact and in the eases
+    /// around it (weighted by how much of the correction applies there). Each leg weighs by
+    /// how straight it is, 1 / (1.0001 - extension): the nearer the knee is to straight, the
+    /// more a change of the leg's length would turn it.
+    fn root_rise(&self) -> Vec<DVec3> {
+        self.curve(RISE_SECONDS, |m, weight, sum| {
+            for (leg, g) in self.legs.iter().zip(self.goals) {
+                self.leg_rises(leg, g, &mut weight[..m], &mut sum[..m]);
+            }
+        })
+    }
+
+    /// [`Stance::root_rise`]'s sums for one leg.
+    fn leg_rises(&self, leg: &Leg, g: &LegGoal, weight: &mut [f64], sum: &mut [DVec3]) {
+        let (ends, m) = (self.ends, weight.len());
         let Some([a, b, c]) = leg.ik else {
-            continue;
+            return;
         };
         let own: Vec<DVec3> = ends.iter().map(|p| p[leg.end()]).collect();
-        let corrections = corrections(&g.planted, &g.target, &own, dt, looping);
+        let corrections = corrections(&g.planted, &g.target, &own, self.dt, self.looping);
         for (j, correction) in corrections.iter().enumerate().take(m) {
             let (Some(correction), p) = (correction, &ends[j]) else {
                 continue;
@@ -468,7 +489,6 @@ fn root_rise(
             sum[j] += UP * (rise * w);
         }
     }
-    smooth(&weight, &sum, RISE_SECONDS / dt, looping)
 }
 
 /// Frames of a clip of `n` that are distinct (a loop's last frame repeats its first).
