@@ -190,18 +190,22 @@ fn positions_track(rig: &Rig, poses: &[Pose], dt: f64, looping: bool) -> Track {
         poses.iter().map(|p| rig.positions(p)).collect(),
         dt,
         looping,
+        rig.root,
     )
 }
 
 /// A track of joint positions `pos`, one frame every `dt`; a looping motion (last frame =
 /// first) becomes a looping track without the repeated frame, so speeds and steps at its ends
 /// wrap as it plays.
-fn track_of(mut pos: Vec<Vec<DVec3>>, dt: f64, looping: bool) -> Track {
+fn track_of(mut pos: Vec<Vec<DVec3>>, dt: f64, looping: bool, root: usize) -> Track {
     let looping = looping && pos.len() > 2;
+    let mut travel = DVec3::ZERO;
     if looping {
-        pos.pop();
+        let back = pos.pop().expect("more than two frames");
+        travel = flat(back[root] - pos[0][root]);
     }
     Track {
+        travel,
         start: 0.0,
         dt,
         looping,
@@ -547,7 +551,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
         .collect();
     let dt = 1.0 / phase.fps;
     let before = positions_track(rig, &frames, dt, false);
-    let before_loop = track_of(before.pos.clone(), dt, phase.looping);
+    let before_loop = track_of(before.pos.clone(), dt, phase.looping, rig.root);
     let vote = |l: usize, t: [f64; 2], half: [f64; 2]| planted_by_vote([an_a, an_b], w, l, t, half);
     let voted: Vec<Vec<bool>> = (0..ch.legs.len())
         .map(|l| match w == 0.5 {

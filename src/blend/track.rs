@@ -4,7 +4,7 @@
 //! without repeating its first frame, and frame indices wrap around; any other clip is sampled
 //! from its first to its last key.
 
-use super::rig::{Clip, Path, Pose, Rig};
+use super::rig::{flat, Clip, Path, Pose, Rig};
 use glam::DVec3;
 
 /// Smallest size (scene units) a skeleton is given, so that a collapsed rest pose still scales
@@ -24,6 +24,9 @@ pub struct Track {
     pub looping: bool,
     /// World positions, frame by frame.
     pub pos: Vec<Vec<DVec3>>,
+    /// On a loop, the root's horizontal travel from the first frame to where the loop comes
+    /// back to it (the frame after the last); zero otherwise.
+    pub travel: DVec3,
 }
 
 impl Track {
@@ -36,15 +39,20 @@ impl Track {
         } else {
             1.0 / rate
         };
-        let frames = if looping { intervals } else { intervals + 1 };
-        let pos = (0..frames)
+        let mut pos: Vec<Vec<DVec3>> = (0..=intervals)
             .map(|i| rig.positions(&clip.pose(rig, clip.start + i as f64 * dt)))
             .collect();
+        let mut travel = DVec3::ZERO;
+        if looping {
+            let back = pos.pop().expect("at least two frames");
+            travel = flat(back[rig.root] - pos[0][rig.root]);
+        }
         Track {
             start: clip.start,
             dt,
             looping,
             pos,
+            travel,
         }
     }
 
