@@ -590,11 +590,12 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
         fps: phase.fps,
         w,
     };
-    let naive = figures.naive(a, b, phase.looping, &vote);
+    let taken = [Taken::of(a, an_a, &spans[0]), Taken::of(b, an_b, &spans[1])];
+    let naive = figures.naive(&taken, phase.looping, &vote);
     let after = figures.of(&positions_track(rig, &frames, dt, phase.looping), &voted);
     let fig = [
-        figures.of(&figures.source(a, an_a.looping(), &spans[0]), &[]),
-        figures.of(&figures.source(b, an_b.looping(), &spans[1]), &[]),
+        figures.of(&figures.source(&taken[0]), &[]),
+        figures.of(&figures.source(&taken[1]), &[]),
     ];
     let source_jerk = (1.0 - w) * fig[0].jerk + w * fig[1].jerk;
     let result = ResultReport {
@@ -668,29 +669,21 @@ impl Measured<'_> {
         )
     }
 
-    /// A source clip resampled at the output rate as the blend takes it: a looping clip whole,
-    /// another over the cycles `spans` (start, period) the blend uses, so that a capture's
-    /// standing start and stop do not count in the figures it is compared with (CMU's
-    /// start-walk-stop blended with itself measured a jerk ratio of 0.80 at weight 0, where
-    /// the blend is its cycle unchanged).
-    fn source(&self, clip: &Clip, looping: bool, spans: &[(f64, f64)]) -> Track {
-        let end = clip.start + clip.duration();
-        let (t0, t1) = match (looping, spans.first(), spans.last()) {
-            (false, Some(&(first, _)), Some(&(last, period))) => {
-                (first.max(clip.start), (last + period).min(end))
-            }
-            _ => (clip.start, end),
-        };
-        let length = (t1 - t0).max(0.0);
+    /// A source clip resampled at the output rate over the part the blend takes.
+    fn source(&self, t: &Taken) -> Track {
+        let length = t.length();
         let n = ((length * self.fps).round() as usize).max(1);
         let poses: Vec<Pose> = (0..=n)
-            .map(|i| clip.pose(self.rig, t0 + i as f64 * length / n as f64))
+            .map(|i| {
+                t.clip
+                    .pose(self.rig, t.start + i as f64 * length / n as f64)
+            })
             .collect();
         positions_track(
             self.rig,
             &poses,
             length.max(MIN_DURATION) / n as f64,
-            looping,
+            t.looping,
         )
     }
 
@@ -698,22 +691,28 @@ impl Measured<'_> {
     /// sliding measured where the sources plant a foot by `vote`.
     fn naive(
         &self,
-        a: &Clip,
-        b: &Clip,
+        [a, b]: &[Taken; 2],
         looping: bool,
         vote: &dyn Fn(usize, [f64; 2], [f64; 2]) -> bool,
     ) -> Figures {
         let w = self.w;
-        let dur = (1.0 - w) * a.duration() + w * b.duration();
+        let (la, lb) = (a.length(), b.length());
+        let dur = (1.0 - w) * la + w * lb;
         let n = ((dur * self.fps).round() as usize).max(1);
         let at = |i: usize| {
             let u = i as f64 / n as f64;
-            (a.start + u * a.duration(), b.start + u * b.duration())
+            (a.start + u * la, b.start + u * lb)
         };
         let poses: Vec<Pose> = (0..=n)
-            .map(|i| mix(&a.pose(self.rig, at(i).0), &b.pose(self.rig, at(i).1), w))
+            .map(|i| {
+                mix(
+                    &a.clip.pose(self.rig, at(i).0),
+                    &b.clip.pose(self.rig, at(i).1),
+                    w,
+                )
+            })
             .collect();
-        let half = [0.5 * a.duration() / n as f64, 0.5 * b.duration() / n as f64];
+        let half = [0.5 * la / n as f64, 0.5 * lb / n as f64];
         let expected: Vec<Vec<bool>> = (0..self.ch.legs.len())
             .map(|l| (0..=n).map(|i| vote(l, [at(i).0, at(i).1], half)).collect())
             .collect();
@@ -721,6 +720,43 @@ impl Measured<'_> {
             &positions_track(self.rig, &poses, dur.max(MIN_DURATION) / n as f64, looping),
             &expected,
         )
+    }
+}
+
+/// The part of a source clip the blend takes, which the figures it is compared with (the
+/// source's own, the naive blend's) are measured on: a looping clip whole, another (a capture)
+/// over the cycles the blend uses, so that its standing start and stop do not count (CMU's
+/// start-walk-stop blended with itself measured a jerk ratio of 0.80 at weight 0, where the
+/// blend is its cycle unchanged; its naive blend slid 0.0041 leg a frame at weight 0.25, the
+/// same blend over the cycles 0.0052).
+struct Taken<'c> {
+    clip: &'c Clip,
+    /// Start and end on the clip's timeline (seconds).
+    start: f64,
+    end: f64,
+    looping: bool,
+}
+
+impl<'c> Taken<'c> {
+    fn of(clip: &'c Clip, an: &Analysis, spans: &[(f64, f64)]) -> Taken<'c> {
+        let looping = an.looping();
+        let end = clip.start + clip.duration();
+        let (start, end) = match (looping, spans.first(), spans.last()) {
+            (false, Some(&(first, _)), Some(&(last, period))) => {
+                (first.max(clip.start), (last + period).min(end))
+            }
+            _ => (clip.start, end),
+        };
+        Taken {
+            clip,
+            start,
+            end,
+            looping,
+        }
+    }
+
+    fn length(&self) -> f64 {
+        (self.end - self.start).max(0.0)
     }
 }
 
