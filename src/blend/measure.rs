@@ -171,15 +171,20 @@ mod tests {
         }
     }
 
-    #[test]
-    fn figures_of_a_loop_do_not_depend_on_where_it_starts() {
-        let leg = Leg {
+    /// The treadmill's one leg: joint 1, its foot.
+    fn foot() -> Leg {
+        Leg {
             chain: vec![1],
             ik: None,
             side: Side::Left,
             length: 1.0,
             name: "foot".into(),
-        };
+        }
+    }
+
+    #[test]
+    fn figures_of_a_loop_do_not_depend_on_where_it_starts() {
+        let leg = foot();
         let figures = |start: usize| {
             figures(
                 &treadmill(start),
@@ -215,13 +220,7 @@ mod tests {
         // The same walk with its root swaying sideways and back within the loop (as the
         // clean-up's shift moves it): the feet are where they were, so the sliding is the same;
         // the root's last frame no longer tells the loop's travel.
-        let leg = Leg {
-            chain: vec![1],
-            ik: None,
-            side: Side::Left,
-            length: 1.0,
-            name: "foot".into(),
-        };
+        let leg = foot();
         let still = treadmill(0);
         let mut swaying = treadmill(0);
         let n = swaying.len();
