@@ -96,7 +96,7 @@ pub fn pin(
     let n = planted.len();
     let loop_time = times[n - 1] - times[0];
     let mut out = target.to_vec();
-    let distinct = if looping && n > 1 { n - 1 } else { n };
+    let distinct = distinct(n, looping);
     let mut done = vec![false; n];
     for s in 0..distinct {
         if !planted[s] || done[s] {
@@ -211,18 +211,9 @@ pub fn corrections(
     looping: bool,
 ) -> Vec<Option<Correction>> {
     let n = planted.len();
-    let distinct = if looping && n > 1 { n - 1 } else { n };
+    let distinct = distinct(n, looping);
     let off = |j: usize| target[j] - ends[j];
-    let at = |j: usize, d: i64| -> Option<usize> {
-        let i = j as i64 + d;
-        if (0..distinct as i64).contains(&i) {
-            Some(i as usize)
-        } else if looping {
-            Some(i.rem_euclid(distinct as i64) as usize)
-        } else {
-            None
-        }
-    };
+    let at = |j: usize, d: i64| wrap(j as i64 + d, distinct, looping);
     // The nearest planted frame in direction `dir` from `j`, and its distance in frames.
     let nearest = |j: usize, dir: i64| -> Option<(usize, usize)> {
         (1..distinct).find_map(|d| {
@@ -377,10 +368,9 @@ pub fn clean(
                 .fold(0.0, f64::max)
         })
         .collect();
+    let lowered: Vec<DVec3> = drop.iter().map(|d| -UP * *d).collect();
+    move_roots(rig, frames, &lowered);
     for (j, pose) in frames.iter_mut().enumerate() {
-        if drop[j] > 0.0 {
-            super::align::move_skeleton(rig, pose, &DMat4::from_translation(-UP * drop[j]));
-        }
         for (l, (leg, want)) in legs.iter().zip(&wants).enumerate() {
             let Some((want, weight)) = want[j] else {
                 continue;
@@ -500,6 +490,15 @@ fn distinct(n: usize, looping: bool) -> usize {
     }
 }
 
+/// Distinct frame `i` of `m`: wrapped round on a loop, `None` past either end otherwise.
+fn wrap(i: i64, m: usize, looping: bool) -> Option<usize> {
+    if looping {
+        Some(i.rem_euclid(m as i64) as usize)
+    } else {
+        usize::try_from(i).ok().filter(|&i| i < m)
+    }
+}
+
 /// The curve x over a clip's distinct frames that minimises sum_j (weight_j |x_j|^2 -
 /// 2 x_j . sum_j) + lambda sum_j |x_{j-1} - 2 x_j + x_{j+1}|^2 (the weighted least squares
 /// through the values `sum_j / weight_j`, second differences wrapping on a loop), lambda =
@@ -526,13 +525,7 @@ fn smooth(weight: &[f64], sum: &[DVec3], frames: f64, looping: bool) -> Vec<DVec
         for (j, w) in weight.iter().enumerate() {
             band.add(at[j], at[j], w + 1e-12 * mean);
         }
-        let frame = |j: i64| -> Option<usize> {
-            if looping {
-                Some(j.rem_euclid(m as i64) as usize)
-            } else {
-                usize::try_from(j).ok().filter(|&j| j < m)
-            }
-        };
+        let frame = |j: i64| wrap(j, m, looping);
         for c in 0..m as i64 {
             let (Some(p), Some(q), Some(r)) = (frame(c - 1), frame(c), frame(c + 1)) else {
                 continue;
@@ -802,10 +795,7 @@ mod tests {
             let lambda = frames.powi(4) * weight.iter().sum::<f64>() / weighted;
             let mut y: Vec<DVec3> = (0..m).map(|j| x[j] * weight[j]).collect();
             for c in 0..m as i64 {
-                let f = |j: i64| match looping {
-                    true => Some(j.rem_euclid(m as i64) as usize),
-                    false => usize::try_from(j).ok().filter(|&j| j < m),
-                };
+                let f = |j: i64| wrap(j, m, looping);
                 let (Some(p), Some(q), Some(r)) = (f(c - 1), f(c), f(c + 1)) else {
                     continue;
                 };

@@ -195,22 +195,10 @@ fn positions_track(rig: &Rig, poses: &[Pose], dt: f64, looping: bool) -> Track {
 }
 
 /// A track of joint positions `pos`, one frame every `dt`; a looping motion (last frame =
-/// first) becomes a looping track without the repeated frame, so speeds and steps at its ends
-/// wrap as it plays.
-fn track_of(mut pos: Vec<Vec<DVec3>>, dt: f64, looping: bool, root: usize) -> Track {
+/// first) of more than two frames becomes a looping track (see [`Track::closed`]).
+fn track_of(pos: Vec<Vec<DVec3>>, dt: f64, looping: bool, root: usize) -> Track {
     let looping = looping && pos.len() > 2;
-    let mut travel = DVec3::ZERO;
-    if looping {
-        let back = pos.pop().expect("more than two frames");
-        travel = flat(back[root] - pos[0][root]);
-    }
-    Track {
-        travel,
-        start: 0.0,
-        dt,
-        looping,
-        pos,
-    }
+    Track::closed(0.0, dt, looping, pos, root)
 }
 
 /// Contact flags of `leg` per pose of `poses` (see [`positions_track`]; the repeated last pose

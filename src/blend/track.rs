@@ -39,16 +39,30 @@ impl Track {
         } else {
             1.0 / rate
         };
-        let mut pos: Vec<Vec<DVec3>> = (0..=intervals)
+        let pos = (0..=intervals)
             .map(|i| rig.positions(&clip.pose(rig, clip.start + i as f64 * dt)))
             .collect();
+        Track::closed(clip.start, dt, looping, pos, rig.root)
+    }
+
+    /// The track of frames `pos` of joint positions, `dt` apart from `start`, the last frame
+    /// the first again one loop on: on a loop that repeated frame is dropped, so speeds and
+    /// steps at the ends wrap as it plays, and kept as the loop's travel (of joint `root`);
+    /// otherwise every frame is kept.
+    pub fn closed(
+        start: f64,
+        dt: f64,
+        looping: bool,
+        mut pos: Vec<Vec<DVec3>>,
+        root: usize,
+    ) -> Track {
         let mut travel = DVec3::ZERO;
         if looping {
-            let back = pos.pop().expect("at least two frames");
-            travel = flat(back[rig.root] - pos[0][rig.root]);
+            let back = pos.pop().expect("a loop's frames and its repeated one");
+            travel = flat(back[root] - pos[0][root]);
         }
         Track {
-            start: clip.start,
+            start,
             dt,
             looping,
             pos,
