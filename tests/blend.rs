@@ -68,6 +68,25 @@ fn blend_report(input: &Path, a: &str, b: &str, w: f64, out: &Path, extra: &[&st
     serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap()
 }
 
+/// `inbetween blend A.bvh B.bvh --weight WEIGHTS -o out` and its report (written beside `out`).
+fn blend_bvh_report(a: &Path, b: &Path, weights: &str, out: &Path) -> Value {
+    let rep = out.with_extension("json");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    run_ok(&[
+        "blend",
+        &s(a),
+        &s(b),
+        "-o",
+        &s(out),
+        "-q",
+        "--weight",
+        weights,
+        "--report",
+        &s(&rep),
+    ]);
+    serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap()
+}
+
 fn sliding(figures: &Value) -> f64 {
     figures["sliding"]["mean"].as_f64().unwrap()
 }
@@ -591,21 +610,8 @@ fn cmu_start_walk_stop_blends_with_itself_half_a_cycle_later() {
     let capture = fx.join("bvh/bvh11_131_01_start_walk_stop.bvh");
     let later = dir.path().join("later.bvh");
     std::fs::write(&later, bvh_from_frame(&capture, 74)).unwrap();
-    let (out, rep) = (dir.path().join("out.bvh"), dir.path().join("out.json"));
-    let s = |p: &Path| p.to_str().unwrap().to_owned();
-    run_ok(&[
-        "blend",
-        &s(&capture),
-        &s(&later),
-        "-o",
-        &s(&out),
-        "-q",
-        "--weight",
-        "0,0.25,0.5,0.75,1",
-        "--report",
-        &s(&rep),
-    ]);
-    let reports: Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+    let out = dir.path().join("out.bvh");
+    let reports = blend_bvh_report(&capture, &later, "0,0.25,0.5,0.75,1", &out);
     for r in reports.as_array().unwrap() {
         let w = r["weight"].as_f64().unwrap();
         let res = &r["result"];
@@ -694,21 +700,12 @@ fn bvh_captures_blend_into_bvh() {
     let run_later = dir.path().join("run_later.bvh");
     std::fs::write(&run_later, bvh_from_frame(&run, 46)).unwrap();
     for (name, second) in [("", run.clone()), (" re-phased", run_later)] {
-        let rep3 = dir.path().join("three.json");
-        let (three_bvh, walk, second) = (dir.path().join("three.bvh"), s(&walk), s(&second));
-        run_ok(&[
-            "blend",
+        let three = blend_bvh_report(
             &walk,
             &second,
-            "-o",
-            &s(&three_bvh),
-            "-q",
-            "--weight",
             "0.25,0.5,0.75",
-            "--report",
-            &s(&rep3),
-        ]);
-        let three: Value = serde_json::from_slice(&std::fs::read(&rep3).unwrap()).unwrap();
+            &dir.path().join("three.bvh"),
+        );
         check_cmu_figures(&three, name);
     }
     // Refusals.
