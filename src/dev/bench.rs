@@ -40,11 +40,13 @@ pub struct BenchRow {
     pub factor_nonzeros: usize,
     pub symbolic_s: f64,
     pub setup_s: f64,
+    /// Median milliseconds of a seed frame solved alone, one frame after the other, each on
+    /// every thread (its triangles' terms and the independent parts of its solves).
     pub seed_frame_ms: f64,
     /// Fastest single seed frame (the VM's noise only ever adds time).
     pub seed_frame_min_ms: f64,
     /// Seed milliseconds per frame where frames are solved [`MAX_BLOCK`] at a time (one pass
-    /// over the factor for the block; 1 thread, median over blocks).
+    /// over the factor for the block; median over blocks).
     pub seed_block_frame_ms: f64,
     /// Set-up of a spline segment in the middle of 8 keys (the two keys alternating): the
     /// polar decompositions of its whole window plus the numeric factorization.
@@ -305,7 +307,7 @@ fn run_peer(
 /// A markdown table of the rows.
 pub fn table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| triangles | vertices | nnz(L) | symbolic s | set-up s | spline set-up s (8 keys) | seed ms/frame (1 thread, median / min) | seed ms/frame, 4 solved at once | spline ms/frame (median / min) | spline / seed (min; paired median) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| triangles | vertices | nnz(L) | symbolic s | set-up s | spline set-up s (8 keys) | seed ms/frame (median / min) | seed ms/frame, 4 solved at once | spline ms/frame (median / min) | spline / seed (min; paired median) | linear ms/frame | seed frames/s (all threads) | peak RSS MiB | peer set-up s | peer ms/frame | set-up ratio | frame ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let opt = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));

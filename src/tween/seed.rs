@@ -7,7 +7,7 @@
 use super::gradient::{
     axis_angle_matrix, deformation, frame, gradient_operator, polar_of_triangle, quat_log,
 };
-use super::solve::{scatter, Pattern, Placement};
+use super::solve::{in_order, scatter, Pattern, Placement};
 use anyhow::Result;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -114,13 +114,18 @@ impl SeedSegment {
     /// The right-hand side of frame `t` and its components' centroids.
     fn system(&self, t: f64) -> (Vec<[f64; 3]>, Vec<DVec3>) {
         let mut rhs = vec![[0.0f64; 3]; self.x0.len()];
-        for tri in &self.triangles {
-            let r = axis_angle_matrix(tri.axis, tri.angle * t);
-            // T(t) g = R(t) ((1-t) g + t S g)
-            let v1 = r * (tri.g[0] * (1.0 - t) + tri.sg[0] * t);
-            let v2 = r * (tri.g[1] * (1.0 - t) + tri.sg[1] * t);
-            scatter(&mut rhs, tri.corners, v1, v2);
-        }
+        in_order(
+            self.triangles.len(),
+            |k| {
+                let tri = &self.triangles[k];
+                let r = axis_angle_matrix(tri.axis, tri.angle * t);
+                // T(t) g = R(t) ((1-t) g + t S g)
+                let v1 = r * (tri.g[0] * (1.0 - t) + tri.sg[0] * t);
+                let v2 = r * (tri.g[1] * (1.0 - t) + tri.sg[1] * t);
+                (v1, v2)
+            },
+            |k, (v1, v2)| scatter(&mut rhs, self.triangles[k].corners, v1, v2),
+        );
         // Centroid path per component; untouched vertices follow the straight line.
         let centroids: Vec<DVec3> = self
             .centroid0

@@ -166,6 +166,8 @@ pub struct Factor {
     row_vals: Vec<f64>,
     /// Vertices held at 0 by a Dirichlet row.
     pub pinned: Vec<bool>,
+    /// The columns in independent parts, for the solves on several threads.
+    parts: Parts,
 }
 
 impl Factor {
@@ -269,7 +271,30 @@ impl Factor {
             diag,
             columns,
             pinned,
-        })
+            parts: Parts::default(),
+        }
+        .checked())
+    }
+
+    /// Check, once, what the solves' unchecked accesses rely on: every row copy's pointer
+    /// within its arrays and its indices below n, every column's entries within its values
+    /// and its rows below n, the order a permutation's worth of indices below n. (Checked at
+    /// every solve before: at 100k triangles a pass over 3M indices a frame.)
+    fn checked(self) -> Factor {
+        let n = self.diag.len();
+        self.columns.check();
+        assert_eq!(self.columns.block.len(), n);
+        assert!(self.perm.len() == n && self.perm.iter().all(|&p| (p as usize) < n));
+        if !self.row_ptr.is_empty() {
+            assert_eq!(self.row_ptr.len(), n + 1);
+            assert!(self.row_ptr.windows(2).all(|w| w[0] <= w[1]));
+            assert!(self.row_ptr[n] <= self.cols.len() && self.cols.len() == self.row_vals.len());
+            assert!(self.cols.iter().all(|&c| (c as usize) < n));
+        }
+        Factor {
+            parts: Parts::of(&self.columns, rayon::current_num_threads()),
+            ..self
+        }
     }
 
     /// Keep only the column-oriented copy of L (half the memory, a slower forward pass):
@@ -312,71 +337,282 @@ impl Factor {
     /// [`Factor::solve_block`] on right-hand sides already in the factor's order (see
     /// [`Factor::order`]), in place: no copy of the block.
     ///
+    /// The independent [`Parts`] of the factor are solved on all threads (the forward pass
+    /// when the row copy is kept; the backward pass always); each entry of the result comes
+    /// from the same operations in the same order as on one thread, so the same bits.
+    ///
     /// On an x86-64 processor with AVX2 the same code is compiled for it (vectors of four
     /// instead of two): the same multiplications and additions in the same order (no fused
     /// multiply-add), so the same bits on every machine.
     pub fn solve_permuted<const M: usize>(&self, y: &mut [[f64; M]]) {
+        let n = self.diag.len();
+        assert_eq!(y.len(), n);
+        let rows = Rows(y.as_mut_ptr());
+        let parts = &self.parts;
+        // SAFETY: every range lies within 0..n (`Parts::of`), and the arrays are as
+        // `Factor::checked` asserted; parts run side by side only where `Parts::of` found that
+        // each reads and writes its own rows and reads no row another part writes.
+        unsafe {
+            // L z = P b
+            if self.row_ptr.is_empty() {
+                // Only the column copy is kept: scatter each finished value down its column,
+                // into rows of other parts too, so on one thread.
+                self.pass(Pass::ForwardScatter, rows, 0..n);
+            } else {
+                parts
+                    .ranges
+                    .par_iter()
+                    .for_each(|r| self.pass(Pass::Forward, rows, r.clone()));
+                for r in &parts.top {
+                    self.pass(Pass::Forward, rows, r.clone());
+                }
+            }
+            // L^T w = z
+            for r in parts.top.iter().rev() {
+                self.pass(Pass::Backward, rows, r.clone());
+            }
+            parts
+                .ranges
+                .par_iter()
+                .for_each(|r| self.pass(Pass::Backward, rows, r.clone()));
+        }
+    }
+
+    /// One pass over the columns `range` of `y` (see [`Pass`]), compiled for AVX2 where the
+    /// processor has it.
+    ///
+    /// # Safety
+    /// `range` within `0..n`, `y` holding n rows, and no row this pass reads or writes written
+    /// by another thread meanwhile.
+    unsafe fn pass<const M: usize>(&self, pass: Pass, y: Rows<M>, range: std::ops::Range<usize>) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked just above).
-            unsafe { self.solve_permuted_avx2(y) };
+            self.pass_avx2(pass, y, range);
             return;
         }
-        self.solve_permuted_portable(y);
+        self.pass_portable(pass, y, range);
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn solve_permuted_avx2<const M: usize>(&self, y: &mut [[f64; M]]) {
-        self.solve_permuted_portable(y);
+    unsafe fn pass_avx2<const M: usize>(
+        &self,
+        pass: Pass,
+        y: Rows<M>,
+        range: std::ops::Range<usize>,
+    ) {
+        self.pass_portable(pass, y, range);
     }
 
     #[inline(always)]
-    fn solve_permuted_portable<const M: usize>(&self, y: &mut [[f64; M]]) {
-        let n = self.diag.len();
-        assert_eq!(y.len(), n);
-        self.columns.check();
-        assert_eq!(self.columns.block.len(), n);
-        assert!(self.perm.iter().all(|&p| (p as usize) < n));
-        let by_rows = !self.row_ptr.is_empty();
-        if by_rows {
-            assert_eq!(self.row_ptr.len(), n + 1);
-            assert!(self.row_ptr[n] <= self.cols.len() && self.cols.len() == self.row_vals.len());
-            assert!(self.cols.iter().all(|&c| (c as usize) < n));
-        }
-        // SAFETY (all unchecked accesses below): row_ptr is non-decreasing and bounded by its
-        // index array's length, which equals its value array's length, every index is below n,
-        // and every column's entries lie within vals and its rows below n (checked above; the
-        // arrays are immutable after construction).
-        unsafe {
-            // L z = P b
-            if by_rows {
+    unsafe fn pass_portable<const M: usize>(
+        &self,
+        pass: Pass,
+        y: Rows<M>,
+        range: std::ops::Range<usize>,
+    ) {
+        match pass {
+            Pass::Forward => {
                 // Gather along each row of L.
-                for i in 0..n {
+                for i in range {
                     gather_step(y, i, &self.cols, &self.row_vals, &self.row_ptr, &self.diag);
                 }
-            } else {
-                // Only the column copy is kept: scatter each finished value down its column.
-                for j in 0..n {
+            }
+            Pass::ForwardScatter => {
+                for j in range {
                     let d = 1.0 / *self.diag.get_unchecked(j);
-                    let v = *y.get_unchecked(j);
+                    let v = y.get(j);
                     let w: [f64; M] = std::array::from_fn(|c| v[c] * d);
-                    *y.get_unchecked_mut(j) = w;
+                    y.set(j, w);
                     let (k, inside, below) = self.columns.column(j);
                     let vals = self.columns.vals.get_unchecked(k..);
                     scatter_column(y, vals, inside, below, w);
                 }
             }
-            // L^T w = z: gather along each column of L.
-            for j in (0..n).rev() {
-                let (k, inside, below) = self.columns.column(j);
-                let vals = self.columns.vals.get_unchecked(k..);
-                let s = gather_column(y, vals, inside, below);
-                let b = *y.get_unchecked(j);
-                let d = 1.0 / *self.diag.get_unchecked(j);
-                *y.get_unchecked_mut(j) = std::array::from_fn(|c| (b[c] - s[c]) * d);
+            Pass::Backward => {
+                // Gather along each column of L.
+                for j in range.rev() {
+                    let (k, inside, below) = self.columns.column(j);
+                    let vals = self.columns.vals.get_unchecked(k..);
+                    let s = gather_column(y, vals, inside, below);
+                    let b = y.get(j);
+                    let d = 1.0 / *self.diag.get_unchecked(j);
+                    y.set(j, std::array::from_fn(|c| (b[c] - s[c]) * d));
+                }
             }
         }
+    }
+}
+
+/// One pass of the triangular solves over a range of columns: forward (`L z = b`) gathering
+/// along L's rows (row copy kept) or scattering down its columns (column copy only, ascending),
+/// or backward (`L^T w = z`, gathering along L's columns, descending).
+#[derive(Clone, Copy)]
+enum Pass {
+    Forward,
+    ForwardScatter,
+    Backward,
+}
+
+/// The right-hand sides being solved, rows of `M` values, shared by the threads of a solve
+/// (each writing its own rows: see [`Parts`]).
+#[derive(Clone, Copy)]
+struct Rows<const M: usize>(*mut [f64; M]);
+
+// SAFETY: the threads of a solve write disjoint rows and read no row another writes meanwhile
+// ([`Factor::solve_permuted`]).
+unsafe impl<const M: usize> Send for Rows<M> {}
+unsafe impl<const M: usize> Sync for Rows<M> {}
+
+impl<const M: usize> Rows<M> {
+    /// # Safety
+    /// `i` within the rows, not written meanwhile by another thread.
+    #[inline(always)]
+    unsafe fn get(self, i: usize) -> [f64; M] {
+        *self.0.add(i)
+    }
+
+    /// # Safety
+    /// As for [`Rows::get`], and not read meanwhile by another thread.
+    #[inline(always)]
+    unsafe fn set(self, i: usize, v: [f64; M]) {
+        *self.0.add(i) = v;
+    }
+}
+
+/// The factor's columns split for the solves on several threads: subtrees of the elimination
+/// tree of L's blocks (supernodes), each a range of consecutive columns (the order is a
+/// postorder) whose entries below the diagonal lie in its own range or in `top`, the columns
+/// above them (the separators of a nested dissection). Going forward a row of L gathers only
+/// from its subtree, going back a column only from its ancestors: the ranges are solved side
+/// by side, `top` alone (after them forward, before them back).
+#[derive(Default)]
+struct Parts {
+    /// Subtrees, ascending.
+    ranges: Vec<std::ops::Range<usize>>,
+    /// Every other column, as ascending ranges.
+    top: Vec<std::ops::Range<usize>>,
+}
+
+/// Fewest entries of L for the solves to be split (below, a solve takes well under 0.1 ms and
+/// the threads' hand-over would cost more than it saves).
+const PARTS_MIN_ENTRIES: usize = 100_000;
+
+impl Parts {
+    /// Split `columns` for `threads` threads: the largest subtree, from the roots down, is
+    /// split into its children (its block going to `top`) while it holds more than a thread's
+    /// share of the subtrees' entries. One range, all columns in `top`, where the factor is
+    /// small, one thread runs, or the blocks are not in the order this relies on (checked
+    /// entry by entry).
+    fn of(columns: &Columns, threads: usize) -> Parts {
+        let n = columns.block.len();
+        let all = Parts {
+            ranges: Vec::new(),
+            top: std::iter::once(0..n).collect(),
+        };
+        if threads < 2 || columns.vals.len() < PARTS_MIN_ENTRIES {
+            return all;
+        }
+        let blocks = columns.end.len();
+        // Block b's columns are start[b]..end[b], consecutive, blocks in order.
+        let start: Vec<usize> = std::iter::once(0)
+            .chain(columns.end.iter().map(|&e| e as usize))
+            .take(blocks)
+            .collect();
+        let in_order = (0..n).all(|j| {
+            let b = columns.block[j] as usize;
+            start[b] <= j && j < columns.end[b] as usize
+        });
+        if !in_order || blocks == 0 || columns.end[blocks - 1] as usize != n {
+            return all;
+        }
+        const ROOT: usize = usize::MAX;
+        let below = |b: usize| &columns.below[columns.below_ptr[b]..columns.below_ptr[b + 1]];
+        let parent: Vec<usize> = (0..blocks)
+            .map(|b| {
+                below(b)
+                    .iter()
+                    .min()
+                    .map_or(ROOT, |&r| columns.block[r as usize] as usize)
+            })
+            .collect();
+        if parent.iter().enumerate().any(|(b, &p)| p != ROOT && p <= b) {
+            return all;
+        }
+        // Each subtree's entries and first block; a postorder numbers a subtree b as
+        // first[b]..=b.
+        let mut work: Vec<usize> = (0..blocks)
+            .map(|b| columns.col_ptr[columns.end[b] as usize] - columns.col_ptr[start[b]])
+            .collect();
+        let mut first: Vec<usize> = (0..blocks).collect();
+        let mut count = vec![1usize; blocks];
+        for (b, &p) in parent.iter().enumerate() {
+            if p != ROOT {
+                work[p] += work[b];
+                first[p] = first[p].min(first[b]);
+                count[p] += count[b];
+            }
+        }
+        if (0..blocks).any(|b| count[b] != b + 1 - first[b]) {
+            return all;
+        }
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); blocks];
+        let mut roots = Vec::new();
+        for (b, &p) in parent.iter().enumerate() {
+            match p {
+                ROOT => roots.push(b),
+                p => children[p].push(b),
+            }
+        }
+        // Split the largest subtree while it outweighs a thread's share.
+        let mut heap: std::collections::BinaryHeap<(usize, usize)> =
+            roots.iter().map(|&b| (work[b], b)).collect();
+        let mut held: usize = heap.iter().map(|&(w, _)| w).sum();
+        while let Some(&(w, b)) = heap.peek() {
+            if w * threads <= held {
+                break;
+            }
+            heap.pop();
+            held -= w;
+            for &c in &children[b] {
+                heap.push((work[c], c));
+                held += work[c];
+            }
+        }
+        let mut ranges: Vec<std::ops::Range<usize>> = heap
+            .into_iter()
+            .map(|(_, b)| start[first[b]]..columns.end[b] as usize)
+            .collect();
+        ranges.sort_by_key(|r| r.start);
+        if ranges.len() < 2 {
+            return all;
+        }
+        // Label each column with its range (or none: top) and check every entry below the
+        // diagonal against it.
+        const TOP: u32 = u32::MAX;
+        let mut label = vec![TOP; n];
+        for (k, r) in ranges.iter().enumerate() {
+            label[r.clone()].fill(k as u32);
+        }
+        let fits = (0..blocks).all(|b| {
+            let own = label[start[b]];
+            (start[b]..columns.end[b] as usize).all(|j| label[j] == own)
+                && below(b)
+                    .iter()
+                    .all(|&r| label[r as usize] == own || label[r as usize] == TOP)
+                && (own != TOP || below(b).iter().all(|&r| label[r as usize] == TOP))
+        });
+        if !fits {
+            return all;
+        }
+        let mut top: Vec<std::ops::Range<usize>> = Vec::new();
+        for j in (0..n).filter(|&j| label[j] == TOP) {
+            match top.last_mut() {
+                Some(r) if r.end == j => r.end += 1,
+                _ => top.push(j..j + 1),
+            }
+        }
+        Parts { ranges, top }
     }
 }
 
@@ -579,7 +815,7 @@ fn supernodes<'s>(
 /// `i + 1 < ptr.len()`, `i < diag.len()`, and as for [`gather_dot`].
 #[inline(always)]
 unsafe fn gather_step<const M: usize>(
-    y: &mut [[f64; M]],
+    y: Rows<M>,
     i: usize,
     idx: &[u32],
     vals: &[f64],
@@ -593,9 +829,9 @@ unsafe fn gather_step<const M: usize>(
         *ptr.get_unchecked(i),
         *ptr.get_unchecked(i + 1),
     );
-    let b = *y.get_unchecked(i);
+    let b = y.get(i);
     let d = 1.0 / *diag.get_unchecked(i);
-    *y.get_unchecked_mut(i) = std::array::from_fn(|c| (b[c] - s[c]) * d);
+    y.set(i, std::array::from_fn(|c| (b[c] - s[c]) * d));
 }
 
 /// `sum_k vals[k] * y[idx[k]]` over `start..end`, for `M` right-hand sides at once, with two
@@ -605,7 +841,7 @@ unsafe fn gather_step<const M: usize>(
 /// `start..end` must lie within `idx` and `vals`, and every `idx[k]` within `y`.
 #[inline(always)]
 unsafe fn gather_dot<const M: usize>(
-    y: &[[f64; M]],
+    y: Rows<M>,
     idx: &[u32],
     vals: &[f64],
     start: usize,
@@ -616,7 +852,7 @@ unsafe fn gather_dot<const M: usize>(
         let k = start + k;
         (
             *vals.get_unchecked(k),
-            y.get_unchecked(*idx.get_unchecked(k) as usize),
+            y.get(*idx.get_unchecked(k) as usize),
         )
     });
     std::array::from_fn(|c| sums[0][c] + sums[1][c])
@@ -625,10 +861,10 @@ unsafe fn gather_dot<const M: usize>(
 /// Add `count` terms `v * row` (`term(k)` gives the k-th) into two accumulators, alternately:
 /// the inner loop of the triangular solves.
 #[inline(always)]
-fn add_pairs<'y, const M: usize>(
+fn add_pairs<const M: usize>(
     sums: &mut [[f64; M]; 2],
     count: usize,
-    term: impl Fn(usize) -> (f64, &'y [f64; M]),
+    term: impl Fn(usize) -> (f64, [f64; M]),
 ) {
     let mut k = 0;
     while k + 1 < count {
@@ -654,7 +890,7 @@ fn add_pairs<'y, const M: usize>(
 /// `vals` must hold an entry for every row, and every row must lie within `y`.
 #[inline(always)]
 unsafe fn gather_column<const M: usize>(
-    y: &[[f64; M]],
+    y: Rows<M>,
     vals: &[f64],
     inside: std::ops::Range<usize>,
     below: &[u32],
@@ -663,12 +899,12 @@ unsafe fn gather_column<const M: usize>(
     let first = inside.start;
     let count = inside.len();
     add_pairs(&mut sums, count, |k| {
-        (*vals.get_unchecked(k), y.get_unchecked(first + k))
+        (*vals.get_unchecked(k), y.get(first + k))
     });
     add_pairs(&mut sums, below.len(), |k| {
         (
             *vals.get_unchecked(count + k),
-            y.get_unchecked(*below.get_unchecked(k) as usize),
+            y.get(*below.get_unchecked(k) as usize),
         )
     });
     std::array::from_fn(|c| sums[0][c] + sums[1][c])
@@ -682,19 +918,20 @@ unsafe fn gather_column<const M: usize>(
 /// As for [`gather_column`].
 #[inline(always)]
 unsafe fn scatter_column<const M: usize>(
-    y: &mut [[f64; M]],
+    y: Rows<M>,
     vals: &[f64],
     inside: std::ops::Range<usize>,
     below: &[u32],
     w: [f64; M],
 ) {
     let count = inside.len();
-    let mut subtract = |k: usize, r: usize| {
+    let subtract = |k: usize, r: usize| {
         let l = *vals.get_unchecked(k);
-        let t = y.get_unchecked_mut(r);
+        let mut t = y.get(r);
         for c in 0..M {
             t[c] -= l * w[c];
         }
+        y.set(r, t);
     };
     for (k, r) in inside.enumerate() {
         subtract(k, r);
@@ -927,6 +1164,51 @@ impl Placement {
     }
 }
 
+/// Triangles taken per parallel pass of [`in_order`] (a pass's terms, up to about 400 bytes a
+/// triangle for a block of four spline frames, stay in cache while they are added).
+const TERMS_CHUNK: usize = 4096;
+
+/// `each(t)` for every `t` in `0..count`, computed on all threads [`TERMS_CHUNK`] at a time,
+/// and given to `add` in order of `t` on one thread (beside the next chunk's computation):
+/// sums built by `add` are the same, bit for bit, on any number of threads as on one.
+///
+/// A frame's right-hand side is built this way: the triangles' terms (rotations, their
+/// sines and cosines, the products with the gradients) in parallel, their sums per vertex
+/// ([`scatter`]) in triangle order.
+pub fn in_order<T: Send>(
+    count: usize,
+    each: impl Fn(usize) -> T + Sync,
+    mut add: impl FnMut(usize, T) + Send,
+) {
+    let compute = |start: usize| -> Vec<T> {
+        (start..(start + TERMS_CHUNK).min(count))
+            .into_par_iter()
+            .with_min_len(256)
+            .map(&each)
+            .collect()
+    };
+    let mut starts = (0..count).step_by(TERMS_CHUNK);
+    let Some(first) = starts.next() else { return };
+    let mut ready = (first, compute(first));
+    for next in starts {
+        let (start, terms) = ready;
+        let add = &mut add;
+        let ((), computed) = rayon::join(
+            || {
+                for (k, term) in terms.into_iter().enumerate() {
+                    add(start + k, term);
+                }
+            },
+            || compute(next),
+        );
+        ready = (next, computed);
+    }
+    let (start, terms) = ready;
+    for (k, term) in terms.into_iter().enumerate() {
+        add(start + k, term);
+    }
+}
+
 /// Add a triangle's right-hand-side terms `T g` for corners 1 and 2 (corner 0 gets minus
 /// their sum, since the gradient operators sum to zero).
 #[inline]
@@ -1048,7 +1330,11 @@ mod tests {
 
     /// The factor of a small tube's system (vertex 0 pinned), and the tube.
     fn tube_factor() -> (Factor, crate::dev::synth::Surface) {
-        let s = crate::dev::synth::tube(12, 9, 3.0, 0.5, 0.4);
+        tube_factor_of(12, 9)
+    }
+
+    fn tube_factor_of(rings: usize, segments: usize) -> (Factor, crate::dev::synth::Surface) {
+        let s = crate::dev::synth::tube(rings, segments, 3.0, 0.5, 0.4);
         let pattern = Pattern::new(s.positions.len(), &s.triangles, &s.positions).unwrap();
         let grads: Vec<Option<[DVec3; 3]>> = s
             .triangles
@@ -1150,6 +1436,79 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Split into parts for four threads, the solves give the same bits as on one thread
+    /// (both passes, a frame and a block of four, both copies of L and the column copy only),
+    /// and each part's columns reach only their own part and the top.
+    #[test]
+    fn solves_split_into_parts_give_the_same_bits_as_one_thread() {
+        let (mut factor, s) = tube_factor_of(200, 100);
+        let n = s.positions.len();
+        let serial = Parts::of(&factor.columns, 1);
+        assert!(serial.ranges.is_empty() && serial.top.len() == 1 && serial.top[0] == (0..n));
+        let parts = Parts::of(&factor.columns, 4);
+        assert!(parts.ranges.len() >= 4, "{:?}", parts.ranges);
+        let top: usize = parts.top.iter().map(|r| r.len()).sum();
+        let inside: usize = parts.ranges.iter().map(|r| r.len()).sum();
+        assert_eq!(top + inside, n);
+        assert!(top < n / 4, "{top} of {n} columns on one thread");
+        let part_of = |r: usize| parts.ranges.iter().position(|p| p.contains(&r));
+        for j in 0..n {
+            // SAFETY: j < n, the factor checked when made.
+            let (_, inside, below) = unsafe { factor.columns.column(j) };
+            for row in inside.chain(below.iter().map(|&r| r as usize)) {
+                let (own, other) = (part_of(j), part_of(row));
+                assert!(other.is_none() || other == own, "column {j}, row {row}");
+            }
+        }
+        let rhs: Vec<[f64; 12]> = (0..n)
+            .map(|i| std::array::from_fn(|c| ((i * (c + 3)) % 11) as f64 - 5.0))
+            .collect();
+        for columns_only in [false, true] {
+            if columns_only {
+                factor.keep_columns_only();
+            }
+            let mut solved = Vec::new();
+            for p in [Parts::of(&factor.columns, 1), Parts::of(&factor.columns, 4)] {
+                factor.parts = p;
+                let mut block = rhs.clone();
+                factor.solve_permuted(&mut block);
+                let mut one: Vec<[f64; 3]> = rhs.iter().map(|r| [r[0], r[1], r[2]]).collect();
+                factor.solve_permuted(&mut one);
+                solved.push((block, one));
+            }
+            let bits = |x: &[[f64; 12]], y: &[[f64; 3]]| -> Vec<u64> {
+                x.iter()
+                    .flatten()
+                    .chain(y.iter().flatten())
+                    .map(|v| v.to_bits())
+                    .collect()
+            };
+            let (a, b) = (&solved[0], &solved[1]);
+            assert_eq!(
+                bits(&a.0, &a.1),
+                bits(&b.0, &b.1),
+                "columns only: {columns_only}"
+            );
+            assert!(a.1.iter().flatten().any(|v| v.abs() > 1e-3));
+        }
+    }
+
+    /// Terms computed on all threads chunk by chunk come to `add` in order: an order-sensitive
+    /// floating-point sum over three chunks and a part is the one loop's, bit for bit.
+    #[test]
+    fn terms_come_in_order() {
+        let count = 3 * TERMS_CHUNK + 17;
+        let term = |t: usize| ((t * 7919) % 1000) as f64 * 1e-3 + 1e10 * (t % 3) as f64;
+        let (mut sum, mut seen) = (0.0f64, Vec::new());
+        in_order(count, term, |t, x| {
+            seen.push(t);
+            sum += x;
+        });
+        let one: f64 = (0..count).map(term).fold(0.0, |a, x| a + x);
+        assert_eq!(sum.to_bits(), one.to_bits());
+        assert!(seen.iter().copied().eq(0..count));
     }
 
     #[test]

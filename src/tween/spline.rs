@@ -37,7 +37,7 @@ use super::gradient::{
     aligned, around_axis, deformation, frame, gradient_operator, polar_of_triangle, quat_log,
     rotation, sin_cos, sym_eigen,
 };
-use super::solve::{scatter, Pattern, Placement, MAX_BLOCK};
+use super::solve::{in_order, scatter, Pattern, Placement, MAX_BLOCK};
 use super::weld::{bbox_diagonal, rms_rel};
 use anyhow::Result;
 use glam::{DMat3, DQuat, DVec3, Vec3};
@@ -2006,8 +2006,10 @@ impl SplineSegment {
         // Each split component's screw offsets turned with their cross-sections (see [`Screw`]).
         let mut turned: [Vec<DVec3>; N] =
             std::array::from_fn(|_| vec![DVec3::ZERO; self.paths.len()]);
-        for (t, tri) in self.tris.iter().enumerate() {
-            let Some(tri) = tri else { continue };
+        // A triangle's two terms per frame, and its screw offset turned with its component's.
+        type Terms = ([DVec3; 2], Option<(usize, DVec3)>);
+        let each = |t: usize| -> Option<[Terms; N]> {
+            let tri = self.tris[t].as_ref()?;
             let r = tri.r.map(|r| r.as_dvec3());
             let g = tri.g.map(|g| g.as_dvec3());
             let sg = tri.sg.map(|s| s.map(|s| s.as_dvec3()));
@@ -2023,8 +2025,10 @@ impl SplineSegment {
                     .map(|(c, o)| (c, self.paths[c].limb, o.as_dvec3()));
                 (twist, axis, bend, screw, self.field_of(t, tri))
             });
-            for (f, w) in ws.iter().enumerate() {
+            Some(std::array::from_fn(|f| {
+                let w = &ws[f];
                 let r = hermite_from_a(*w, r);
+                let mut turn = None;
                 let rot = if let Some((twist, axis, bend, screw, field)) = split {
                     let twist = hermite_from_a(*w, twist);
                     let bend = bend.map_or(DVec3::ZERO, |b| hermite_from_a(*w, b));
@@ -2033,7 +2037,7 @@ impl SplineSegment {
                     if let Some((c, limb, o)) = screw {
                         let section =
                             DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
-                        turned[f][c] += section * o;
+                        turn = Some((c, section * o));
                     }
                     // B W X D, or B S W X D along a limb (see [`Field`]).
                     let swing = glam::DQuat::from_scaled_axis(r);
@@ -2051,9 +2055,20 @@ impl SplineSegment {
                 let v: [DVec3; 2] = std::array::from_fn(|k| {
                     rot * (g[k] * w[0] + sg[0][k] * w[1] + sg[1][k] * w[2] + sg[2][k] * w[3])
                 });
+                (v, turn)
+            }))
+        };
+        in_order(self.tris.len(), each, |t, terms| {
+            let (Some(terms), Some(tri)) = (terms, &self.tris[t]) else {
+                return;
+            };
+            for (f, (v, turn)) in terms.into_iter().enumerate() {
                 scatter(&mut rhs[f], tri.corners, v[0], v[1]);
+                if let Some((c, turn)) = turn {
+                    turned[f][c] += turn;
+                }
             }
-        }
+        });
         let mut rhs = rhs.into_iter();
         std::array::from_fn(|f| {
             let rhs = rhs.next().expect("N right-hand sides");
