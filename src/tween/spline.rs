@@ -1566,6 +1566,10 @@ struct Field {
     after: Vec<[glam::Mat3; 3]>,
 }
 
+/// A triangle's two right-hand-side terms for one frame, and its screw offset turned with its
+/// component's cross-section (the component and the offset).
+type Terms = ([DVec3; 2], Option<(usize, DVec3)>);
+
 /// A split triangle's part of the [`Field`], in double precision for a block of frames.
 #[derive(Clone, Copy)]
 struct FieldTri {
@@ -2006,58 +2010,7 @@ impl SplineSegment {
         // Each split component's screw offsets turned with their cross-sections (see [`Screw`]).
         let mut turned: [Vec<DVec3>; N] =
             std::array::from_fn(|_| vec![DVec3::ZERO; self.paths.len()]);
-        // A triangle's two terms per frame, and its screw offset turned with its component's.
-        type Terms = ([DVec3; 2], Option<(usize, DVec3)>);
-        let each = |t: usize| -> Option<[Terms; N]> {
-            let tri = self.tris[t].as_ref()?;
-            let r = tri.r.map(|r| r.as_dvec3());
-            let g = tri.g.map(|g| g.as_dvec3());
-            let sg = tri.sg.map(|s| s.map(|s| s.as_dvec3()));
-            // A split triangle's twist, axis, bend and screw offset (with its component and
-            // whether that twists about its limb): the same for every frame.
-            let split = tri.split().then(|| {
-                let twist = tri.twist.map(f64::from);
-                let axis = tri.axis.as_dvec3().normalize();
-                let bend = self.bends.get(t).map(|b| b.map(|b| b.as_dvec3()));
-                let c = self.placement.component_of(tri.corners[0] as usize);
-                let screw = c
-                    .zip(self.offsets.get(t))
-                    .map(|(c, o)| (c, self.paths[c].limb, o.as_dvec3()));
-                (twist, axis, bend, screw, self.field_of(t, tri))
-            });
-            Some(std::array::from_fn(|f| {
-                let w = &ws[f];
-                let r = hermite_from_a(*w, r);
-                let mut turn = None;
-                let rot = if let Some((twist, axis, bend, screw, field)) = split {
-                    let twist = hermite_from_a(*w, twist);
-                    let bend = bend.map_or(DVec3::ZERO, |b| hermite_from_a(*w, b));
-                    let bend_q = glam::DQuat::from_scaled_axis(bend);
-                    let twist_q = glam::DQuat::from_axis_angle(axis, twist);
-                    if let Some((c, limb, o)) = screw {
-                        let section =
-                            DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
-                        turn = Some((c, section * o));
-                    }
-                    // B W X D, or B S W X D along a limb (see [`Field`]).
-                    let swing = glam::DQuat::from_scaled_axis(r);
-                    let rot = || DMat3::from_quat(bend_q * twist_q * swing);
-                    match field.map(|f| f.at(*w)) {
-                        Some((d, Some(s))) => {
-                            DMat3::from_quat(bend_q) * s * DMat3::from_quat(twist_q * swing) * d
-                        }
-                        Some((d, None)) => rot() * d,
-                        None => rot(),
-                    }
-                } else {
-                    rotation(r)
-                };
-                let v: [DVec3; 2] = std::array::from_fn(|k| {
-                    rot * (g[k] * w[0] + sg[0][k] * w[1] + sg[1][k] * w[2] + sg[2][k] * w[3])
-                });
-                (v, turn)
-            }))
-        };
+        let each = |t: usize| self.terms(t, &ws);
         in_order(self.tris.len(), each, |t, terms| {
             let (Some(terms), Some(tri)) = (terms, &self.tris[t]) else {
                 return;
@@ -2074,6 +2027,60 @@ impl SplineSegment {
             let rhs = rhs.next().expect("N right-hand sides");
             (rhs, self.centroids(ws[f], &turned[f]))
         })
+    }
+
+    /// Triangle `t`'s two terms at each of the Hermite weights `ws` and, where its component
+    /// turns its screw offset, that offset turned (see [`SplineSegment::systems_of`]); `None`
+    /// for a triangle left out.
+    #[inline(always)]
+    fn terms<const N: usize>(&self, t: usize, ws: &[[f64; 4]; N]) -> Option<[Terms; N]> {
+        let tri = self.tris[t].as_ref()?;
+        let r = tri.r.map(|r| r.as_dvec3());
+        let g = tri.g.map(|g| g.as_dvec3());
+        let sg = tri.sg.map(|s| s.map(|s| s.as_dvec3()));
+        // A split triangle's twist, axis, bend and screw offset (with its component and
+        // whether that twists about its limb): the same for every frame.
+        let split = tri.split().then(|| {
+            let twist = tri.twist.map(f64::from);
+            let axis = tri.axis.as_dvec3().normalize();
+            let bend = self.bends.get(t).map(|b| b.map(|b| b.as_dvec3()));
+            let c = self.placement.component_of(tri.corners[0] as usize);
+            let screw = c
+                .zip(self.offsets.get(t))
+                .map(|(c, o)| (c, self.paths[c].limb, o.as_dvec3()));
+            (twist, axis, bend, screw, self.field_of(t, tri))
+        });
+        Some(std::array::from_fn(|f| {
+            let w = &ws[f];
+            let r = hermite_from_a(*w, r);
+            let mut turn = None;
+            let rot = if let Some((twist, axis, bend, screw, field)) = split {
+                let twist = hermite_from_a(*w, twist);
+                let bend = bend.map_or(DVec3::ZERO, |b| hermite_from_a(*w, b));
+                let bend_q = glam::DQuat::from_scaled_axis(bend);
+                let twist_q = glam::DQuat::from_axis_angle(axis, twist);
+                if let Some((c, limb, o)) = screw {
+                    let section = DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
+                    turn = Some((c, section * o));
+                }
+                // B W X D, or B S W X D along a limb (see [`Field`]).
+                let swing = glam::DQuat::from_scaled_axis(r);
+                let rot = || DMat3::from_quat(bend_q * twist_q * swing);
+                match field.map(|f| f.at(*w)) {
+                    Some((d, Some(s))) => {
+                        DMat3::from_quat(bend_q) * s * DMat3::from_quat(twist_q * swing) * d
+                    }
+                    Some((d, None)) => rot() * d,
+                    None => rot(),
+                }
+            } else {
+                rotation(r)
+            };
+            let v: [DVec3; 2] = std::array::from_fn(|k| {
+                rot * (g[k] * w[0] + sg[0][k] * w[1] + sg[1][k] * w[2] + sg[2][k] * w[3])
+            });
+            (v, turn)
+        }))
     }
 
     /// Split triangle `t`'s part of the twist field (see [`Field`]).
