@@ -37,11 +37,13 @@ impl Segment {
     }
 
     /// The frame at `t` in [0, 1] (or beyond, to extrapolate).
+    ///
+    /// A solving method's frame runs on rayon's threads as one job (see [`on_the_pool`]).
     pub fn frame(&self, t: f64) -> Vec<DVec3> {
         match self {
             Segment::Linear { x0, x1 } => x0.iter().zip(x1).map(|(a, b)| a.lerp(*b, t)).collect(),
-            Segment::Seed(s) => s.frame(t),
-            Segment::Spline(s) => s.frame(t),
+            Segment::Seed(s) => on_the_pool(|| s.frame(t)),
+            Segment::Spline(s) => on_the_pool(|| s.frame(t)),
         }
     }
 
@@ -50,8 +52,8 @@ impl Segment {
     pub fn frames(&self, ts: &[f64]) -> Vec<Vec<DVec3>> {
         match self {
             Segment::Linear { .. } => ts.iter().map(|&t| self.frame(t)).collect(),
-            Segment::Seed(s) => s.frames(ts),
-            Segment::Spline(s) => s.frames(ts),
+            Segment::Seed(s) => on_the_pool(|| s.frames(ts)),
+            Segment::Spline(s) => on_the_pool(|| s.frames(ts)),
         }
     }
 
@@ -119,6 +121,14 @@ impl KeyTrack<'_> {
             m => Segment::new(m, keys[a].clone(), keys[b].clone(), pattern, triangles),
         }
     }
+}
+
+/// `work` on one of rayon's threads (at once where called on one): a frame's parallel steps
+/// (its terms, its solves' parts) then hand work to the other threads from inside the pool,
+/// where each step called from outside it (the bench's frames, a caller's own thread) would
+/// send its work to the pool and wait to be woken, several times a frame.
+fn on_the_pool<R: Send>(work: impl FnOnce() -> R + Send) -> R {
+    rayon::scope(|_| work())
 }
 
 #[cfg(test)]
