@@ -1,9 +1,11 @@
 //! Foot contacts (the seed's test): a foot is planted while it is near its floor and barely
-//! moves vertically. Horizontal speed is not part of the test, so sliding can be measured on
-//! the contacts it finds.
+//! moves vertically, unless it swings forward of its hip (see [`drop_swings`]). Its speed
+//! over the ground is not part of the test, so sliding can be measured on the contacts it
+//! finds.
 
 use super::legs::{self, Leg};
 use super::track::Track;
+use glam::DVec3;
 use serde::Serialize;
 
 /// Height above the foot's lowest point, as a fraction of the leg scale.
@@ -38,6 +40,7 @@ pub fn flags(track: &Track, leg: &Leg, scale: f64) -> Vec<bool> {
                 && track.velocity(i, e).y.abs() <= SPEED_TOLERANCE * scale
         })
         .collect();
+    drop_swings(track, leg, scale, &mut f);
     let short = ((MIN_CONTACT / track.dt).ceil() as usize).max(1);
     // Close short gaps, then drop short contacts.
     for (value, max_run) in [(false, short), (true, short)] {
@@ -51,6 +54,49 @@ pub fn flags(track: &Track, leg: &Leg, scale: f64) -> Vec<bool> {
         }
     }
     f
+}
+
+/// How many times the body's speed a foot must lead its hip by, in a frame, to be swinging
+/// rather than planted (see [`drop_swings`]): a planted foot trails its hip at the body's
+/// speed; a walk's swing foot leads it by about 1.5 times that on average (its stance lasts
+/// about 1.5 times its swing) and by more mid-swing; a landing foot, still moving forward
+/// as its heel strikes, by less.
+pub const SWING_LEAD: f64 = 2.0;
+/// Least lead that makes a swing, in leg scales per second, for a motion whose body hardly
+/// moves (an idle, a standing start): a foot shifting its weight leads by less.
+pub const SWING_LEAD_MIN: f64 = 1.0;
+
+/// Unflag frames where the foot, low and level enough for the test above, swings: it moves
+/// forward of its hip faster than [`SWING_LEAD`] times the speed at which the leg's flagged
+/// frames trail it on average (the body's speed over the ground; the forward direction is
+/// the opposite of that trail), and than [`SWING_LEAD_MIN`]. A planted foot trails its hip,
+/// on a treadmill as on still ground; a foot dragged low through the start of its swing
+/// leads it (CMU's start-walk-stop: a toe flagged for 0.15 s after lift-off, leading its hip
+/// by 2.7 leg/s where its contacts trail by 0.6-1.1; kevinxie4c's walk: 0.06-0.1 s fragments
+/// leading by about 5). Judged per frame, not on a run's mean: on a cleaned motion the foot
+/// released at lift-off and eased back to its path joins the slow frames after lift-off and
+/// the swing's fragment into one run of low mean lead, which the clean-up's next pass then
+/// pinned.
+fn drop_swings(track: &Track, leg: &Leg, scale: f64, f: &mut [bool]) {
+    let (e, hip) = (leg.end(), leg.top());
+    let lead = |i: usize| {
+        let v = track.velocity(i, e) - track.velocity(i, hip);
+        DVec3::new(v.x, 0.0, v.z) / scale
+    };
+    let flagged: Vec<usize> = (0..f.len()).filter(|&i| f[i]).collect();
+    if flagged.is_empty() {
+        return;
+    }
+    let trail = flagged.iter().map(|&i| lead(i)).sum::<DVec3>() / flagged.len() as f64;
+    let Some(forward) = (-trail).try_normalize() else {
+        return;
+    };
+    let limit = SWING_LEAD_MIN.max(SWING_LEAD * trail.length());
+    for i in flagged {
+        if lead(i).dot(forward) > limit {
+            f[i] = false;
+        }
+    }
 }
 
 /// The floor under a joint at each frame of `heights` (one every `dt` seconds): the
@@ -138,4 +184,62 @@ pub fn planted(contacts: &[Contact], t: f64, half: f64, period: Option<(f64, f64
         }
         None => near(c, t),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blend::legs::Side;
+
+    /// A one-second loop on a treadmill, 48 frames, leg length 1: a still hip (joint 0) and a
+    /// foot (joint 1) stepping back on the floor at 2 leg/s for frames 0-23, then dragged
+    /// forward along the floor at `drag` leg/s for frames 24-29, then swinging forward 0.3
+    /// above the floor back to where it touches down.
+    fn dragged_toe(drag: f64) -> Track {
+        let n = 48;
+        let dt = 1.0 / n as f64;
+        let pos = (0..n)
+            .map(|i| {
+                let foot = match i {
+                    0..=23 => DVec3::new(0.0, 0.0, 0.5 - 2.0 * dt * i as f64),
+                    24..=29 => DVec3::new(0.0, 0.0, -0.5 + drag * dt * (i - 23) as f64),
+                    _ => {
+                        let from = -0.5 + drag * dt * 6.0;
+                        let u = (i - 29) as f64 / 19.0;
+                        DVec3::new(0.0, 0.3, from + (0.5 - from) * u)
+                    }
+                };
+                vec![DVec3::new(0.0, 1.0, 0.0), foot]
+            })
+            .collect();
+        Track {
+            start: 0.0,
+            dt,
+            looping: true,
+            pos,
+            travel: DVec3::ZERO,
+        }
+    }
+
+    #[test]
+    fn a_toe_dragged_forward_fast_is_swinging_and_a_slow_one_planted() {
+        let leg = Leg {
+            chain: vec![0, 1],
+            ik: None,
+            side: Side::Left,
+            length: 1.0,
+            name: "leg".into(),
+        };
+        // Dragged at 4 leg/s: it leads its hip by twice the body's speed (2 leg/s) and more.
+        let fast = flags(&dragged_toe(4.0), &leg, 1.0);
+        assert!((1..=22).all(|i| fast[i]), "{fast:?}");
+        assert!((24..=29).all(|i| !fast[i]), "{fast:?}");
+        // Dragged at 1 leg/s it stays planted: half the body's speed, the foot still trailing
+        // the ground it left.
+        let slow = flags(&dragged_toe(1.0), &leg, 1.0);
+        assert!(
+            (1..=22).all(|i| slow[i]) && (25..=28).all(|i| slow[i]),
+            "{slow:?}"
+        );
+    }
 }
