@@ -359,10 +359,11 @@ impl Factor {
                 // into rows of other parts too, so on one thread.
                 self.pass(Pass::ForwardScatter, rows, 0..n);
             } else {
-                parts
-                    .ranges
-                    .par_iter()
-                    .for_each(|r| self.pass(Pass::Forward, rows, r.clone()));
+                parts.bins.par_iter().for_each(|bin| {
+                    for r in bin {
+                        self.pass(Pass::Forward, rows, r.clone());
+                    }
+                });
                 for r in &parts.top {
                     self.pass(Pass::Forward, rows, r.clone());
                 }
@@ -371,10 +372,11 @@ impl Factor {
             for r in parts.top.iter().rev() {
                 self.pass(Pass::Backward, rows, r.clone());
             }
-            parts
-                .ranges
-                .par_iter()
-                .for_each(|r| self.pass(Pass::Backward, rows, r.clone()));
+            parts.bins.par_iter().for_each(|bin| {
+                for r in bin {
+                    self.pass(Pass::Backward, rows, r.clone());
+                }
+            });
         }
     }
 
@@ -497,8 +499,9 @@ impl<const M: usize> Rows<M> {
 /// by side, `top` alone (after them forward, before them back).
 #[derive(Default)]
 struct Parts {
-    /// Subtrees, ascending.
-    ranges: Vec<std::ops::Range<usize>>,
+    /// The subtrees (ranges of columns) dealt out to the threads, one list a thread (see
+    /// [`deal`]).
+    bins: Vec<Vec<std::ops::Range<usize>>>,
     /// Every other column, as ascending ranges.
     top: Vec<std::ops::Range<usize>>,
 }
@@ -516,7 +519,7 @@ impl Parts {
     fn of(columns: &Columns, threads: usize) -> Parts {
         let n = columns.block.len();
         let all = Parts {
-            ranges: Vec::new(),
+            bins: Vec::new(),
             top: std::iter::once(0..n).collect(),
         };
         if threads < 2 || columns.vals.len() < PARTS_MIN_ENTRIES {
@@ -621,8 +624,32 @@ impl Parts {
                 _ => top.push(j..j + 1),
             }
         }
-        Parts { ranges, top }
+        let work = |r: &std::ops::Range<usize>| columns.col_ptr[r.end] - columns.col_ptr[r.start];
+        let bins = deal(&ranges, work, threads);
+        Parts { bins, top }
     }
+}
+
+/// `ranges` dealt out to `threads` lists of about equal `work`: the largest first, each to the
+/// list that holds least so far (the subtrees are solved each on one thread, so a thread that
+/// took the largest one last would leave the other waiting).
+fn deal(
+    ranges: &[std::ops::Range<usize>],
+    work: impl Fn(&std::ops::Range<usize>) -> usize,
+    threads: usize,
+) -> Vec<Vec<std::ops::Range<usize>>> {
+    let mut by_work: Vec<&std::ops::Range<usize>> = ranges.iter().collect();
+    by_work.sort_by_key(|r| (std::cmp::Reverse(work(r)), r.start));
+    let mut bins: Vec<(usize, Vec<std::ops::Range<usize>>)> =
+        vec![(0, Vec::new()); threads.min(ranges.len())];
+    for r in by_work {
+        let least = (0..bins.len())
+            .min_by_key(|&b| (bins[b].0, b))
+            .expect("a bin");
+        bins[least].0 += work(r);
+        bins[least].1.push(r.clone());
+    }
+    bins.into_iter().map(|(_, bin)| bin).collect()
 }
 
 /// L's strictly-lower columns in blocks (see [`Factor`]): column j's values at
@@ -1458,14 +1485,19 @@ mod tests {
         let (mut factor, s) = tube_factor_of(200, 100);
         let n = s.positions.len();
         let serial = Parts::of(&factor.columns, 1);
-        assert!(serial.ranges.is_empty() && serial.top.len() == 1 && serial.top[0] == (0..n));
+        assert!(serial.bins.is_empty() && serial.top.len() == 1 && serial.top[0] == (0..n));
         let parts = Parts::of(&factor.columns, 4);
-        assert!(parts.ranges.len() >= 4, "{:?}", parts.ranges);
+        let ranges = parts.bins.concat();
+        assert!(
+            parts.bins.len() == 4 && ranges.len() >= 4,
+            "{:?}",
+            parts.bins
+        );
         let top: usize = parts.top.iter().map(|r| r.len()).sum();
-        let inside: usize = parts.ranges.iter().map(|r| r.len()).sum();
+        let inside: usize = ranges.iter().map(|r| r.len()).sum();
         assert_eq!(top + inside, n);
         assert!(top < n / 4, "{top} of {n} columns on one thread");
-        let part_of = |r: usize| parts.ranges.iter().position(|p| p.contains(&r));
+        let part_of = |r: usize| ranges.iter().position(|p| p.contains(&r));
         for j in 0..n {
             // SAFETY: j < n, the factor checked when made.
             let (_, inside, below) = unsafe { factor.columns.column(j) };
@@ -1505,6 +1537,39 @@ mod tests {
             );
             assert!(a.1.iter().flatten().any(|v| v.abs() > 1e-3));
         }
+    }
+
+    /// The subtrees of the 16k and 100k bench tubes' factors (their entries as `work`) dealt
+    /// to two threads: the largest first, each to the lighter list, so neither thread waits
+    /// long for the other.
+    #[test]
+    fn subtrees_are_dealt_largest_first_to_the_lighter_thread() {
+        let ranges_of = |works: &[usize]| -> Vec<std::ops::Range<usize>> {
+            let mut at = 0;
+            works
+                .iter()
+                .map(|&w| {
+                    at += w;
+                    at - w..at
+                })
+                .collect()
+        };
+        let work = |r: &std::ops::Range<usize>| r.len();
+        let loads = |bins: &[Vec<std::ops::Range<usize>>]| -> Vec<usize> {
+            bins.iter().map(|b| b.iter().map(work).sum()).collect()
+        };
+        let small = ranges_of(&[28_000, 44_248, 58_429, 129_264]);
+        let bins = deal(&small, work, 2);
+        assert_eq!(bins[0], vec![small[3].clone()]);
+        assert_eq!(loads(&bins), vec![129_264, 130_677]);
+        let large = ranges_of(&[448_162, 138_990, 433_412, 349_353, 1_097_045]);
+        assert_eq!(loads(&deal(&large, work, 2)), vec![1_236_035, 1_230_927]);
+        // More threads than subtrees: one list a subtree; every subtree dealt once.
+        let bins = deal(&small, work, 8);
+        assert_eq!(bins.len(), 4);
+        let mut all = bins.concat();
+        all.sort_by_key(|r| r.start);
+        assert_eq!(all, small);
     }
 
     /// Terms computed on all threads chunk by chunk come to `add` in order: an order-sensitive
