@@ -1207,9 +1207,9 @@ const TERMS_CHUNK: usize = 4096;
 /// `each(t)` for every `t` in `0..count`, computed on all threads [`TERMS_CHUNK`] at a time,
 /// and given to `add` in order of `t` on one thread (beside the next chunk's computation):
 /// sums built by `add` are the same, bit for bit, on any number of threads as on one. (On one
-/// thread the terms pass through the chunk too: a frame there costs 10-20% more than a loop
-/// adding each term as it is made; a path of its own for one thread slowed the spline's
-/// terms on two threads by 15%, its code laid out differently.)
+/// thread the terms pass through the chunk too; a frame there costs what it did with a loop
+/// adding each term as it is made, within 3% over five alternating bench runs, and a path of
+/// its own for one thread slowed the spline's terms on two threads by 15%.)
 ///
 /// A frame's right-hand side is built this way: the triangles' terms (rotations, their
 /// sines and cosines, the products with the gradients) in parallel, their sums per vertex
