@@ -513,7 +513,8 @@ const PARTS_MIN_ENTRIES: usize = 100_000;
 impl Parts {
     /// Split `columns` for `threads` threads: the largest subtree, from the roots down, is
     /// split into its children (its block going to `top`) while it holds more than a thread's
-    /// share of the subtrees' entries. One range, all columns in `top`, where the factor is
+    /// share of the subtrees' entries; the subtrees are then dealt to the threads (see
+    /// [`deal`]). No subtree, all columns in `top`, where the factor is
     /// small, one thread runs, or the blocks are not in the order this relies on (checked
     /// entry by entry).
     fn of(columns: &Columns, threads: usize) -> Parts {
