@@ -353,17 +353,21 @@ impl Factor {
         // `Factor::checked` asserted; parts run side by side only where `Parts::of` found that
         // each reads and writes its own rows and reads no row another part writes.
         unsafe {
+            // Each thread's list of subtrees, one after the other.
+            let subtrees = |pass: Pass| {
+                parts.bins.par_iter().for_each(|bin| {
+                    for r in bin {
+                        self.pass(pass, rows, r.clone());
+                    }
+                })
+            };
             // L z = P b
             if self.row_ptr.is_empty() {
                 // Only the column copy is kept: scatter each finished value down its column,
                 // into rows of other parts too, so on one thread.
                 self.pass(Pass::ForwardScatter, rows, 0..n);
             } else {
-                parts.bins.par_iter().for_each(|bin| {
-                    for r in bin {
-                        self.pass(Pass::Forward, rows, r.clone());
-                    }
-                });
+                subtrees(Pass::Forward);
                 for r in &parts.top {
                     self.pass(Pass::Forward, rows, r.clone());
                 }
@@ -372,11 +376,7 @@ impl Factor {
             for r in parts.top.iter().rev() {
                 self.pass(Pass::Backward, rows, r.clone());
             }
-            parts.bins.par_iter().for_each(|bin| {
-                for r in bin {
-                    self.pass(Pass::Backward, rows, r.clone());
-                }
-            });
+            subtrees(Pass::Backward);
         }
     }
 
