@@ -2038,48 +2038,54 @@ impl SplineSegment {
         let r = tri.r.map(|r| r.as_dvec3());
         let g = tri.g.map(|g| g.as_dvec3());
         let sg = tri.sg.map(|s| s.map(|s| s.as_dvec3()));
+        // The rotation's stretched gradients, at Hermite weights `w`.
+        let turned = |w: &[f64; 4], rot: DMat3| -> [DVec3; 2] {
+            std::array::from_fn(|k| {
+                rot * (g[k] * w[0] + sg[0][k] * w[1] + sg[1][k] * w[2] + sg[2][k] * w[3])
+            })
+        };
+        if !tri.split() {
+            return Some(std::array::from_fn(|f| {
+                let w = &ws[f];
+                (turned(w, rotation(hermite_from_a(*w, r))), None)
+            }));
+        }
         // A split triangle's twist, axis, bend and screw offset (with its component and
-        // whether that twists about its limb): the same for every frame.
-        let split = tri.split().then(|| {
-            let twist = tri.twist.map(f64::from);
-            let axis = tri.axis.as_dvec3().normalize();
-            let bend = self.bends.get(t).map(|b| b.map(|b| b.as_dvec3()));
-            let c = self.placement.component_of(tri.corners[0] as usize);
-            let screw = c
-                .zip(self.offsets.get(t))
-                .map(|(c, o)| (c, self.paths[c].limb, o.as_dvec3()));
-            (twist, axis, bend, screw, self.field_of(t, tri))
-        });
+        // whether that twists about its limb) and its part of the field: the same for every
+        // frame. (Held apart, not gathered in one value: the field's part, about 600 bytes,
+        // was then copied into it and again for each frame, 4-6% of a spline frame's time at
+        // 16k triangles by perf.)
+        let twist = tri.twist.map(f64::from);
+        let axis = tri.axis.as_dvec3().normalize();
+        let bend = self.bends.get(t).map(|b| b.map(|b| b.as_dvec3()));
+        let c = self.placement.component_of(tri.corners[0] as usize);
+        let screw = c
+            .zip(self.offsets.get(t))
+            .map(|(c, o)| (c, self.paths[c].limb, o.as_dvec3()));
+        let field = self.field_of(t, tri);
         Some(std::array::from_fn(|f| {
             let w = &ws[f];
             let r = hermite_from_a(*w, r);
             let mut turn = None;
-            let rot = if let Some((twist, axis, bend, screw, field)) = split {
-                let twist = hermite_from_a(*w, twist);
-                let bend = bend.map_or(DVec3::ZERO, |b| hermite_from_a(*w, b));
-                let bend_q = glam::DQuat::from_scaled_axis(bend);
-                let twist_q = glam::DQuat::from_axis_angle(axis, twist);
-                if let Some((c, limb, o)) = screw {
-                    let section = DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
-                    turn = Some((c, section * o));
+            let twist = hermite_from_a(*w, twist);
+            let bend = bend.map_or(DVec3::ZERO, |b| hermite_from_a(*w, b));
+            let bend_q = glam::DQuat::from_scaled_axis(bend);
+            let twist_q = glam::DQuat::from_axis_angle(axis, twist);
+            if let Some((c, limb, o)) = screw {
+                let section = DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
+                turn = Some((c, section * o));
+            }
+            // B W X D, or B S W X D along a limb (see [`Field`]).
+            let swing = glam::DQuat::from_scaled_axis(r);
+            let rot = || DMat3::from_quat(bend_q * twist_q * swing);
+            let rot = match field.as_ref().map(|f| f.at(*w)) {
+                Some((d, Some(s))) => {
+                    DMat3::from_quat(bend_q) * s * DMat3::from_quat(twist_q * swing) * d
                 }
-                // B W X D, or B S W X D along a limb (see [`Field`]).
-                let swing = glam::DQuat::from_scaled_axis(r);
-                let rot = || DMat3::from_quat(bend_q * twist_q * swing);
-                match field.map(|f| f.at(*w)) {
-                    Some((d, Some(s))) => {
-                        DMat3::from_quat(bend_q) * s * DMat3::from_quat(twist_q * swing) * d
-                    }
-                    Some((d, None)) => rot() * d,
-                    None => rot(),
-                }
-            } else {
-                rotation(r)
+                Some((d, None)) => rot() * d,
+                None => rot(),
             };
-            let v: [DVec3; 2] = std::array::from_fn(|k| {
-                rot * (g[k] * w[0] + sg[0][k] * w[1] + sg[1][k] * w[2] + sg[2][k] * w[3])
-            });
-            (v, turn)
+            (turned(w, rot), turn)
         }))
     }
 
