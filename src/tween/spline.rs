@@ -2066,15 +2066,14 @@ impl SplineSegment {
         Some(std::array::from_fn(|f| {
             let w = &ws[f];
             let r = hermite_from_a(*w, r);
-            let mut turn = None;
             let twist = hermite_from_a(*w, twist);
             let bend = bend.map_or(DVec3::ZERO, |b| hermite_from_a(*w, b));
             let bend_q = glam::DQuat::from_scaled_axis(bend);
             let twist_q = glam::DQuat::from_axis_angle(axis, twist);
-            if let Some((c, limb, o)) = screw {
+            let turn = screw.map(|(c, limb, o)| {
                 let section = DMat3::from_quat(if limb { bend_q } else { bend_q * twist_q });
-                turn = Some((c, section * o));
-            }
+                (c, section * o)
+            });
             // B W X D, or B S W X D along a limb (see [`Field`]).
             let swing = glam::DQuat::from_scaled_axis(r);
             let rot = || DMat3::from_quat(bend_q * twist_q * swing);
