@@ -13,16 +13,6 @@ fn s(p: &Path) -> &str {
 }
 
 /// The node tools' folder, or `None` (skipped with the reason) where they are not installed.
-fn node_bin() -> Option<PathBuf> {
-    let bin = root().join("tools/node/node_modules/.bin");
-    if bin.join("gltfpack").exists() && bin.join("gltf-transform").exists() {
-        Some(bin)
-    } else {
-        missing_tool("gltfpack and gltf-transform (tools/node)");
-        None
-    }
-}
-
 /// The compressors, as (name, command line after the tool's name with IN and OUT).
 const VARIANTS: &[(&str, &str, &[&str])] = &[
     // -af 0: no resampling of the animation (gltfpack resamples at 30 Hz by default, which

@@ -496,8 +496,11 @@ pub fn clip_from_channels(name: String, index: usize, channels: Vec<Channel>) ->
     }
 }
 
-/// Mark the skeleton of skin `skin`: its joints plus their descendants that carry nothing
-/// (end-of-chain helper nodes such as `LowerLeg.L_end`), and find its topmost joint.
+/// Mark the skeleton of skin `skin`: its joints plus their descendants that carry nothing,
+/// themselves or below them (end-of-chain helper nodes such as `LowerLeg.L_end`), and find its
+/// topmost joint. A node whose mesh hangs from a child of its own (gltfpack moves a mesh on a
+/// joint's child into a new node below it) is an attachment, not a bone: taken as one, it ended
+/// RobotExpressive's legs at the knee and the blend planted its fingers.
 pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
     let nodes = arr(&doc.json, "nodes");
     let joints: BTreeSet<usize> = arr(&doc.json["skins"][skin], "joints")
@@ -505,14 +508,21 @@ pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
         .filter_map(|j| j.as_u64().map(|j| j as usize))
         .filter(|&j| j < rig.len())
         .collect();
-    let plain = |i: usize| {
+    let carries = |i: usize| {
         let nd = &nodes[i];
-        nd.get("mesh").is_none() && nd.get("camera").is_none() && nd.get("skin").is_none()
+        nd.get("mesh").is_some() || nd.get("camera").is_some() || nd.get("skin").is_some()
     };
+    // Whether a node or one below it carries something (children before parents).
+    let mut loaded: Vec<bool> = (0..rig.len()).map(carries).collect();
+    for &i in rig.order.iter().rev() {
+        if let Some(p) = rig.parent[i] {
+            loaded[p] |= loaded[i] && !joints.contains(&i);
+        }
+    }
     let mut member = vec![false; rig.len()];
     for &i in &rig.order {
         member[i] = joints.contains(&i)
-            || (plain(i) && rig.parent[i].is_some_and(|p| member[p]) && !joints.is_empty());
+            || (!loaded[i] && rig.parent[i].is_some_and(|p| member[p]) && !joints.is_empty());
     }
     rig.root = rig.order.iter().copied().find(|&i| member[i]).unwrap_or(0);
     rig.skeleton = member;
@@ -529,4 +539,38 @@ pub fn skins(doc: &Document) -> Vec<BTreeSet<usize>> {
                 .collect()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A joint's helper children are skeleton; a child whose mesh hangs from a node below it
+    /// (as gltfpack leaves a mesh on a joint's child) is not, nor is that mesh node.
+    #[test]
+    fn a_node_carrying_a_mesh_below_it_is_not_a_bone() {
+        let json = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "nodes": [
+                {"name": "hip", "children": [1]},
+                {"name": "shin", "children": [2, 3], "translation": [0.0, -1.0, 0.0]},
+                {"name": "shin mesh", "children": [4]},
+                {"name": "shin end", "translation": [0.0, -1.0, 0.0]},
+                {"name": "", "mesh": 0},
+            ],
+            "meshes": [{"primitives": [{"attributes": {}}]}],
+            "skins": [{"joints": [0, 1]}],
+        });
+        let bytes = serde_json::to_vec(&json).unwrap();
+        let doc = Document::from_bytes(
+            std::path::Path::new("rig.gltf"),
+            &bytes,
+            &Default::default(),
+        );
+        let doc = doc.unwrap();
+        let (mut rig, _) = load_gltf(&doc).unwrap();
+        use_skin(&doc, &mut rig, 0);
+        assert_eq!(rig.skeleton, [true, true, false, true, false]);
+        assert_eq!(rig.skeleton_children(1), [3]);
+    }
 }

@@ -577,3 +577,15 @@ pub fn matching(a: &[glam::DVec3], b: &[glam::DVec3]) -> Vec<usize> {
         })
         .collect()
 }
+
+/// The folder of the node tools' commands (gltfpack, gltf-transform), or None (noted as a
+/// missing tool) where they are not installed.
+pub fn node_bin() -> Option<PathBuf> {
+    let bin = root().join("tools/node/node_modules/.bin");
+    if bin.join("gltfpack").exists() && bin.join("gltf-transform").exists() {
+        Some(bin)
+    } else {
+        missing_tool("gltfpack and gltf-transform (tools/node)");
+        None
+    }
+}
