@@ -221,6 +221,9 @@ pub struct Rig {
     pub skeleton: Vec<bool>,
     /// The skeleton's topmost joint (where alignment moves the character).
     pub root: usize,
+    /// How many of the nodes are the file's: the chain ends [`use_skin`] adds come after them
+    /// and are never written.
+    pub file_nodes: usize,
 }
 
 impl Rig {
@@ -249,6 +252,7 @@ impl Rig {
             rest,
             skeleton: vec![true; n],
             root: 0,
+            file_nodes: n,
         })
     }
 
@@ -526,6 +530,73 @@ pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
     }
     rig.root = rig.order.iter().copied().find(|&i| member[i]).unwrap_or(0);
     rig.skeleton = member;
+    add_ends(doc, rig, &joints);
+}
+
+/// Give each leaf joint that carries rigid geometry and nothing to mark where it ends an end
+/// node at that geometry's lowest point in the rest pose (in the joint's frame), named
+/// `<joint>_end` as Blender names such nodes. gltfpack drops end nodes no skin uses: on
+/// RobotExpressive, whose shins are rigid meshes hung from the knee joints and whose
+/// `LowerLeg.L_end` nodes were the only mark of where they end, the legs then stopped at the
+/// knee and the blend took the fingers for feet. Joints whose geometry is skinned (Fox,
+/// CesiumMan: their foot joints are the leaves) are left as they are. An unreadable mesh adds
+/// no end (the blend then goes on as before).
+fn add_ends(doc: &Document, rig: &mut Rig, joints: &BTreeSet<usize>) {
+    let nodes = arr(&doc.json, "nodes");
+    let world = rig.world(&rig.rest);
+    let mut ends = Vec::new();
+    for &j in joints {
+        if j >= rig.file_nodes || !rig.skeleton_children(j).is_empty() {
+            continue;
+        }
+        // The joint and its non-joint descendants, each with its transform into the joint's
+        // frame.
+        let mut stack = vec![(j, DMat4::IDENTITY)];
+        let mut lowest: Option<(f64, DVec3)> = None;
+        while let Some((i, to_joint)) = stack.pop() {
+            let node = &nodes[i];
+            if let (Some(mesh), None) = (node.get("mesh").and_then(Value::as_u64), node.get("skin"))
+            {
+                for prim in arr(&doc.json["meshes"][mesh as usize], "primitives") {
+                    let Some(acc) = prim["attributes"].get("POSITION").and_then(Value::as_u64)
+                    else {
+                        continue;
+                    };
+                    let Ok((p, 3)) = doc.read_f64(acc as usize) else {
+                        continue;
+                    };
+                    for v in p.chunks_exact(3) {
+                        let local = to_joint.transform_point3(DVec3::new(v[0], v[1], v[2]));
+                        let y = world[j].transform_point3(local).y;
+                        if lowest.is_none_or(|(b, _)| y < b) {
+                            lowest = Some((y, local));
+                        }
+                    }
+                }
+            }
+            stack.extend(
+                (0..rig.file_nodes)
+                    .filter(|&c| rig.parent[c] == Some(i) && !joints.contains(&c))
+                    .map(|c| (c, to_joint * rig.rest.local[c].matrix())),
+            );
+        }
+        if let Some((_, at)) = lowest {
+            ends.push((j, at));
+        }
+    }
+    for (j, at) in ends {
+        let end = rig.len();
+        rig.names.push(format!("{}_end", rig.names[j]));
+        rig.parent.push(Some(j));
+        rig.order.push(end);
+        rig.rest.local.push(Trs {
+            t: at,
+            r: DQuat::IDENTITY,
+            s: DVec3::ONE,
+        });
+        rig.rest.weights.push(Vec::new());
+        rig.skeleton.push(true);
+    }
 }
 
 /// The skin joints of the document: one set per skin.

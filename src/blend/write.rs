@@ -28,7 +28,7 @@ pub fn channels(
     animated: &BTreeSet<(usize, Path)>,
 ) -> BTreeSet<(usize, Path)> {
     let mut out = animated.clone();
-    for j in 0..rig.len() {
+    for j in 0..rig.file_nodes {
         for path in [Path::Translation, Path::Rotation, Path::Scale] {
             let rest = component(&rig.rest.local[j], path);
             let moved = poses.iter().any(|p| {
