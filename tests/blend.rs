@@ -184,17 +184,8 @@ fn robot_packed_by_gltfpack_keeps_its_legs() {
     let input = fx.join("skinned/RobotExpressive.glb");
     for flags in [&["-cc", "-kn"][..], &["-cc"][..]] {
         let packed = dir.path().join(format!("robot{}.glb", flags.join("")));
-        let st = std::process::Command::new(bin.join("gltfpack"))
-            .args(["-i", input.to_str().unwrap()])
-            .args(["-o", packed.to_str().unwrap()])
-            .args(flags)
-            .output()
-            .unwrap();
-        assert!(
-            st.status.success(),
-            "{}",
-            String::from_utf8_lossy(&st.stderr)
-        );
+        let (i, o) = (input.to_str().unwrap(), packed.to_str().unwrap());
+        node_tool(&bin, "gltfpack", [&["-i", i, "-o", o][..], flags].concat());
         for w in [0.25, 0.5, 0.75] {
             let out = dir.path().join(format!("packed_{w}.glb"));
             let r = blend_report(&packed, "Walking", "Running", w, &out, &[]);

@@ -7,7 +7,6 @@ mod common;
 use common::*;
 use inbetween::gltf::Document;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -102,12 +101,8 @@ fn attribute_deviation(out: &Path, dense: &Path, names: &[&str]) -> f64 {
 }
 
 fn gltfpack(input: &Path, output: &Path) {
-    let bin = root().join("tools/node/node_modules/.bin/gltfpack");
-    let r = Command::new(bin)
-        .args(["-i", s(input), "-o", s(output), "-cc"])
-        .output()
-        .unwrap();
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let bin = root().join("tools/node/node_modules/.bin");
+    node_tool(&bin, "gltfpack", ["-i", s(input), "-o", s(output), "-cc"]);
 }
 
 fn size(p: &Path) -> u64 {
@@ -146,20 +141,11 @@ fn read_back_by_others(out: &Path) {
         }
     }
     assert!(g.animations().all(|a| a.channels().count() > 0));
-    let bin = root().join("tools/node/node_modules/.bin/gltf-transform");
-    if !bin.exists() && missing_tool("gltf-transform (tools/node)") {
+    let bin = root().join("tools/node/node_modules/.bin");
+    if !bin.join("gltf-transform").exists() && missing_tool("gltf-transform (tools/node)") {
         return;
     }
-    let r = Command::new(bin)
-        .args(["inspect", s(out)])
-        .output()
-        .unwrap();
-    assert!(
-        r.status.success(),
-        "gltf-transform inspect {}: {}",
-        out.display(),
-        String::from_utf8_lossy(&r.stderr)
-    );
+    node_tool(&bin, "gltf-transform", ["inspect", s(out)]);
 }
 
 /// Flamingo, Parrot, MorphStressTest and a face rig baked at 10 samples a second (52 blend

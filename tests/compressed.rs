@@ -6,7 +6,6 @@ mod common;
 
 use common::*;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -90,13 +89,7 @@ fn compressed_fixtures_tween_to_the_frames_of_the_uncompressed_files() {
                     a => a.to_string(),
                 })
                 .collect();
-            let r = Command::new(bin.join(tool)).args(&args).output().unwrap();
-            assert!(
-                r.status.success(),
-                "{name} on {}: {}",
-                input.display(),
-                String::from_utf8_lossy(&r.stderr)
-            );
+            node_tool(&bin, tool, &args);
             let out = dir.path().join(format!("out{k}.glb"));
             tween_quietly(&packed, &out, &[]);
             assert_valid(&out);

@@ -379,13 +379,9 @@ struct Case {
 /// Flamingo compressed by gltfpack -cc (meshopt) and glTF-Transform draco, in `dir`, when the
 /// node tools are installed: mutations then reach the decoders.
 fn compressed_cases(dir: &Path) -> Vec<Case> {
-    let (Some(fx), bin) = (fixtures(), root().join("tools/node/node_modules/.bin")) else {
+    let (Some(fx), Some(bin)) = (fixtures(), node_bin()) else {
         return Vec::new();
     };
-    if !bin.join("gltfpack").exists() {
-        missing_tool("gltfpack (tools/node)");
-        return Vec::new();
-    }
     let flamingo = fx.join("morph-keyframes/Flamingo.glb");
     let mut out = Vec::new();
     for (name, tool, args) in [
@@ -393,12 +389,13 @@ fn compressed_cases(dir: &Path) -> Vec<Case> {
         ("draco.glb", "gltf-transform", vec!["draco"]),
     ] {
         let file = dir.join(name);
-        let mut cmd = Command::new(bin.join(tool));
-        cmd.args(&args).arg(&flamingo);
+        let mut line: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_ref()).collect();
+        line.push(flamingo.as_os_str());
         if tool == "gltfpack" {
-            cmd.arg("-o");
+            line.push("-o".as_ref());
         }
-        assert!(cmd.arg(&file).output().unwrap().status.success(), "{tool}");
+        line.push(file.as_os_str());
+        node_tool(&bin, tool, line);
         out.push(Case {
             file,
             command: &["tween"],

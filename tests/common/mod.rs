@@ -589,3 +589,21 @@ pub fn node_bin() -> Option<PathBuf> {
         None
     }
 }
+
+/// Run `tool` (gltfpack, gltf-transform) from `bin` (see [`node_bin`]) with `args`, insisting on
+/// success: a failure names the command line and shows the tool's error output.
+pub fn node_tool<A: AsRef<std::ffi::OsStr>>(
+    bin: &Path,
+    tool: &str,
+    args: impl IntoIterator<Item = A>,
+) -> Output {
+    let args: Vec<std::ffi::OsString> = args.into_iter().map(|a| a.as_ref().into()).collect();
+    let out = Command::new(bin.join(tool)).args(&args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{tool} {:?}: {}",
+        args,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
