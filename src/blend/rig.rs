@@ -644,4 +644,45 @@ mod tests {
         assert_eq!(rig.skeleton, [true, true, false, true, false]);
         assert_eq!(rig.skeleton_children(1), [3]);
     }
+
+    /// The rig of a two-joint skin whose leaf joint (the shin, at y = -1) carries a rigid mesh
+    /// of two vertices, `positions` as base64 of six little-endian f32.
+    fn shin_with_mesh(positions: &str) -> Rig {
+        let json = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "nodes": [
+                {"name": "hip", "children": [1]},
+                {"name": "shin", "mesh": 0, "translation": [0.0, -1.0, 0.0]},
+            ],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"}],
+            "bufferViews": [{"buffer": 0, "byteLength": 24}],
+            "buffers": [{"byteLength": 24,
+                "uri": format!("data:application/octet-stream;base64,{positions}")}],
+            "skins": [{"joints": [0, 1]}],
+        });
+        let bytes = serde_json::to_vec(&json).unwrap();
+        let path = std::path::Path::new("rig.gltf");
+        let doc = Document::from_bytes(path, &bytes, &Default::default()).unwrap();
+        let (mut rig, _) = load_gltf(&doc).unwrap();
+        use_skin(&doc, &mut rig, 0);
+        rig
+    }
+
+    /// A leaf joint's rigid mesh gives it an end at its lowest vertex in the rest pose, in the
+    /// joint's frame, never written; a mesh with a vertex that is not a number (a broken or
+    /// hostile file) gives none rather than an end at NaN.
+    #[test]
+    fn a_leaf_joint_ends_at_its_mesh_s_lowest_vertex() {
+        // (0, 0.5, 0) and (0, -0.5, 0.25).
+        let rig = shin_with_mesh("AAAAAAAAAD8AAAAAAAAAAAAAAL8AAIA+");
+        assert_eq!((rig.len(), rig.file_nodes), (3, 2));
+        assert_eq!(rig.names[2], "shin_end");
+        assert_eq!(rig.parent[2], Some(1));
+        assert!(rig.skeleton[2]);
+        assert_eq!(rig.rest.local[2].t, DVec3::new(0.0, -0.5, 0.25));
+        // (NaN, NaN, NaN) and (0, -0.5, 0.25).
+        let rig = shin_with_mesh("AADAfwAAwH8AAMB/AAAAAAAAAL8AAIA+");
+        assert_eq!(rig.len(), 2);
+    }
 }
