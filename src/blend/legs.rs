@@ -66,11 +66,12 @@ impl Leg {
 pub fn find(rig: &Rig, tracks: &[&Track], size: f64) -> (Vec<Leg>, DVec3) {
     let first = &tracks[0].pos[0];
     let mut chains = Vec::new();
-    for leaf in (0..rig.len()).filter(|&j| rig.skeleton[j] && rig.skeleton_children(j).is_empty()) {
+    let bones = rig.skeleton_child_counts();
+    for leaf in (0..rig.len()).filter(|&j| rig.skeleton[j] && bones[j] == 0) {
         let mut chain = vec![leaf];
         let mut j = leaf;
         while let Some(p) = rig.parent[j].filter(|&p| rig.skeleton[p] && p != rig.root) {
-            if rig.skeleton_children(p).len() != 1 {
+            if bones[p] != 1 {
                 break;
             }
             chain.push(p);
