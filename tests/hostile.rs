@@ -407,3 +407,88 @@ fn temporaries_of_a_killed_run_are_removed_by_the_next() {
         assert!(!t.exists(), "{} left after the next run", t.display());
     }
 }
+
+/// A one-triangle mesh with two targets whose weights `clips` animations each key three times
+/// (0, 1 and 2 s), as a GLB.
+fn triangle_many_clips(path: &Path, clips: usize) {
+    let floats: [f32; 36] = [
+        0., 0., 0., 1., 0., 0., 0., 1., 0., // base
+        0., 0., 0., 0., 0., 0., 0., 0., 1., // target 0
+        0., 0., 0., 0., 0., 1., 0., 0., 0., // target 1
+        0., 1., 2., // times
+        0., 0., 1., 0., 0., 1., // weights
+    ];
+    let bin: Vec<u8> = floats.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let view =
+        |offset: usize, len: usize| json!({"buffer": 0, "byteOffset": offset, "byteLength": len});
+    let vec3 = |view: usize| json!({"bufferView": view, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 1]});
+    let json = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0},
+            "targets": [{"POSITION": 1}, {"POSITION": 2}]}], "weights": [0, 0]}],
+        "accessors": [vec3(0), vec3(1), vec3(2),
+            {"bufferView": 3, "componentType": 5126, "count": 3, "type": "SCALAR", "min": [0], "max": [2]},
+            {"bufferView": 4, "componentType": 5126, "count": 6, "type": "SCALAR"}],
+        "bufferViews": [view(0, 36), view(36, 36), view(72, 36), view(108, 12), view(120, 24)],
+        "buffers": [{"byteLength": bin.len()}],
+        "animations": (0..clips).map(|i| json!({"name": format!("clip {i}"),
+            "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
+            "samplers": [{"input": 3, "output": 4}]})).collect::<Vec<_>>(),
+    });
+    write_glb(path, &json, &bin);
+}
+
+#[test]
+fn a_mesh_animated_by_many_clips_is_refused_before_its_weights_fill_memory() {
+    // Each of n clips tweens to about 62 frames, and the mesh takes a target for every frame
+    // of every clip, so each clip's weights animation has 62 n weights a key: 400 clips make
+    // 24,800 keys of 24,800 weights, about 7 GiB (the vertices are nothing). Refused in a
+    // line under a 2 GiB address-space limit instead of failing an allocation.
+    let dir = tempfile::tempdir().unwrap();
+    let (many, few) = (dir.path().join("many.glb"), dir.path().join("few.glb"));
+    triangle_many_clips(&many, 400);
+    triangle_many_clips(&few, 20);
+    let out = dir.path().join("out.glb");
+    let limit = "ulimit -v 2097152;";
+    let r = run_in_shell(limit, &["tween", s(&many), "-o", s(&out), "-q"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("many.glb") && err.contains("their weights need"),
+        "{err}"
+    );
+    assert!(!out.exists() && temporaries(dir.path()).is_empty());
+    // Compacted, the weights are a few a key (a basis no larger than the frames' rank), but
+    // 24,800 frames are more than a basis is looked for over: refused, naming the file too.
+    let r = run_in_shell(
+        limit,
+        &["tween", s(&many), "-o", s(&out), "--compact", "-q"],
+    );
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(err.contains("many.glb") && err.contains("basis"), "{err}");
+    assert!(!out.exists() && temporaries(dir.path()).is_empty());
+    // A USD point cache has no weights: it streams.
+    let usd = dir.path().join("out.usdc");
+    let r = run_in_shell(limit, &["tween", s(&many), "-o", s(&usd), "-q"]);
+    assert_eq!(
+        r.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    // 20 clips (3 MiB of weights) go through under the same limit, every clip kept.
+    let r = run_in_shell(limit, &["tween", s(&few), "-o", s(&out), "-q"]);
+    assert_eq!(
+        r.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let doc = inbetween::gltf::Document::open(&out).unwrap();
+    assert_eq!(doc.json["animations"].as_array().unwrap().len(), 20);
+}

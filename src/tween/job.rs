@@ -213,7 +213,9 @@ impl Run<'_> {
         let mut results = Vec::new();
         for m in &self.meshes {
             self.progress.message(m.name.clone());
-            results.push(collect_mesh(m, &self.opts, &|| self.progress.inc())?);
+            // The computation's own failures (the solve, the factorization) name the input.
+            let done = collect_mesh(m, &self.opts, &|| self.progress.inc());
+            results.push(done.map_err(|e| self.doc.err(format!("{e:#}")))?);
         }
         self.progress.finish();
         let mut out = gltf::begin(&self.doc, container, &self.job.output)?;
@@ -268,7 +270,7 @@ impl Run<'_> {
         self.left_out = (stage.look.left_out.iter())
             .map(|what| format!("{input}: {what}"))
             .collect();
-        let (meshes, opts, progress) = (&self.meshes, &self.opts, &self.progress);
+        let (meshes, opts, progress, doc) = (&self.meshes, &self.opts, &self.progress, &self.doc);
         let (stats, reports) = (&mut self.stats, &mut self.reports);
         self.output_bytes = usd::write_file(
             &stage,
@@ -277,8 +279,18 @@ impl Run<'_> {
             &mut |sink| {
                 for (k, m) in meshes.iter().enumerate() {
                     progress.message(m.name.clone());
+                    // The computation's own failures name the input; the writer's name the
+                    // file it could not write.
+                    let mut writing = false;
                     let done = tween_mesh(m, opts, &|| progress.inc(), &mut |f, deltas| {
-                        sink(k, f, &usd_deltas(&deltas))
+                        sink(k, f, &usd_deltas(&deltas)).inspect_err(|_| writing = true)
+                    })
+                    .map_err(|e| {
+                        if writing {
+                            e
+                        } else {
+                            doc.err(format!("{e:#}"))
+                        }
                     })?;
                     stats.push(done.stats);
                     reports.extend(done.report);
@@ -304,7 +316,10 @@ fn usd_deltas(deltas: &[PrimitiveDelta]) -> Vec<Delta<'_>> {
 }
 
 /// Refuse, before any work, a job whose tracks would have more than [`MAX_FRAMES`] frames or
-/// whose glTF output (every frame held until it is written) would not fit in memory.
+/// whose glTF output (every frame held until it is written) would not fit in memory: the
+/// frames' vertex data, and the weights animations, each track one weight per target for each
+/// of its frames while the mesh takes a target for every frame of every track (a mesh that
+/// 2,000 clips animate: 122,000 targets, 122,000 keys of that many weights: about 170 GiB).
 fn check_budget(
     doc: &Document,
     meshes: &[MorphMesh],
@@ -313,6 +328,21 @@ fn check_budget(
 ) -> Result<()> {
     let mut bytes = 0.0;
     for m in meshes {
+        let frames: f64 = m
+            .tracks
+            .iter()
+            .map(|t| frame_estimate(&t.times, opts))
+            .sum();
+        // At most one new target a frame; a compacted basis no more than the frames' rank.
+        let normals = m.primitives.iter().all(|p| p.normals.is_some());
+        let tangents = normals && m.primitives.iter().all(|p| p.tangents.is_some());
+        let attributes = 1.0 + normals as u8 as f64 + tangents as u8 as f64;
+        let new = match opts.compact {
+            Some(_) => frames.min(3.0 * attributes * m.vertex_count() as f64),
+            None => frames,
+        };
+        // f32 weights, built, packed and copied into the buffer.
+        bytes += 3.0 * 4.0 * frames * (m.target_count as f64 + new);
         for (k, t) in m.tracks.iter().enumerate() {
             let frames = frame_estimate(&t.times, opts);
             if frames > MAX_FRAMES {
@@ -323,9 +353,7 @@ fn check_budget(
                     t.times.last().copied().unwrap_or(0.0)
                 )));
             }
-            let normals = m.primitives.iter().all(|p| p.normals.is_some());
-            let tangents = normals && m.primitives.iter().all(|p| p.tangents.is_some());
-            let per_vertex = 12.0 * (1.0 + normals as u8 as f64 + tangents as u8 as f64);
+            let per_vertex = 12.0 * attributes;
             // The frames as computed and again in the output buffer.
             bytes += 2.0 * frames * m.vertex_count() as f64 * per_vertex;
         }
@@ -333,7 +361,7 @@ fn check_budget(
     let available = memory_available();
     if let Some(available) = available.filter(|&a| held && bytes > a as f64) {
         bail!(doc.err(format!(
-            "its frames need about {:.1} GiB in memory for a glTF output, more than the {:.1} GiB available; write fewer frames (--fps, --tweens) or a USD point cache (.usdc streams its frames)",
+            "its frames and their weights need about {:.1} GiB in memory for a glTF output, more than the {:.1} GiB available; write fewer frames (--fps, --tweens), one clip at a time (--animation) or a USD point cache (.usdc streams its frames)",
             bytes / GIB,
             available as f64 / GIB
         )));

@@ -215,7 +215,8 @@ pub fn apply_frames(
                 .map(|(g, _)| g)
                 .collect();
             let restorable = base::restorable(&out.json, m);
-            let c = compact(m, mesh, w.authored_rows(), own, &restorable, opts)?;
+            let c = compact(m, mesh, w.authored_rows(), own, &restorable, opts)
+                .map_err(|e| doc.err(format!("{e:#}")))?;
             applied
                 .compacted
                 .push((mesh.name.clone(), c.figures.clone()));
