@@ -1326,8 +1326,16 @@ fn symmetric_adjacency(n: usize, col_ptr: &[u32], row_idx: &[u32]) -> (Vec<u32>,
     (start, neighbours)
 }
 
+/// Triangles sharing one edge are all each other's neighbours up to this many; an edge shared
+/// by more (a fan of coincident or stacked faces, which only a broken or hostile file has:
+/// 2,000 copies of one triangle made 12M neighbour pairs and a growth of 4M steps) links
+/// them in a ring instead, each to the next in index order, which keeps them connected with
+/// two neighbours each instead of all.
+const ALL_PAIRS_FAN: usize = 8;
+
 /// For each triangle, the triangles sharing one of its edges (each once per shared edge), as
-/// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up.
+/// CSR arrays: edges sorted by their vertex pair (in parallel), then runs paired up (in a ring
+/// beyond [`ALL_PAIRS_FAN`]).
 fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
     let mut edges: Vec<(u64, u32)> = triangles
         .par_iter()
@@ -1343,10 +1351,20 @@ fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
     let mut i = 0;
     while i < edges.len() {
         let j = i + edges[i..].iter().take_while(|e| e.0 == edges[i].0).count();
-        for x in &edges[i..j] {
-            for y in &edges[i..j] {
-                if x.1 != y.1 {
-                    pairs.push((x.1, y.1));
+        let fan = &edges[i..j];
+        if fan.len() <= ALL_PAIRS_FAN {
+            for x in fan {
+                for y in fan {
+                    if x.1 != y.1 {
+                        pairs.push((x.1, y.1));
+                    }
+                }
+            }
+        } else {
+            for (k, x) in fan.iter().enumerate() {
+                let next = fan[(k + 1) % fan.len()].1;
+                if next != x.1 {
+                    pairs.extend([(x.1, next), (next, x.1)]);
                 }
             }
         }
@@ -1367,6 +1385,31 @@ fn edge_neighbours(triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
 mod tests {
     use super::*;
     use crate::tween::gradient::{frame, gradient_operator};
+
+    #[test]
+    fn a_fan_of_many_faces_on_one_edge_is_a_ring() {
+        // Two triangles on an edge are each other's neighbour, as are up to eight.
+        let (start, nb) = edge_neighbours(&[[0, 1, 2], [1, 0, 3]]);
+        assert_eq!((start, nb), (vec![0, 1, 2], vec![1, 0]));
+        let eight = vec![[0u32, 1, 2]; ALL_PAIRS_FAN];
+        let (start, _) = edge_neighbours(&eight);
+        assert!(start
+            .windows(2)
+            .all(|w| w[1] - w[0] == 3 * (ALL_PAIRS_FAN as u32 - 1)));
+        // 2,000 copies of one triangle: two neighbours per edge, all still connected.
+        let n = 2000;
+        let (start, nb) = edge_neighbours(&vec![[0u32, 1, 2]; n]);
+        assert!(start.windows(2).all(|w| w[1] - w[0] == 6));
+        let mut seen = vec![false; n];
+        let mut stack = vec![0usize];
+        while let Some(t) = stack.pop() {
+            if !std::mem::replace(&mut seen[t], true) {
+                let (a, b) = (start[t] as usize, start[t + 1] as usize);
+                stack.extend(nb[a..b].iter().map(|&x| x as usize));
+            }
+        }
+        assert!(seen.iter().all(|&x| x));
+    }
 
     /// The factor of a small tube's system (vertex 0 pinned), and the tube.
     fn tube_factor() -> (Factor, crate::dev::synth::Surface) {
