@@ -5,7 +5,7 @@
 //! mix, and the required extensions with whether they are decoded. Text, or JSON
 //! (`schemas/inspect.schema.json`).
 
-use crate::gltf::{arr, Access, Document, PASSED_THROUGH};
+use crate::gltf::{arr, listed, Access, Document, PASSED_THROUGH};
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, KeyOptions, KeySource, MorphMesh,
     TrackOrigin, TweenOptions,
@@ -329,17 +329,7 @@ pub fn text(i: &Inspection) -> String {
             m.targets
         );
         if !m.target_names.is_empty() {
-            let shown: Vec<&str> = m.target_names.iter().take(8).map(String::as_str).collect();
-            let more = m.target_names.len().saturating_sub(8);
-            s += &format!(
-                " ({}{})",
-                shown.join(", "),
-                if more > 0 {
-                    format!(", ... {more} more")
-                } else {
-                    String::new()
-                }
-            );
+            s += &format!(" ({})", listed(&m.target_names));
         }
         s += "\n";
     }
@@ -381,7 +371,7 @@ pub fn text(i: &Inspection) -> String {
             "blend: {} skin{}, clips {}\n",
             i.blend.skins,
             if i.blend.skins == 1 { "" } else { "s" },
-            i.blend.clips.join(", ")
+            listed(&i.blend.clips)
         );
     }
     s

@@ -492,3 +492,18 @@ fn a_mesh_animated_by_many_clips_is_refused_before_its_weights_fill_memory() {
     let doc = inbetween::gltf::Document::open(&out).unwrap();
     assert_eq!(doc.json["animations"].as_array().unwrap().len(), 20);
 }
+
+#[test]
+fn a_refusal_lists_a_few_of_the_file_s_names_not_all() {
+    // 400 clips: the line names the first eight and counts the rest (it was one name each).
+    let dir = tempfile::tempdir().unwrap();
+    let many = dir.path().join("many.glb");
+    triangle_many_clips(&many, 400);
+    let out = dir.path().join("out.glb");
+    assert_refused(
+        &["tween", s(&many), "-o", s(&out), "--animation", "nope"],
+        "many.glb",
+        "\"clip 7\", ... 392 more)",
+        &out,
+    );
+}

@@ -5,7 +5,7 @@
 use super::cycles::CycleMethod;
 use super::plan::{blend, BlendOptions, Blended, Report};
 use super::rig::{self, Clip, Path, Rig};
-use crate::gltf::{self, Access, Container, Document};
+use crate::gltf::{self, listed, Access, Container, Document};
 use crate::output::{Format, Outputs};
 use anyhow::{bail, Result};
 use std::collections::BTreeSet;
@@ -108,7 +108,7 @@ fn find_clip<'a>(doc: &Document, clips: &'a [Clip], key: &str) -> Result<&'a Cli
         if names.is_empty() {
             "none".to_string()
         } else {
-            names.join(", ")
+            listed(&names)
         }
     )))
 }

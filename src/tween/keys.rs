@@ -5,7 +5,9 @@
 //! A key pose is `base + sum_i w_i * delta_i` over the mesh's targets.
 
 use super::timegrid::snap;
-use crate::gltf::{arr, read_attribute, read_attribute3, read_triangles, read_vec3, Document};
+use crate::gltf::{
+    arr, listed, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
+};
 use anyhow::{bail, Result};
 use glam::DVec3;
 use serde_json::Value;
@@ -153,7 +155,7 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
                 "; it has a skinned character with {} clip{} ({}): `inbetween blend` mixes skeletal clips",
                 clips.len(),
                 if clips.len() == 1 { "" } else { "s" },
-                clips.join(", ")
+                listed(&clips)
             )
         } else {
             String::new()
@@ -384,7 +386,7 @@ fn find_animation(doc: &Document, sel: &str) -> Result<usize> {
                 .collect();
             bail!(doc.err(format!(
                 "no animation {sel:?} (the file has: {})",
-                names.join(", ")
+                listed(&names)
             )))
         }
     }
