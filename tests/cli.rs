@@ -211,6 +211,12 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     let good = sample("bar_twist.glb");
     let p = |n: &str| dir.path().join(n);
     std::fs::write(p("not.glb"), b"hello, not a gltf").unwrap();
+    // A motion capture (with a byte-order mark and CRLF line ends, as some exporters write).
+    std::fs::write(
+        p("walk.bvh"),
+        "\u{feff}HIERARCHY\r\nROOT Hips\r\n{\r\n\tOFFSET 0 0 0\r\n",
+    )
+    .unwrap();
     let mut short = std::fs::read(&good).unwrap();
     short.truncate(short.len() - 100);
     std::fs::write(p("short.glb"), &short).unwrap();
@@ -268,6 +274,10 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
 
     let cases = [
         ("not.glb", "not a glTF"),
+        (
+            "walk.bvh",
+            "a BVH motion capture, not a glTF file (`inbetween blend`",
+        ),
         ("short.glb", "GLB header says"),
         ("nobuf.gltf", "missing.bin"),
         ("nomorph.gltf", "no mesh with morph targets"),

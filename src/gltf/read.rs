@@ -89,12 +89,21 @@ impl Document {
         } else {
             (bytes, None)
         };
-        let json: Value = serde_json::from_slice(json_bytes).map_err(|e| {
-            at(
-                path,
-                format!("not a glTF file (the JSON does not parse: {e})"),
-            )
-        })?;
+        let json: Value =
+            serde_json::from_slice(json_bytes).map_err(|e| {
+                // A motion capture handed to a glTF command: say what it is and what reads it.
+                let text = String::from_utf8_lossy(&bytes[..bytes.len().min(64)]);
+                match text.trim_start_matches('\u{feff}').trim_start().starts_with("HIERARCHY") {
+                true => at(
+                    path,
+                    "a BVH motion capture, not a glTF file (`inbetween blend` reads two captures)",
+                ),
+                false => at(
+                    path,
+                    format!("not a glTF file (the JSON does not parse: {e})"),
+                ),
+            }
+            })?;
         if !json.is_object() || !json.get("asset").is_some_and(Value::is_object) {
             return Err(at(path, "not a glTF file (no \"asset\" object)"));
         }
