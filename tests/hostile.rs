@@ -408,9 +408,9 @@ fn temporaries_of_a_killed_run_are_removed_by_the_next() {
     }
 }
 
-/// A one-triangle mesh with two targets whose weights `clips` animations each key three times
-/// (0, 1 and 2 s), as a GLB.
-fn triangle_many_clips(path: &Path, clips: usize) {
+/// `meshes` one-triangle meshes (one node each) with two targets, whose weights `clips`
+/// animations each key three times (0, 1 and 2 s), as a GLB.
+fn triangles_animated(path: &Path, meshes: usize, clips: usize) {
     let floats: [f32; 36] = [
         0., 0., 0., 1., 0., 0., 0., 1., 0., // base
         0., 0., 0., 0., 0., 0., 0., 0., 1., // target 0
@@ -422,20 +422,21 @@ fn triangle_many_clips(path: &Path, clips: usize) {
     let view =
         |offset: usize, len: usize| json!({"buffer": 0, "byteOffset": offset, "byteLength": len});
     let vec3 = |view: usize| json!({"bufferView": view, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 1]});
+    let mesh = json!({"primitives": [{"attributes": {"POSITION": 0},
+        "targets": [{"POSITION": 1}, {"POSITION": 2}]}], "weights": [0, 0]});
     let json = json!({
         "asset": {"version": "2.0"},
         "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0},
-            "targets": [{"POSITION": 1}, {"POSITION": 2}]}], "weights": [0, 0]}],
+        "scenes": [{"nodes": (0..meshes).collect::<Vec<_>>()}],
+        "nodes": (0..meshes).map(|m| json!({"mesh": m})).collect::<Vec<_>>(),
+        "meshes": vec![mesh; meshes],
         "accessors": [vec3(0), vec3(1), vec3(2),
             {"bufferView": 3, "componentType": 5126, "count": 3, "type": "SCALAR", "min": [0], "max": [2]},
             {"bufferView": 4, "componentType": 5126, "count": 6, "type": "SCALAR"}],
         "bufferViews": [view(0, 36), view(36, 36), view(72, 36), view(108, 12), view(120, 24)],
         "buffers": [{"byteLength": bin.len()}],
         "animations": (0..clips).map(|i| json!({"name": format!("clip {i}"),
-            "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
+            "channels": (0..meshes).map(|m| json!({"sampler": 0, "target": {"node": m, "path": "weights"}})).collect::<Vec<_>>(),
             "samplers": [{"input": 3, "output": 4}]})).collect::<Vec<_>>(),
     });
     write_glb(path, &json, &bin);
@@ -449,8 +450,8 @@ fn a_mesh_animated_by_many_clips_is_refused_before_its_weights_fill_memory() {
     // line under a 2 GiB address-space limit instead of failing an allocation.
     let dir = tempfile::tempdir().unwrap();
     let (many, few) = (dir.path().join("many.glb"), dir.path().join("few.glb"));
-    triangle_many_clips(&many, 400);
-    triangle_many_clips(&few, 20);
+    triangles_animated(&many, 1, 400);
+    triangles_animated(&few, 1, 20);
     let out = dir.path().join("out.glb");
     let limit = "ulimit -v 2097152;";
     let r = run_in_shell(limit, &["tween", s(&many), "-o", s(&out), "-q"]);
@@ -498,7 +499,7 @@ fn a_refusal_lists_a_few_of_the_file_s_names_not_all() {
     // 400 clips: the line names the first eight and counts the rest (it was one name each).
     let dir = tempfile::tempdir().unwrap();
     let many = dir.path().join("many.glb");
-    triangle_many_clips(&many, 400);
+    triangles_animated(&many, 1, 400);
     let out = dir.path().join("out.glb");
     assert_refused(
         &["tween", s(&many), "-o", s(&out), "--animation", "nope"],
@@ -506,4 +507,25 @@ fn a_refusal_lists_a_few_of_the_file_s_names_not_all() {
         "\"clip 7\", ... 392 more)",
         &out,
     );
+}
+
+#[test]
+fn a_stage_of_many_animated_meshes_is_written_under_the_usual_open_file_limit() {
+    // 600 animated meshes to .usda under `ulimit -n 256`: their samples are spooled to one
+    // scratch file (one file per attribute failed with "Too many open files"); every mesh's
+    // points are sampled, and no scratch file is left.
+    let dir = tempfile::tempdir().unwrap();
+    let many = dir.path().join("many.glb");
+    triangles_animated(&many, 600, 1);
+    let out = dir.path().join("out.usda");
+    let r = run_in_shell("ulimit -n 256;", &["tween", s(&many), "-o", s(&out), "-q"]);
+    assert_eq!(
+        r.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.matches("point3f[] points.timeSamples").count(), 600);
+    assert!(temporaries(dir.path()).is_empty());
 }

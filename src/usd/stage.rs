@@ -23,7 +23,7 @@ use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 use std::cell::RefCell;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// One Mesh prim to write.
 pub struct MeshPrim {
@@ -399,24 +399,35 @@ pub fn extent(points: &[[f32; 3]]) -> [[f32; 3]; 2] {
 /// The animated primitives of a stage: one entry per (processed mesh, primitive), with the
 /// base points and normals its frames' deltas apply to (instances share the entry).
 pub fn animated(stage: &Stage) -> Vec<&MeshPrim> {
-    fn walk<'a>(p: &'a Prim, out: &mut Vec<&'a MeshPrim>) {
+    fn walk<'a>(p: &'a Prim, seen: &mut HashSet<(usize, usize)>, out: &mut Vec<&'a MeshPrim>) {
         match p {
-            Prim::Xform { children, .. } => children.iter().for_each(|c| walk(c, out)),
+            Prim::Xform { children, .. } => children.iter().for_each(|c| walk(c, seen, out)),
             Prim::Mesh(m) => {
                 if let Some(a) = &m.animation {
-                    let key = (a.mesh, a.primitive);
-                    if !out
-                        .iter()
-                        .any(|o| o.animation.as_ref().map(|x| (x.mesh, x.primitive)) == Some(key))
-                    {
+                    if seen.insert((a.mesh, a.primitive)) {
                         out.push(m);
                     }
                 }
             }
         }
     }
-    let mut out = Vec::new();
-    stage.children.iter().for_each(|c| walk(c, &mut out));
+    let (mut seen, mut out) = (HashSet::new(), Vec::new());
+    stage
+        .children
+        .iter()
+        .for_each(|c| walk(c, &mut seen, &mut out));
+    out
+}
+
+/// [`animated`]'s primitives by processed mesh, each mesh's in their order (a frame looks up
+/// its own mesh's instead of scanning all of them: 8,000 animated meshes took 13.5 s to write).
+pub fn by_mesh<'a>(prims: &[&'a MeshPrim]) -> HashMap<usize, Vec<&'a MeshPrim>> {
+    let mut out: HashMap<usize, Vec<&MeshPrim>> = HashMap::new();
+    for m in prims {
+        if let Some(a) = &m.animation {
+            out.entry(a.mesh).or_default().push(m);
+        }
+    }
     out
 }
 
@@ -429,15 +440,15 @@ pub struct Sample {
 }
 
 /// Call `f` with the sample of every animated primitive of processed mesh `k` in `prims` (from
-/// [`animated`]), given that mesh's per-primitive deltas for one frame.
+/// [`by_mesh`]), given that mesh's per-primitive deltas for one frame.
 pub fn for_each_sample(
-    prims: &[&MeshPrim],
+    prims: &HashMap<usize, Vec<&MeshPrim>>,
     k: usize,
     deltas: &[Delta],
     f: &mut dyn FnMut(&Animation, Sample) -> Result<()>,
 ) -> Result<()> {
-    for m in prims {
-        let Some(a) = m.animation.as_ref().filter(|a| a.mesh == k) else {
+    for m in prims.get(&k).into_iter().flatten() {
+        let Some(a) = m.animation.as_ref() else {
             continue;
         };
         let d = &deltas[a.primitive];

@@ -4,7 +4,8 @@
 
 use super::material::{Material, Value, SURFACE};
 use super::stage::{
-    animated, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
+    animated, by_mesh, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim,
+    Prim, Stage,
 };
 use crate::output::{naming, Outputs};
 use anyhow::Result;
@@ -318,21 +319,32 @@ pub enum Attr {
     Points,
 }
 
-/// Sample text of every animated attribute, spooled to scratch files beside the output as
-/// frames arrive, then copied into the .usda (so no frame is held in memory).
+/// Sample text of every animated attribute, spooled to one scratch file beside the output as
+/// frames arrive, then copied into the .usda (so no frame is held in memory): each attribute's
+/// samples are chunks of that file, in frame order. (One file per attribute kept a file open
+/// for each: a stage of 600 animated meshes failed with "Too many open files" under the
+/// usual limit of 1,024.)
 pub struct Spool {
-    files: HashMap<(usize, usize, u8), PathBuf>,
+    file: Option<PathBuf>,
+    /// (mesh, primitive, attribute) -> its samples' (offset, length) in the file.
+    chunks: HashMap<(usize, usize, u8), Vec<(u64, u64)>>,
 }
 
 impl Spool {
-    fn path(&self, a: &Animation, attr: Attr) -> Option<&PathBuf> {
-        self.files.get(&(a.mesh, a.primitive, attr as u8))
-    }
-
     fn copy(&self, a: &Animation, attr: Attr, out: &mut dyn Write) -> Result<()> {
-        if let Some(p) = self.path(a, attr) {
-            let mut f = std::fs::File::open(p)?;
-            std::io::copy(&mut f, out)?;
+        use std::io::Read;
+        let key = (a.mesh, a.primitive, attr as u8);
+        let (Some(file), Some(chunks)) = (&self.file, self.chunks.get(&key)) else {
+            return Ok(());
+        };
+        let mut f = std::io::BufReader::with_capacity(1 << 16, std::fs::File::open(file)?);
+        let (mut at, mut buf) = (0u64, Vec::new());
+        for &(offset, len) in chunks {
+            f.seek_relative(offset as i64 - at as i64)?;
+            buf.resize(len as usize, 0);
+            f.read_exact(&mut buf)?;
+            out.write_all(&buf)?;
+            at = offset + len;
         }
         Ok(())
     }
@@ -357,31 +369,24 @@ fn spool_frames(
     files: &mut Outputs,
 ) -> Result<Spool> {
     let prims = animated(stage);
+    let by_mesh = by_mesh(&prims);
     let mut spool = Spool {
-        files: HashMap::new(),
+        file: None,
+        chunks: HashMap::new(),
     };
-    let mut writers: HashMap<(usize, usize, u8), std::io::BufWriter<std::fs::File>> =
-        HashMap::new();
-    for m in &prims {
-        let a = m.animation.as_ref().expect("animated");
-        let attrs: &[Attr] = if a.normals {
-            &[Attr::Extent, Attr::Normals, Attr::Points]
-        } else {
-            &[Attr::Extent, Attr::Points]
-        };
-        for &attr in attrs {
-            let key = (a.mesh, a.primitive, attr as u8);
-            let tag = format!(".{}_{}_{}", a.mesh, a.primitive, attr as u8);
-            let file = files.scratch(path, &tag);
-            spool.files.insert(key, file.clone());
-            let f = std::fs::File::create(&file)
-                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
-            writers.insert(key, std::io::BufWriter::with_capacity(1 << 20, f));
-        }
+    if prims.is_empty() {
+        return Ok(spool);
     }
+    let file = files.scratch(path, ".samples");
+    let f = std::fs::File::create(&file)
+        .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+    spool.file = Some(file);
+    let mut w = std::io::BufWriter::with_capacity(1 << 20, f);
+    let (mut at, mut line) = (0u64, Vec::new());
     let pad = "            ";
+    let chunks = &mut spool.chunks;
     source(&mut |k, f, deltas| {
-        for_each_sample(&prims, k, deltas, &mut |a, s| {
+        for_each_sample(&by_mesh, k, deltas, &mut |a, s| {
             let t = a.times[f];
             let arrays = [
                 (Attr::Extent, Some(&s.extent[..])),
@@ -390,20 +395,23 @@ fn spool_frames(
             ];
             for (attr, values) in arrays {
                 if let Some(values) = values {
-                    let w = writers
-                        .get_mut(&(k, a.primitive, attr as u8))
-                        .expect("spool");
-                    write!(w, "{pad}{t}: ")?;
-                    write_vec3s(w, values)?;
-                    writeln!(w, ",")?;
+                    line.clear();
+                    write!(line, "{pad}{t}: ")?;
+                    write_vec3s(&mut line, values)?;
+                    writeln!(line, ",")?;
+                    w.write_all(&line)?;
+                    let len = line.len() as u64;
+                    chunks
+                        .entry((k, a.primitive, attr as u8))
+                        .or_default()
+                        .push((at, len));
+                    at += len;
                 }
             }
             Ok(())
         })
     })
     .map_err(|e| naming(path, e))?;
-    for (_, mut w) in writers {
-        w.flush().map_err(|e| naming(path, e.into()))?;
-    }
+    w.flush().map_err(|e| naming(path, e.into()))?;
     Ok(spool)
 }
