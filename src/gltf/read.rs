@@ -50,6 +50,27 @@ pub fn listed(names: &[String]) -> String {
 /// How many names [`listed`] shows.
 pub const LISTED: usize = 8;
 
+/// The error for a file whose JSON does not parse; a motion capture handed to a glTF command
+/// is named as one, with what reads it.
+fn not_gltf(path: &Path, bytes: &[u8], e: serde_json::Error) -> anyhow::Error {
+    let start = String::from_utf8_lossy(&bytes[..bytes.len().min(64)]);
+    if start
+        .trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with("HIERARCHY")
+    {
+        at(
+            path,
+            "a BVH motion capture, not a glTF file (`inbetween blend` reads two captures)",
+        )
+    } else {
+        at(
+            path,
+            format!("not a glTF file (the JSON does not parse: {e})"),
+        )
+    }
+}
+
 /// Top-level arrays whose entries must be objects.
 const OBJECT_ARRAYS: &[&str] = &[
     "accessors",
@@ -90,20 +111,7 @@ impl Document {
             (bytes, None)
         };
         let json: Value =
-            serde_json::from_slice(json_bytes).map_err(|e| {
-                // A motion capture handed to a glTF command: say what it is and what reads it.
-                let text = String::from_utf8_lossy(&bytes[..bytes.len().min(64)]);
-                match text.trim_start_matches('\u{feff}').trim_start().starts_with("HIERARCHY") {
-                true => at(
-                    path,
-                    "a BVH motion capture, not a glTF file (`inbetween blend` reads two captures)",
-                ),
-                false => at(
-                    path,
-                    format!("not a glTF file (the JSON does not parse: {e})"),
-                ),
-            }
-            })?;
+            serde_json::from_slice(json_bytes).map_err(|e| not_gltf(path, bytes, e))?;
         if !json.is_object() || !json.get("asset").is_some_and(Value::is_object) {
             return Err(at(path, "not a glTF file (no \"asset\" object)"));
         }

@@ -328,11 +328,12 @@ fn check_budget(
 ) -> Result<()> {
     let mut bytes = 0.0;
     for m in meshes {
-        let frames: f64 = m
+        let per_track: Vec<f64> = m
             .tracks
             .iter()
             .map(|t| frame_estimate(&t.times, opts))
-            .sum();
+            .collect();
+        let frames: f64 = per_track.iter().sum();
         // At most one new target a frame; a compacted basis no more than the frames' rank.
         let normals = m.primitives.iter().all(|p| p.normals.is_some());
         let tangents = normals && m.primitives.iter().all(|p| p.tangents.is_some());
@@ -343,8 +344,7 @@ fn check_budget(
         };
         // f32 weights, built, packed and copied into the buffer.
         bytes += 3.0 * 4.0 * frames * (m.target_count as f64 + new);
-        for (k, t) in m.tracks.iter().enumerate() {
-            let frames = frame_estimate(&t.times, opts);
+        for (k, (t, &frames)) in m.tracks.iter().zip(&per_track).enumerate() {
             if frames > MAX_FRAMES {
                 bail!(doc.err(format!(
                     "track {k} of mesh {:?} would have about {frames:.3e} frames (keys from {} s to {} s), more than {MAX_FRAMES}; ask for fewer with --fps or --tweens",
