@@ -282,6 +282,28 @@ fn run_in_shell(prefix: &str, args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// [`run_in_shell`], insisting on a refusal: exit 2, one line saying each of `what`, `out` not
+/// written and no temporary left beside it.
+fn refused_in_shell(prefix: &str, args: &[&str], what: &[&str], out: &Path) {
+    let r = run_in_shell(prefix, args);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    assert!(
+        what.iter().all(|w| err.contains(w)),
+        "{args:?}: {what:?} in {err}"
+    );
+    let folder = out.parent().expect("a folder");
+    assert!(!out.exists() && temporaries(folder).is_empty(), "{args:?}");
+}
+
+/// [`run_in_shell`], insisting on success (its error output shown otherwise).
+fn succeeds_in_shell(prefix: &str, args: &[&str]) {
+    let r = run_in_shell(prefix, args);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(0), "{args:?}: {err}");
+}
+
 #[test]
 fn outputs_appear_together_or_not_at_all() {
     let dir = tempfile::tempdir().unwrap();
@@ -454,42 +476,17 @@ fn a_mesh_animated_by_many_clips_is_refused_before_its_weights_fill_memory() {
     triangles_animated(&few, 1, 20);
     let out = dir.path().join("out.glb");
     let limit = "ulimit -v 2097152;";
-    let r = run_in_shell(limit, &["tween", s(&many), "-o", s(&out), "-q"]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert_eq!(r.status.code(), Some(2), "{err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(
-        err.contains("many.glb") && err.contains("their weights need"),
-        "{err}"
-    );
-    assert!(!out.exists() && temporaries(dir.path()).is_empty());
+    let args = ["tween", s(&many), "-o", s(&out), "-q"];
+    refused_in_shell(limit, &args, &["many.glb", "their weights need"], &out);
     // Compacted, the weights are a few a key (a basis no larger than the frames' rank), but
     // 24,800 frames are more than a basis is looked for over: refused, naming the file too.
-    let r = run_in_shell(
-        limit,
-        &["tween", s(&many), "-o", s(&out), "--compact", "-q"],
-    );
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert_eq!(r.status.code(), Some(2), "{err}");
-    assert!(err.contains("many.glb") && err.contains("basis"), "{err}");
-    assert!(!out.exists() && temporaries(dir.path()).is_empty());
+    let args = ["tween", s(&many), "-o", s(&out), "--compact", "-q"];
+    refused_in_shell(limit, &args, &["many.glb", "basis"], &out);
     // A USD point cache has no weights: it streams.
     let usd = dir.path().join("out.usdc");
-    let r = run_in_shell(limit, &["tween", s(&many), "-o", s(&usd), "-q"]);
-    assert_eq!(
-        r.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&r.stderr)
-    );
+    succeeds_in_shell(limit, &["tween", s(&many), "-o", s(&usd), "-q"]);
     // 20 clips (3 MiB of weights) go through under the same limit, every clip kept.
-    let r = run_in_shell(limit, &["tween", s(&few), "-o", s(&out), "-q"]);
-    assert_eq!(
-        r.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&r.stderr)
-    );
+    succeeds_in_shell(limit, &["tween", s(&few), "-o", s(&out), "-q"]);
     let doc = inbetween::gltf::Document::open(&out).unwrap();
     assert_eq!(doc.json["animations"].as_array().unwrap().len(), 20);
 }
@@ -518,13 +515,7 @@ fn a_stage_of_many_animated_meshes_is_written_under_the_usual_open_file_limit() 
     let many = dir.path().join("many.glb");
     triangles_animated(&many, 600, 1);
     let out = dir.path().join("out.usda");
-    let r = run_in_shell("ulimit -n 256;", &["tween", s(&many), "-o", s(&out), "-q"]);
-    assert_eq!(
-        r.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&r.stderr)
-    );
+    succeeds_in_shell("ulimit -n 256;", &["tween", s(&many), "-o", s(&out), "-q"]);
     let text = std::fs::read_to_string(&out).unwrap();
     assert_eq!(text.matches("point3f[] points.timeSamples").count(), 600);
     assert!(temporaries(dir.path()).is_empty());
