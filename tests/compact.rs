@@ -304,3 +304,28 @@ fn compact_keeps_each_vertex_colour() {
     // ... but every vertex kept its colour.
     assert_eq!(attribute_deviation(&out, &dense, &["COLOR_0"]), 0.0);
 }
+
+/// Flamingo sampled at 1,000 frames a second: 1,401 frames of 1,011 values each, so the basis
+/// comes from the frames' covariance (values x values) rather than their Gram matrix: within
+/// the tolerance of the dense frames, with as few targets as the SVD's rank allows.
+#[test]
+fn frames_outnumbering_the_values_compact_within_tolerance() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = fx.join("morph-keyframes/Flamingo.glb");
+    let (dense, out) = (dir.path().join("dense.glb"), dir.path().join("c.glb"));
+    let report = dir.path().join("r.json");
+    tween_quietly(&input, &dense, &["--fps", "1000"]);
+    let args = ["--fps", "1000", "--compact", "--report", s(&report)];
+    tween_quietly(&input, &out, &args);
+    assert_valid(&out);
+    let tol = 1e-4;
+    let (r, m) = deviation(&out, &dense);
+    assert!(
+        r <= tol * 1.001 && m <= 3.0 * tol * 1.001,
+        "{r:.2e} RMS, {m:.2e} max"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let basis = json["compact"]["meshes"][0]["basis"].as_u64().unwrap();
+    assert!((1..=16).contains(&basis), "{basis} basis targets");
+}
