@@ -6,7 +6,9 @@
 //!   basis and the keys stay exact) become K basis targets and K weights per frame. The Gram
 //!   matrix of the frames (frames x frames) is built in column chunks from the frames as they
 //!   are held (f32), its eigenvectors give the weights and one more pass the basis: the frames
-//!   are never copied whole. K is the smallest whose truncation leaves every frame within
+//!   are never copied whole. Where the frames outnumber their values (a small mesh sampled
+//!   long), the frames are copied into one matrix instead and their covariance (values x
+//!   values) gives the basis directions. K is the smallest whose truncation leaves every frame within
 //!   [`TRUNCATION_SHARE`] of the tolerance, then grown until the encoded result is within it.
 //! * **Quantized** basis targets: normalized SHORT (or BYTE where the error allows) with each
 //!   target's scale carried by its weights (`KHR_mesh_quantization`); NORMAL and TANGENT
@@ -75,7 +77,9 @@ pub const UV_FACTOR: f64 = 1.0;
 /// added up at every vertex; the measured deviation includes it.
 pub const WEIGHT_SHARE: f64 = 0.25;
 
-/// Most frames a basis is looked for over (the Gram matrix is frames x frames).
+/// Most frames a basis is looked for over where the frames have at least as many values (the
+/// Gram matrix is frames x frames; with fewer values, their covariance is values x values and
+/// any number of frames will do).
 pub const MAX_BASIS_FRAMES: usize = 8192;
 
 /// How many basis targets (`--basis`).
@@ -449,7 +453,13 @@ pub fn compact(
 ) -> Result<Compacted> {
     let rig = authored.iter().any(|w| !w.is_empty());
     let count = authored.len();
-    if opts.basis != Basis::Off && count > MAX_BASIS_FRAMES {
+    let values: usize = (frames.primitives.iter().zip(&mesh.primitives))
+        .map(|(f, p)| {
+            let attributes = 1 + f.normals.is_some() as usize + f.tangents.is_some() as usize;
+            3 * attributes * p.base.len()
+        })
+        .sum();
+    if opts.basis != Basis::Off && count.min(values) > MAX_BASIS_FRAMES {
         bail!(
             "mesh {:?}: {count} frames are more than a basis is looked for over ({MAX_BASIS_FRAMES}); use fewer frames or --basis off",
             mesh.name

@@ -361,9 +361,10 @@ fn check_budget(
     let available = memory_available();
     if let Some(available) = available.filter(|&a| held && bytes > a as f64) {
         bail!(doc.err(format!(
-            "its frames and their weights need about {:.1} GiB in memory for a glTF output, more than the {:.1} GiB available; write fewer frames (--fps, --tweens), one clip at a time (--animation) or a USD point cache (.usdc streams its frames)",
+            "its frames and their weights need about {:.1} GiB in memory for a glTF output, more than the {:.1} GiB available; write fewer frames (--fps, --tweens), one clip at a time (--animation), {}or a USD point cache (.usdc streams its frames)",
             bytes / GIB,
-            available as f64 / GIB
+            available as f64 / GIB,
+            if opts.compact.is_none() { "--compact (a basis of few targets), " } else { "" }
         )));
     }
     Ok(())
