@@ -353,19 +353,27 @@ fn factor(rows: &Rows) -> Result<Factors> {
             Par::rayon(0),
         );
     });
-    let eig = gram
+    let (u, sigma) = singular(&gram)?;
+    Ok(Factors::Svd { u, sigma })
+}
+
+/// The eigenvectors of `product` (the frames' Gram matrix or covariance) in the order of the
+/// frames' singular values, the square roots of its eigenvalues: descending, down to 1e-12 of
+/// the largest.
+fn singular(product: &Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
+    let eig = product
         .self_adjoint_eigen(Side::Lower)
         .map_err(|e| anyhow::anyhow!("the frames' decomposition failed ({e:?})"))?;
     let s = eig.S().column_vector();
-    let order: Vec<usize> = (0..n).rev().collect();
+    let order: Vec<usize> = (0..product.nrows()).rev().collect();
     let top = s[order[0]].max(0.0);
     let sigma: Vec<f64> = order
         .iter()
         .map(|&i| s[i].max(0.0).sqrt())
         .take_while(|&x| x > 1e-12 * top.sqrt().max(f64::MIN_POSITIVE))
         .collect();
-    let u = Mat::from_fn(n, sigma.len(), |r, c| eig.U()[(r, order[c])]);
-    Ok(Factors::Svd { u, sigma })
+    let vectors = Mat::from_fn(product.nrows(), sigma.len(), |r, c| eig.U()[(r, order[c])]);
+    Ok((vectors, sigma))
 }
 
 /// [`factor`] through the covariance of the frames' `values` columns: its eigenvectors are the
@@ -391,18 +399,7 @@ fn factor_by_values(rows: &Rows, values: usize) -> Result<Factors> {
         1.0,
         Par::rayon(0),
     );
-    let eig = cov
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| anyhow::anyhow!("the frames' decomposition failed ({e:?})"))?;
-    let s = eig.S().column_vector();
-    let order: Vec<usize> = (0..values).rev().collect();
-    let top = s[order[0]].max(0.0);
-    let sigma: Vec<f64> = order
-        .iter()
-        .map(|&i| s[i].max(0.0).sqrt())
-        .take_while(|&x| x > 1e-12 * top.sqrt().max(f64::MIN_POSITIVE))
-        .collect();
-    let v = Mat::from_fn(values, sigma.len(), |r, c| eig.U()[(r, order[c])]);
+    let (v, sigma) = singular(&cov)?;
     let mut u = Mat::<f64>::zeros(n, sigma.len());
     matmul(
         u.as_mut(),
