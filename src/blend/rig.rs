@@ -561,10 +561,9 @@ fn add_ends(doc: &Document, rig: &mut Rig, joints: &BTreeSet<usize>) {
     let nodes = arr(&doc.json, "nodes");
     let world = rig.world(&rig.rest);
     let children = rig.children();
-    let bones = rig.skeleton_child_counts();
     let mut ends = Vec::new();
     for &j in joints {
-        if j >= rig.file_nodes || bones[j] > 0 {
+        if j >= rig.file_nodes || children[j].iter().any(|&c| rig.skeleton[c]) {
             continue;
         }
         // The joint and its non-joint descendants, each with its transform into the joint's
@@ -651,18 +650,20 @@ mod tests {
             "meshes": [{"primitives": [{"attributes": {}}]}],
             "skins": [{"joints": [0, 1]}],
         });
-        let bytes = serde_json::to_vec(&json).unwrap();
-        let doc = Document::from_bytes(
-            std::path::Path::new("rig.gltf"),
-            &bytes,
-            &Default::default(),
-        );
-        let doc = doc.unwrap();
-        let (mut rig, _) = load_gltf(&doc).unwrap();
-        use_skin(&doc, &mut rig, 0);
+        let rig = skinned(&json);
         assert_eq!(rig.skeleton, [true, true, false, true, false]);
         assert_eq!(rig.skeleton_child_counts()[1], 1);
         assert_eq!(rig.children()[1], [2, 3]);
+    }
+
+    /// The rig of `json`, a glTF document, with its skin 0 in use.
+    fn skinned(json: &serde_json::Value) -> Rig {
+        let bytes = serde_json::to_vec(json).unwrap();
+        let path = std::path::Path::new("rig.gltf");
+        let doc = Document::from_bytes(path, &bytes, &Default::default()).unwrap();
+        let (mut rig, _) = load_gltf(&doc).unwrap();
+        use_skin(&doc, &mut rig, 0);
+        rig
     }
 
     /// The rig of a two-joint skin whose leaf joint (the shin, at y = -1) carries a rigid mesh
@@ -681,12 +682,7 @@ mod tests {
                 "uri": format!("data:application/octet-stream;base64,{positions}")}],
             "skins": [{"joints": [0, 1]}],
         });
-        let bytes = serde_json::to_vec(&json).unwrap();
-        let path = std::path::Path::new("rig.gltf");
-        let doc = Document::from_bytes(path, &bytes, &Default::default()).unwrap();
-        let (mut rig, _) = load_gltf(&doc).unwrap();
-        use_skin(&doc, &mut rig, 0);
-        rig
+        skinned(&json)
     }
 
     /// A leaf joint's rigid mesh gives it an end at its lowest vertex in the rest pose, in the

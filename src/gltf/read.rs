@@ -48,7 +48,7 @@ pub fn listed(names: &[String]) -> String {
 }
 
 /// How many names [`listed`] shows.
-pub const LISTED: usize = 8;
+const LISTED: usize = 8;
 
 /// The error for a file whose JSON does not parse; a motion capture handed to a glTF command
 /// is named as one, with what reads it.

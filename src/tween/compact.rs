@@ -338,7 +338,7 @@ impl Factors {
 /// frames took 9.2 s and 614 MiB by the Gram matrix).
 fn factor(rows: &Rows) -> Result<Factors> {
     let n = rows.count();
-    let values: usize = rows.blocks.iter().map(|b| 3 * b.vertices).sum();
+    let values = values(&rows.blocks);
     if values < n {
         return factor_by_values(rows, values);
     }
@@ -374,6 +374,11 @@ fn singular(product: &Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
         .collect();
     let vectors = Mat::from_fn(product.nrows(), sigma.len(), |r, c| eig.U()[(r, order[c])]);
     Ok((vectors, sigma))
+}
+
+/// How many values a frame has in `blocks` (three a vertex and attribute).
+fn values(blocks: &[Block]) -> usize {
+    blocks.iter().map(|b| 3 * b.vertices).sum()
 }
 
 /// [`factor`] through the covariance of the frames' `values` columns: its eigenvectors are the
@@ -450,18 +455,6 @@ pub fn compact(
 ) -> Result<Compacted> {
     let rig = authored.iter().any(|w| !w.is_empty());
     let count = authored.len();
-    let values: usize = (frames.primitives.iter().zip(&mesh.primitives))
-        .map(|(f, p)| {
-            let attributes = 1 + f.normals.is_some() as usize + f.tangents.is_some() as usize;
-            3 * attributes * p.base.len()
-        })
-        .sum();
-    if opts.basis != Basis::Off && count.min(values) > MAX_BASIS_FRAMES {
-        bail!(
-            "mesh {:?}: {count} frames are more than a basis is looked for over ({MAX_BASIS_FRAMES}); use fewer frames or --basis off",
-            mesh.name
-        );
-    }
     let diag = {
         let all: Vec<DVec3> = mesh
             .primitives
@@ -497,6 +490,12 @@ pub fn compact(
                 weight: tol / ntol,
             });
         }
+    }
+    if opts.basis != Basis::Off && count.min(values(&blocks)) > MAX_BASIS_FRAMES {
+        bail!(
+            "mesh {:?}: {count} frames are more than a basis is looked for over ({MAX_BASIS_FRAMES}); use fewer frames or --basis off",
+            mesh.name
+        );
     }
     let vertices: usize = mesh.primitives.iter().map(|p| p.base.len()).sum();
     let (base, base_error) = base_rounding(mesh, &blocks, restorable, opts, (tol, ntol));

@@ -4,8 +4,7 @@
 
 use super::material::{Material, Value, SURFACE};
 use super::stage::{
-    animated, by_mesh, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim,
-    Prim, Stage,
+    animated, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
 };
 use crate::output::{naming, Outputs};
 use anyhow::Result;
@@ -369,7 +368,6 @@ fn spool_frames(
     files: &mut Outputs,
 ) -> Result<Spool> {
     let prims = animated(stage);
-    let by_mesh = by_mesh(&prims);
     let mut spool = Spool {
         file: None,
         chunks: HashMap::new(),
@@ -386,7 +384,7 @@ fn spool_frames(
     let pad = "            ";
     let chunks = &mut spool.chunks;
     source(&mut |k, f, deltas| {
-        for_each_sample(&by_mesh, k, deltas, &mut |a, s| {
+        for_each_sample(&prims, k, deltas, &mut |a, s| {
             let t = a.times[f];
             let arrays = [
                 (Attr::Extent, Some(&s.extent[..])),

@@ -13,7 +13,7 @@
 
 use super::material::{Look, Shader, Value, SURFACE};
 use super::stage::{
-    animated, by_mesh, extent, for_each_sample, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
+    animated, extent, for_each_sample, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
 };
 use anyhow::Result;
 use std::collections::HashMap;
@@ -716,10 +716,9 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     };
     w.bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
     let prims = animated(stage);
-    let by_mesh = by_mesh(&prims);
     let mut frames: FrameReps = HashMap::new();
     source(&mut |k, _f, deltas| {
-        for_each_sample(&by_mesh, k, deltas, &mut |a, sample| {
+        for_each_sample(&prims, k, deltas, &mut |a, sample| {
             let e = w.vec3f_array(&sample.extent)?;
             let p = w.vec3f_array(&sample.points)?;
             let n = sample
