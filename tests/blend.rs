@@ -65,7 +65,7 @@ fn blend_report(input: &Path, a: &str, b: &str, w: f64, out: &Path, extra: &[&st
     ];
     args.extend_from_slice(extra);
     run_ok(&args);
-    serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap()
+    read_json(&rep)
 }
 
 /// `inbetween blend A.bvh B.bvh --weight WEIGHTS -o out` and its report (written beside `out`).
@@ -84,7 +84,7 @@ fn blend_bvh_report(a: &Path, b: &Path, weights: &str, out: &Path) -> Value {
         "--report",
         &s(&rep),
     ]);
-    serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap()
+    read_json(&rep)
 }
 
 fn sliding(figures: &Value) -> f64 {
@@ -570,7 +570,7 @@ fn cycles_none_blends_what_does_not_walk() {
     let mut with = args.to_vec();
     with.extend(["--cycles", "none", "--report", rep.to_str().unwrap(), "-q"]);
     run_ok(&with);
-    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+    let r: serde_json::Value = read_json(&rep);
     assert_eq!(r["cycle_method"], "none");
     assert!(r["clips"]
         .as_array()
@@ -703,7 +703,7 @@ fn bvh_captures_blend_into_bvh() {
     let s = |p: &Path| p.to_str().unwrap().to_owned();
     blend_cmu(&fx, &out, &["--report", &s(&rep)]);
     check_schema(&python, "blend-report.schema.json", &rep, "blend report");
-    let report: Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+    let report: Value = read_json(&rep);
     let a = blend::load_bvh(&walk).unwrap();
     let b = blend::load_bvh(&run).unwrap();
     let back = blend::load_bvh(&out).unwrap();
@@ -845,7 +845,7 @@ fn weight_lists_make_a_blend_space() {
         run_ok(&args);
     };
     fox_blend("0,0.25,0.5,0.75,1", &space, &["--report", &s(&rep)]);
-    let reports: Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+    let reports: Value = read_json(&rep);
     let reports = reports.as_array().unwrap();
     assert_eq!(reports.len(), 5);
     let (gdoc, buffers, _) = ::gltf::import(&space).unwrap();

@@ -101,7 +101,7 @@ fn attribute_deviation(out: &Path, dense: &Path, names: &[&str]) -> f64 {
 }
 
 fn gltfpack(input: &Path, output: &Path) {
-    let bin = root().join("tools/node/node_modules/.bin");
+    let bin = node_modules_bin();
     node_tool(&bin, "gltfpack", ["-i", s(input), "-o", s(output), "-cc"]);
 }
 
@@ -111,7 +111,7 @@ fn size(p: &Path) -> u64 {
 
 /// The `compact` figures of a `--report` (the first mesh's RMS and max deviation).
 fn reported(report: &Path) -> (f64, f64) {
-    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap();
+    let r: serde_json::Value = read_json(report);
     let m = &r["compact"]["meshes"][0];
     (
         m["rms_deviation"].as_f64().unwrap(),
@@ -141,7 +141,7 @@ fn read_back_by_others(out: &Path) {
         }
     }
     assert!(g.animations().all(|a| a.channels().count() > 0));
-    let bin = root().join("tools/node/node_modules/.bin");
+    let bin = node_modules_bin();
     if !bin.join("gltf-transform").exists() && missing_tool("gltf-transform (tools/node)") {
         return;
     }
@@ -173,10 +173,8 @@ fn compact_table() {
         (face, false, true),
     ];
     let tol = 1e-4;
-    let have_gltfpack = root()
-        .join("tools/node/node_modules/.bin/gltfpack")
-        .exists()
-        || !missing_tool("gltfpack (tools/node)");
+    let have_gltfpack =
+        node_modules_bin().join("gltfpack").exists() || !missing_tool("gltfpack (tools/node)");
     eprintln!("file | output | bytes | RMS / diag | max / diag");
     let mut normals = 0.0f64;
     for (input, keyframes, beats_gltfpack) in &inputs {
@@ -325,7 +323,7 @@ fn frames_outnumbering_the_values_compact_within_tolerance() {
         r <= tol * 1.001 && m <= 3.0 * tol * 1.001,
         "{r:.2e} RMS, {m:.2e} max"
     );
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let json: serde_json::Value = read_json(&report);
     let basis = json["compact"]["meshes"][0]["basis"].as_u64().unwrap();
     assert!((1..=16).contains(&basis), "{basis} basis targets");
 }

@@ -11,7 +11,6 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// The node tools' folder, or `None` (skipped with the reason) where they are not installed.
 /// The compressors, as (name, command line after the tool's name with IN and OUT).
 const VARIANTS: &[(&str, &str, &[&str])] = &[
     // -af 0: no resampling of the animation (gltfpack resamples at 30 Hz by default, which

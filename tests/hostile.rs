@@ -30,7 +30,7 @@ fn model_and_secret(dir: &Path) -> (serde_json::Value, PathBuf, PathBuf) {
     png.extend_from_slice(SECRET);
     std::fs::write(secret_dir.join("secret.png"), &png).unwrap();
     tween_quietly(&sample("bar_twist.glb"), &model.join("base.gltf"), &[]);
-    let json = serde_json::from_slice(&std::fs::read(model.join("base.gltf")).unwrap()).unwrap();
+    let json = read_json(model.join("base.gltf"));
     (json, model, secret)
 }
 
@@ -132,8 +132,7 @@ fn external_references_stay_inside_the_input_folder() {
         .unwrap()
         .count();
     assert_eq!(copied, 4, "allowed.gltf, allowed.bin and two images");
-    let written: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&gltf_out).unwrap()).unwrap();
+    let written: serde_json::Value = read_json(&gltf_out);
     assert_eq!(written["images"][0]["uri"], "secret.png");
     assert_eq!(written["images"][1]["uri"], "leak.png");
     let other = dir.path().join("other");

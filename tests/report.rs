@@ -30,7 +30,7 @@ fn report(input: &Path, method: &str) -> serde_json::Value {
             "the report against its schema",
         );
     }
-    serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap()
+    read_json(&rep)
 }
 
 fn frames(r: &serde_json::Value) -> &Vec<serde_json::Value> {

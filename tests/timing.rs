@@ -19,8 +19,7 @@ fn s(p: &Path) -> &str {
 fn file_bytes(path: &Path) -> u64 {
     let mut n = std::fs::metadata(path).unwrap().len();
     if path.extension().is_some_and(|e| e == "gltf") {
-        let json: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+        let json: serde_json::Value = read_json(path);
         for b in json["buffers"].as_array().into_iter().flatten() {
             if let Some(uri) = b["uri"].as_str().filter(|u| !u.starts_with("data:")) {
                 n += std::fs::metadata(path.with_file_name(uri)).unwrap().len();

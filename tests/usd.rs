@@ -746,7 +746,7 @@ fn blender_imports_materials_and_colours() {
 fn webp_textures_are_left_out_with_a_warning() {
     let Some(fx) = fixtures() else { return };
     let Some(python) = python() else { return };
-    let bin = root().join("tools/node/node_modules/.bin/gltf-transform");
+    let bin = node_modules_bin().join("gltf-transform");
     if !bin.exists() && missing_tool("gltf-transform (tools/node)") {
         return;
     }

@@ -578,10 +578,20 @@ pub fn matching(a: &[glam::DVec3], b: &[glam::DVec3]) -> Vec<usize> {
         .collect()
 }
 
+/// A JSON file (a report, a .gltf) as a value.
+pub fn read_json(path: impl AsRef<Path>) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+/// Where the test command installs the node tools' commands (gltfpack, gltf-transform).
+pub fn node_modules_bin() -> PathBuf {
+    root().join("tools/node/node_modules/.bin")
+}
+
 /// The folder of the node tools' commands (gltfpack, gltf-transform), or None (noted as a
 /// missing tool) where they are not installed.
 pub fn node_bin() -> Option<PathBuf> {
-    let bin = root().join("tools/node/node_modules/.bin");
+    let bin = node_modules_bin();
     if bin.join("gltfpack").exists() && bin.join("gltf-transform").exists() {
         Some(bin)
     } else {
