@@ -523,3 +523,44 @@ fn a_stage_of_many_animated_meshes_is_written_under_the_usual_open_file_limit() 
     assert_eq!(text.matches("point3f[] points.timeSamples").count(), 600);
     assert!(temporaries(dir.path()).is_empty());
 }
+
+#[test]
+fn a_long_baked_face_rig_is_written_in_little_memory() {
+    // Two minutes of a 52-shape face rig baked at 60 keys/s (7,201 keys of 1,681 vertices),
+    // under a 1 GiB address-space limit. Every frame lies on a key at the default 30 frames/s
+    // between keys: the glTF keeps the file's targets and weights as they are, and the USD
+    // point cache streams the keys' poses. Every key's pose and normals were held at once
+    // (1.2 GiB: the USD run failed an allocation, the glTF was refused for memory) and every
+    // key was solved (7,200 segments set up for no frame between keys).
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("face.glb");
+    inbetween::synth::face_rig(52, 60.0, 120.0)
+        .write(&input)
+        .unwrap();
+    let limit = "ulimit -v 1048576;";
+    let glb = dir.path().join("out.glb");
+    succeeds_in_shell(limit, &["tween", s(&input), "-o", s(&glb), "-q"]);
+    let weights = |path: &Path| {
+        let doc = inbetween::gltf::Document::open(path).unwrap();
+        let targets = doc.json["meshes"][0]["primitives"][0]["targets"]
+            .as_array()
+            .unwrap()
+            .len();
+        let sampler = &doc.json["animations"][0]["samplers"][0];
+        let read = |key: &str| {
+            doc.read_f64(sampler[key].as_u64().unwrap() as usize)
+                .unwrap()
+                .0
+        };
+        (targets, read("input"), read("output"))
+    };
+    let (targets, times, played) = weights(&glb);
+    assert_eq!(targets, 52);
+    assert_eq!(times.len(), 7201);
+    assert_eq!((times, played), (weights(&input).1, weights(&input).2));
+    let usd = dir.path().join("out.usdc");
+    succeeds_in_shell(limit, &["tween", s(&input), "-o", s(&usd), "-q"]);
+    // Every key's points, 12 bytes a vertex (and its normals beside them).
+    let size = std::fs::metadata(&usd).unwrap().len();
+    assert!(size > 7201 * 1681 * 12, "{size}");
+}

@@ -19,8 +19,8 @@ use crate::gltf::{arr, Access, Document};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
-    close_loop, find_morph_meshes, frames_at, key_poses, mesh_geometry, plan, FrameAt, KeyOptions,
-    KeySource, Method, MorphMesh, Timing, TweenOptions,
+    close_loop, find_morph_meshes, frames_at, mesh_geometry, plan, FrameAt, KeyOptions, KeySource,
+    Method, MorphMesh, Timing, TweenOptions,
 };
 use anyhow::{bail, Result};
 use camera::Camera;
@@ -247,11 +247,10 @@ fn columns(
     match shown {
         Shown::File | Shown::Stored => {
             let welded = crate::tween::Welded::build(m);
-            let keys = key_poses(m, track);
             let cols = picked
                 .iter()
                 .map(|&k| Column {
-                    meshes: vec![to_world(welded.weld(&keys[k]))],
+                    meshes: vec![to_world(welded.weld(&m.pose(&track.weights[k])))],
                     key: true,
                     time: track.times[k],
                 })

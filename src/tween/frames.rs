@@ -7,7 +7,7 @@ use super::normals::{arc, carry, Smoothing};
 use super::options::{Method, TweenOptions};
 use super::report::{FrameReport, MeshReport, Shape};
 use super::schedule::{plan, FrameAt};
-use super::segment::{KeyTrack, Segment};
+use super::segment::{keys_read, KeyTrack, Segment};
 use super::solve::Pattern;
 use super::weld::Welded;
 use anyhow::Result;
@@ -57,9 +57,13 @@ pub fn key_poses(mesh: &MorphMesh, track: &Track) -> Vec<Vec<DVec3>> {
     track.weights.iter().map(|w| mesh.pose(w)).collect()
 }
 
-/// Normals data of a mesh for one track, when every primitive has NORMAL.
+/// Normals data of a mesh for one track, when every primitive has NORMAL: each held key's
+/// recomputed and authored normals (empty for the keys not held).
 struct NormalKeys {
     smoothing: Smoothing,
+    /// The base's recomputed normals (what a key's authored normals turn from when no target
+    /// has normals of its own).
+    rec_base: Vec<DVec3>,
     recomputed: Vec<Vec<DVec3>>,
     authored: Vec<Vec<DVec3>>,
 }
@@ -75,16 +79,24 @@ struct MeshTween<'a> {
     base_normals: Option<Vec<DVec3>>,
     has_normal_targets: bool,
     shape: Option<Shape>,
+    /// Whether a frame on a key is handed on with its deltas (not where a key is played by its
+    /// authored weights alone: the glTF rig layout, uncompacted).
+    key_deltas: bool,
 }
 
-/// One track's keys, ready for its frames.
+/// One track's keys as its segments read them: a key's welded pose and normals are made when
+/// a segment first reads the key and dropped once the segments have passed it, so a track of
+/// thousands of keys (a face rig baked at 60 keys/s) holds a few at a time, never all of them.
 struct TrackKeys {
+    /// Welded poses, empty for the keys not held.
     welded: Vec<Vec<DVec3>>,
     normals: Option<NormalKeys>,
+    /// The keys held, ascending.
+    held: Vec<usize>,
 }
 
 impl<'a> MeshTween<'a> {
-    fn new(mesh: &'a MorphMesh, opts: &'a TweenOptions) -> Result<MeshTween<'a>> {
+    fn new(mesh: &'a MorphMesh, opts: &'a TweenOptions, key_deltas: bool) -> Result<MeshTween<'a>> {
         let welded = Welded::build(mesh);
         let pattern = pattern_for(opts.method, mesh, &welded)?;
         let shape = opts.report.then(|| Shape::new(&welded.triangles));
@@ -100,47 +112,89 @@ impl<'a> MeshTween<'a> {
                 .any(|p| p.target_nrm.iter().any(Option::is_some)),
             shape,
             welded,
+            key_deltas,
         })
     }
 
-    /// The keys of `track` (welded), with their recomputed and authored normals.
-    fn keys(&self, track: &Track) -> TrackKeys {
-        let (mesh, welded) = (self.mesh, &self.welded);
-        let keys = key_poses(mesh, track);
-        let normals = self.base_normals.as_ref().map(|bn| {
-            let smoothing = Smoothing::new(&welded.of_vertex, bn);
-            let rec_base = smoothing.normals(&self.base, &welded.input_triangles);
-            let recomputed: Vec<Vec<DVec3>> = keys
-                .iter()
-                .map(|k| smoothing.normals(k, &welded.input_triangles))
-                .collect();
-            let authored = track
-                .weights
-                .iter()
-                .zip(&recomputed)
-                .map(|(w, rec)| match self.has_normal_targets {
-                    true => mesh.pose_normals(w).expect("normals present"),
-                    false => (0..bn.len())
-                        .map(|v| arc(rec_base[v], rec[v]) * bn[v])
-                        .collect(),
-                })
-                .collect();
+    /// The keys of `track`, none held yet; with `normals` (and normals in the mesh), each
+    /// held key's recomputed and authored normals too.
+    fn keys(&self, track: &Track, normals: bool) -> TrackKeys {
+        let count = track.weights.len();
+        let normals = self.base_normals.as_ref().filter(|_| normals).map(|bn| {
+            let smoothing = Smoothing::new(&self.welded.of_vertex, bn);
+            let rec_base = smoothing.normals(&self.base, &self.welded.input_triangles);
             NormalKeys {
                 smoothing,
-                recomputed,
-                authored,
+                rec_base,
+                recomputed: vec![Vec::new(); count],
+                authored: vec![Vec::new(); count],
             }
         });
         TrackKeys {
-            welded: keys.iter().map(|k| welded.weld(k)).collect(),
+            welded: vec![Vec::new(); count],
             normals,
+            held: Vec::new(),
         }
     }
 
-    /// The frame `f` of `keys` whose welded positions its segment gave as `w`: its
-    /// per-primitive deltas, and its figures when a report is asked for.
+    /// The held keys of `track` with the mesh's system, for a segment between them.
+    fn key_track<'k>(&'k self, track: &'k Track, keys: &'k TrackKeys) -> KeyTrack<'k> {
+        KeyTrack {
+            keys: &keys.welded,
+            times: &track.times,
+            pattern: self.pattern.as_ref(),
+            triangles: &self.welded.triangles,
+        }
+    }
+
+    /// Hold exactly the keys `keep` (ascending) of `track`: those not held are made (side by
+    /// side), the others dropped.
+    fn hold(&self, track: &Track, keys: &mut TrackKeys, keep: &[usize]) {
+        for &k in keys.held.iter().filter(|k| keep.binary_search(k).is_err()) {
+            keys.welded[k] = Vec::new();
+            if let Some(nk) = &mut keys.normals {
+                nk.recomputed[k] = Vec::new();
+                nk.authored[k] = Vec::new();
+            }
+        }
+        let (mesh, welded) = (self.mesh, &self.welded);
+        let normals = keys.normals.as_ref();
+        let made: Vec<_> = keep
+            .par_iter()
+            .filter(|k| keys.held.binary_search(k).is_err())
+            .map(|&k| {
+                let w = &track.weights[k];
+                let pose = mesh.pose(w);
+                let normals = normals.map(|nk| {
+                    let rec = nk.smoothing.normals(&pose, &welded.input_triangles);
+                    let authored = match self.has_normal_targets {
+                        true => mesh.pose_normals(w).expect("normals present"),
+                        false => (nk.rec_base.iter().zip(&rec))
+                            .zip(self.base_normals.as_deref().expect("normals present"))
+                            .map(|((rb, r), bn)| arc(*rb, *r) * *bn)
+                            .collect(),
+                    };
+                    (rec, authored)
+                });
+                (k, welded.weld(&pose), normals)
+            })
+            .collect();
+        for (k, pose, normals) in made {
+            keys.welded[k] = pose;
+            if let (Some(nk), Some((rec, authored))) = (&mut keys.normals, normals) {
+                nk.recomputed[k] = rec;
+                nk.authored[k] = authored;
+            }
+        }
+        keys.held = keep.to_vec();
+    }
+
+    /// The frame `f` of `track` (keys `keys`) whose welded positions its segment gave as `w`:
+    /// its per-primitive deltas, and its figures when a report is asked for. A frame on a key
+    /// is the key's own pose, every input vertex as authored (not welded).
     fn frame(
         &self,
+        track: &Track,
         keys: &TrackKeys,
         f: &FrameAt,
         w: Vec<DVec3>,
@@ -162,12 +216,23 @@ impl<'a> MeshTween<'a> {
                 inverted_triangles: inverted,
             }
         });
-        let positions: Vec<DVec3> = self
-            .welded
-            .of_vertex
-            .iter()
-            .map(|&k| w[k as usize])
-            .collect();
+        if let (Some(_), false) = (f.key(), self.key_deltas) {
+            let none = || PrimitiveDelta {
+                positions: Vec::new(),
+                normals: Some(Vec::new()),
+                tangents: Some(Vec::new()),
+            };
+            return (
+                self.mesh.primitives.iter().map(|_| none()).collect(),
+                figures,
+            );
+        }
+        let positions: Vec<DVec3> = match f.key() {
+            Some(k) => self.mesh.pose(&track.weights[k]),
+            None => (self.welded.of_vertex.iter())
+                .map(|&k| w[k as usize])
+                .collect(),
+        };
         drop(w);
         let normals = keys.normals.as_ref().map(|nk| {
             let rec = nk
@@ -200,7 +265,7 @@ impl<'a> MeshTween<'a> {
         progress: &(dyn Fn() + Sync),
         sink: &mut dyn FnMut(usize, Vec<PrimitiveDelta>) -> Result<()>,
     ) -> Result<()> {
-        let keys = self.keys(track);
+        let mut keys = self.keys(track, true);
         let stats = &mut out.stats;
         stats.keys += keys.welded.len();
         let frames = plan(&track.times, self.opts);
@@ -210,7 +275,9 @@ impl<'a> MeshTween<'a> {
             frames: frames.clone(),
             keys: track.weights.clone(),
         });
-        // Frames grouped by segment, each segment prepared once.
+        // Frames grouped by segment, each segment prepared once. A frame on a key is that key
+        // as it is (nothing solved), and a segment whose frames are all keys is not prepared
+        // (a track baked at 60 keys/s and written at 30 frames/s between keys).
         let mut i = 0;
         while i < frames.len() {
             let (a, b) = (frames[i].key_a, frames[i].key_b);
@@ -219,32 +286,53 @@ impl<'a> MeshTween<'a> {
                 .take_while(|f| f.key_a == a && f.key_b == b)
                 .count();
             let t0 = Instant::now();
-            let segment = KeyTrack {
-                keys: &keys.welded,
-                times: &track.times,
-                pattern: self.pattern.as_ref(),
-                triangles: &self.welded.triangles,
+            let on_keys = frames[i..j].iter().all(|f| f.key().is_some());
+            // Keys played by their authored weights alone, unmeasured, read nothing.
+            if !on_keys || self.key_deltas || self.shape.is_some() {
+                let count = keys.welded.len();
+                self.hold(track, &mut keys, &keys_read(self.opts.method, count, a, b));
             }
-            .segment(self.opts.method, self.opts.wrap, a, b)?;
+            let segment = match on_keys {
+                true => None,
+                false => Some(self.key_track(track, &keys).segment(
+                    self.opts.method,
+                    self.opts.wrap,
+                    a,
+                    b,
+                )?),
+            };
             stats.setup += t0.elapsed();
             let threads = rayon::current_num_threads().max(1);
-            let block = segment.block(j - i, threads);
+            let block = segment.as_ref().map_or(1, |s| s.block(j - i, threads));
             // Two frames a thread at a time, or one block a thread.
             let chunk = threads * if block > 1 { block } else { 2 };
             for start in (i..j).step_by(chunk) {
                 let t0 = Instant::now();
                 let end = (start + chunk).min(j);
                 // A last, shorter chunk is shared out over the threads too.
-                let block = block.min(segment.block(end - start, threads));
+                let block = segment
+                    .as_ref()
+                    .map_or(1, |s| block.min(s.block(end - start, threads)));
                 let computed: Vec<Vec<(Vec<PrimitiveDelta>, Option<FrameReport>)>> = frames
                     [start..end]
                     .par_chunks(block)
                     .map(|fs| {
-                        let ts: Vec<f64> = fs.iter().map(|f| f.t).collect();
+                        let ts: Vec<f64> = (fs.iter())
+                            .filter(|f| f.key().is_none())
+                            .map(|f| f.t)
+                            .collect();
+                        let mut solved = match &segment {
+                            Some(s) if !ts.is_empty() => s.frames(&ts),
+                            _ => Vec::new(),
+                        }
+                        .into_iter();
                         fs.iter()
-                            .zip(segment.frames(&ts))
-                            .map(|(f, w)| {
-                                let done = self.frame(&keys, f, w);
+                            .map(|f| {
+                                let w = match f.key() {
+                                    Some(k) => keys.welded[k].clone(),
+                                    None => solved.next().expect("a frame for each time"),
+                                };
+                                let done = self.frame(track, &keys, f, w);
                                 progress();
                                 done
                             })
@@ -262,7 +350,9 @@ impl<'a> MeshTween<'a> {
                     stats.frames += 1;
                 }
             }
-            segment.recycle(self.pattern.as_ref());
+            if let Some(segment) = segment {
+                segment.recycle(self.pattern.as_ref());
+            }
             i = j;
         }
         Ok(())
@@ -270,18 +360,20 @@ impl<'a> MeshTween<'a> {
 }
 
 /// Compute every frame of every track of `mesh` and hand each to `sink` in order (frame index,
-/// per-primitive deltas), so a writer can stream them. Frames are computed in parallel in
+/// per-primitive deltas), so a writer can stream them; without `key_deltas`, a frame on a key
+/// is handed on with empty deltas (for a writer that plays keys by their authored weights). Frames are computed in parallel in
 /// chunks of a few per thread, so at most one chunk is held at a time. `progress` is called
 /// once per frame done. The returned [`MeshFrames`] holds the tracks and figures but no
 /// frame data (see [`collect_mesh`] for a mesh with all of its frames).
 pub fn tween_mesh(
     mesh: &MorphMesh,
     opts: &TweenOptions,
+    key_deltas: bool,
     progress: &(dyn Fn() + Sync),
     sink: &mut dyn FnMut(usize, Vec<PrimitiveDelta>) -> Result<()>,
 ) -> Result<MeshFrames> {
     let started = Instant::now();
-    let tween = MeshTween::new(mesh, opts)?;
+    let tween = MeshTween::new(mesh, opts, key_deltas)?;
     let mut out = MeshFrames {
         mesh: mesh.mesh,
         tracks: Vec::new(),
@@ -306,7 +398,9 @@ pub fn tween_mesh(
     Ok(out)
 }
 
-/// [`tween_mesh`] with every frame kept, per primitive (what the glTF writer needs).
+/// [`tween_mesh`] with every frame kept, per primitive (what the glTF writer needs: a frame on
+/// a key has empty deltas in the rig layout uncompacted, where keys play their authored
+/// weights).
 pub fn collect_mesh(
     mesh: &MorphMesh,
     opts: &TweenOptions,
@@ -324,18 +418,24 @@ pub fn collect_mesh(
             tangents: (with_normals && all_tangents).then(Vec::new),
         })
         .collect();
-    let mut out = tween_mesh(mesh, opts, progress, &mut |_, frame| {
-        for (out, d) in primitives.iter_mut().zip(frame) {
-            out.positions.push(d.positions);
-            if let (Some(all), Some(n)) = (&mut out.normals, d.normals) {
-                all.push(n);
+    let mut out = tween_mesh(
+        mesh,
+        opts,
+        opts.gltf_reads_keys(),
+        progress,
+        &mut |_, frame| {
+            for (out, d) in primitives.iter_mut().zip(frame) {
+                out.positions.push(d.positions);
+                if let (Some(all), Some(n)) = (&mut out.normals, d.normals) {
+                    all.push(n);
+                }
+                if let (Some(all), Some(t)) = (&mut out.tangents, d.tangents) {
+                    all.push(t);
+                }
             }
-            if let (Some(all), Some(t)) = (&mut out.tangents, d.tangents) {
-                all.push(t);
-            }
-        }
-        Ok(())
-    })?;
+            Ok(())
+        },
+    )?;
     out.primitives = primitives;
     Ok(out)
 }
@@ -428,29 +528,24 @@ pub fn frames_at(
     opts: &TweenOptions,
     frames: &[FrameAt],
 ) -> Result<(Welded, Vec<Vec<DVec3>>)> {
-    let welded = Welded::build(mesh);
-    let pattern = pattern_for(opts.method, mesh, &welded)?;
-    let keys: Vec<Vec<DVec3>> = key_poses(mesh, track)
-        .iter()
-        .map(|k| welded.weld(k))
-        .collect();
+    let tween = MeshTween::new(mesh, opts, false)?;
+    let mut keys = tween.keys(track, false);
     let mut out = Vec::new();
-    let key_track = KeyTrack {
-        keys: &keys,
-        times: &track.times,
-        pattern: pattern.as_ref(),
-        triangles: &welded.triangles,
-    };
     let mut current: Option<((usize, usize), Segment)> = None;
     for f in frames {
-        if current
-            .as_ref()
-            .is_none_or(|(ab, _)| *ab != (f.key_a, f.key_b))
-        {
-            let s = key_track.segment(opts.method, opts.wrap, f.key_a, f.key_b)?;
-            current = Some(((f.key_a, f.key_b), s));
+        let ab = (f.key_a, f.key_b);
+        if current.as_ref().is_none_or(|(held, _)| *held != ab) {
+            tween.hold(
+                track,
+                &mut keys,
+                &keys_read(opts.method, track.times.len(), ab.0, ab.1),
+            );
+            let s = tween
+                .key_track(track, &keys)
+                .segment(opts.method, opts.wrap, ab.0, ab.1)?;
+            current = Some((ab, s));
         }
-        out.push(current.as_ref().unwrap().1.frame(f.t));
+        out.push(current.as_ref().expect("made above").1.frame(f.t));
     }
-    Ok((welded, out))
+    Ok((tween.welded, out))
 }

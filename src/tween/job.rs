@@ -282,7 +282,7 @@ impl Run<'_> {
                     // The computation's own failures name the input; the writer's name the
                     // file it could not write.
                     let mut writing = false;
-                    let done = tween_mesh(m, opts, &|| progress.inc(), &mut |f, deltas| {
+                    let done = tween_mesh(m, opts, true, &|| progress.inc(), &mut |f, deltas| {
                         sink(k, f, &usd_deltas(&deltas)).inspect_err(|_| writing = true)
                     })
                     .map_err(|e| {
@@ -320,31 +320,17 @@ fn usd_deltas(deltas: &[PrimitiveDelta]) -> Vec<Delta<'_>> {
 /// frames' vertex data, and the weights animations, each track one weight per target for each
 /// of its frames while the mesh takes a target for every frame of every track (a mesh that
 /// 2,000 clips animate: 122,000 targets, 122,000 keys of that many weights: about 170 GiB).
+/// In the rig layout uncompacted a frame on a key holds no vertex data and takes no target (a
+/// face rig baked at 60 keys/s and written as it is needs its weights only).
 fn check_budget(
     doc: &Document,
     meshes: &[MorphMesh],
     opts: &TweenOptions,
     held: bool,
 ) -> Result<()> {
-    let mut bytes = 0.0;
     for m in meshes {
-        let per_track: Vec<f64> = m
-            .tracks
-            .iter()
-            .map(|t| frame_estimate(&t.times, opts))
-            .collect();
-        let frames: f64 = per_track.iter().sum();
-        // At most one new target a frame; a compacted basis no more than the frames' rank.
-        let normals = m.primitives.iter().all(|p| p.normals.is_some());
-        let tangents = normals && m.primitives.iter().all(|p| p.tangents.is_some());
-        let attributes = 1.0 + normals as u8 as f64 + tangents as u8 as f64;
-        let new = match opts.compact {
-            Some(_) => frames.min(3.0 * attributes * m.vertex_count() as f64),
-            None => frames,
-        };
-        // f32 weights, built, packed and copied into the buffer.
-        bytes += 3.0 * 4.0 * frames * (m.target_count as f64 + new);
-        for (k, (t, &frames)) in m.tracks.iter().zip(&per_track).enumerate() {
+        for (k, t) in m.tracks.iter().enumerate() {
+            let frames = frame_estimate(&t.times, opts);
             if frames > MAX_FRAMES {
                 bail!(doc.err(format!(
                     "track {k} of mesh {:?} would have about {frames:.3e} frames (keys from {} s to {} s), more than {MAX_FRAMES}; ask for fewer with --fps or --tweens",
@@ -353,10 +339,31 @@ fn check_budget(
                     t.times.last().copied().unwrap_or(0.0)
                 )));
             }
-            let per_vertex = 12.0 * attributes;
-            // The frames as computed and again in the output buffer.
-            bytes += 2.0 * frames * m.vertex_count() as f64 * per_vertex;
         }
+    }
+    let key_deltas = opts.gltf_reads_keys();
+    let mut bytes = 0.0;
+    for m in meshes {
+        let (mut frames, mut between) = (0.0, 0.0);
+        for t in &m.tracks {
+            let planned = plan(&t.times, opts);
+            frames += planned.len() as f64;
+            between += planned.iter().filter(|f| f.key().is_none()).count() as f64;
+        }
+        // At most one new target a frame; a compacted basis no more than the frames' rank.
+        let normals = m.primitives.iter().all(|p| p.normals.is_some());
+        let tangents = normals && m.primitives.iter().all(|p| p.tangents.is_some());
+        let attributes = 1.0 + normals as u8 as f64 + tangents as u8 as f64;
+        let new = match (opts.compact, opts.layout) {
+            (Some(_), _) => frames.min(3.0 * attributes * m.vertex_count() as f64),
+            (None, Layout::Rig) => between,
+            (None, Layout::Frames) => frames,
+        };
+        // f32 weights, built, packed and copied into the buffer.
+        bytes += 3.0 * 4.0 * frames * (m.target_count as f64 + new);
+        // The frames as computed and again in the output buffer.
+        let computed = if key_deltas { frames } else { between };
+        bytes += 2.0 * computed * m.vertex_count() as f64 * 12.0 * attributes;
     }
     let available = memory_available();
     if let Some(available) = available.filter(|&a| held && bytes > a as f64) {

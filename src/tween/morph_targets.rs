@@ -85,7 +85,7 @@ impl Written<'_> {
                     .frames
                     .iter()
                     .enumerate()
-                    .map(|(i, f)| match (self.layout, key_of(f), &self.compact) {
+                    .map(|(i, f)| match (self.layout, f.key(), &self.compact) {
                         (Layout::Rig, Some(k), _) => Played::Key(k),
                         (_, _, Some(_)) => Played::Basis(track.first + i),
                         _ => {
@@ -149,17 +149,6 @@ impl Written<'_> {
             out.extend(w);
         }
         out
-    }
-}
-
-/// The key a frame is, when it lies exactly on one.
-fn key_of(f: &FrameAt) -> Option<usize> {
-    if f.t == 0.0 {
-        Some(f.key_a)
-    } else if f.t == 1.0 {
-        Some(f.key_b)
-    } else {
-        None
     }
 }
 

@@ -100,4 +100,10 @@ impl TweenOptions {
             compact: None,
         }
     }
+
+    /// Whether a glTF output reads the frames that lie on keys: not in the rig layout
+    /// uncompacted, where a key plays its authored weights alone (no target of its own).
+    pub fn gltf_reads_keys(&self) -> bool {
+        self.layout == Layout::Frames || self.compact.is_some()
+    }
 }

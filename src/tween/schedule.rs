@@ -15,6 +15,19 @@ pub struct FrameAt {
     pub t: f64,
 }
 
+impl FrameAt {
+    /// The key this frame is, when it lies exactly on one.
+    pub fn key(&self) -> Option<usize> {
+        if self.t == 0.0 {
+            Some(self.key_a)
+        } else if self.t == 1.0 {
+            Some(self.key_b)
+        } else {
+            None
+        }
+    }
+}
+
 /// Most frames one track may have (a bound checked before any is planned): an hour at 277
 /// frames a second. Key times or options asking for more are refused.
 pub const MAX_FRAMES: f64 = 1e6;

@@ -4,7 +4,7 @@
 use super::options::Method;
 use super::seed::SeedSegment;
 use super::solve::{Pattern, MAX_BLOCK};
-use super::spline::{is_loop, SplineSegment, SplineTrack};
+use super::spline::{self, is_loop, SplineSegment, SplineTrack};
 use anyhow::Result;
 use glam::DVec3;
 
@@ -123,6 +123,17 @@ impl KeyTrack<'_> {
     }
 }
 
+/// The keys the segment from key a to key b of a track of `count` keys reads by `method` (see
+/// [`KeyTrack::segment`]), ascending: what a caller holding only some of a long track's keys
+/// must hold for it.
+pub fn keys_read(method: Method, count: usize, a: usize, b: usize) -> Vec<usize> {
+    match method {
+        Method::Spline if b == a + 1 => spline::keys_read(count, a),
+        _ if a == b => vec![a],
+        _ => vec![a.min(b), a.max(b)],
+    }
+}
+
 /// `work` on one of rayon's threads (at once where called on one): a frame's parallel steps
 /// (its terms, its solves' parts) then hand work to the other threads from inside the pool,
 /// where each step called from outside it (the bench's frames, a caller's own thread) would
@@ -135,6 +146,29 @@ fn on_the_pool<R: Send>(work: impl FnOnce() -> R + Send) -> R {
 mod tests {
     use super::*;
     use crate::dev::synth;
+
+    /// A spline segment reads WINDOW keys either side of its own two (past a track's ends
+    /// round a loop) and the first and last keys; the other methods read their two.
+    #[test]
+    fn a_segment_reads_its_window_and_the_track_s_ends() {
+        assert_eq!(
+            keys_read(Method::Spline, 20, 5, 6),
+            [0, 3, 4, 5, 6, 7, 8, 19]
+        );
+        // Segment 0: keys -2 and -1 of a loop of 19 are 17 and 18.
+        assert_eq!(
+            keys_read(Method::Spline, 20, 0, 1),
+            [0, 1, 2, 3, 17, 18, 19]
+        );
+        assert_eq!(
+            keys_read(Method::Spline, 20, 18, 19),
+            [0, 1, 2, 16, 17, 18, 19]
+        );
+        assert_eq!(keys_read(Method::Spline, 2, 0, 1), [0, 1]);
+        assert_eq!(keys_read(Method::Spline, 1, 0, 0), [0]);
+        assert_eq!(keys_read(Method::Seed, 20, 5, 6), [5, 6]);
+        assert_eq!(keys_read(Method::Linear, 20, 7, 7), [7]);
+    }
 
     /// Frames solved together (one pass over the triangles' data and over the factor) are
     /// bit for bit the frames solved one at a time, for the solving methods, on a tube that

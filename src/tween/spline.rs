@@ -442,6 +442,33 @@ where
 
 /// True when a track's last key repeats its first (RMS difference below 1e-6 of the first key's
 /// bounding-box diagonal): a cycle the spline wraps around.
+/// The window of segment a of a track of `count` keys, as positions along the track: WINDOW
+/// keys either side of a and a + 1, cut at the track's ends, or continuing past them round a
+/// loop (positions below 0 or above `count - 1`, taken modulo the loop's `count - 1` keys).
+fn window_span(count: usize, looped: bool, a: usize) -> std::ops::RangeInclusive<isize> {
+    let w = WINDOW as isize;
+    if looped {
+        a as isize - w..=a as isize + 1 + w
+    } else {
+        (a as isize - w).max(0)..=(a as isize + 1 + w).min(count as isize - 1)
+    }
+}
+
+/// The keys segment a of a track of `count` keys reads (its window, looped or not, and the
+/// first and last keys, which tell whether the track loops): what a caller holding only some
+/// of a long track's keys must hold for it.
+pub fn keys_read(count: usize, a: usize) -> Vec<usize> {
+    let unique = count.saturating_sub(1).max(1) as isize;
+    let mut keys: Vec<usize> = window_span(count, false, a)
+        .chain(window_span(count, true, a).map(|i| i.rem_euclid(unique)))
+        .map(|i| i as usize)
+        .chain([0, count.saturating_sub(1)])
+        .collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys
+}
+
 pub fn is_loop(keys: &[Vec<DVec3>]) -> bool {
     keys.len() > 2 && {
         let d = bbox_diagonal(&keys[0]).max(f64::MIN_POSITIVE);
@@ -558,19 +585,12 @@ impl<'a> SplineTrack<'a> {
     /// The keys whose values set segment a's end tangents (see [`WINDOW`]).
     fn window(&self, a: usize) -> Window {
         let k = self.keys.len();
-        let w = WINDOW as isize;
-        let (lo, hi) = if self.looped {
-            (a as isize - w, a as isize + 1 + w)
-        } else {
-            (
-                (a as isize - w).max(0),
-                (a as isize + 1 + w).min(k as isize - 1),
-            )
-        };
+        let span = window_span(k, self.looped, a);
         // A loop's keys 0..k-1 (the last repeats the first) continue periodically.
         let unique = (k - 1) as isize;
         let period = self.times[k - 1] - self.times[0];
-        let (keys, times): (Vec<usize>, Vec<f64>) = (lo..=hi)
+        let (keys, times): (Vec<usize>, Vec<f64>) = span
+            .clone()
             .map(|i| {
                 let (j, turns) = if self.looped {
                     (i.rem_euclid(unique), i.div_euclid(unique))
@@ -580,6 +600,7 @@ impl<'a> SplineTrack<'a> {
                 (j as usize, self.times[j as usize] + period * turns as f64)
             })
             .unzip();
+        let lo = *span.start();
         let ia = (a as isize - lo) as usize;
         let n = keys.len();
         // Tangent at window position c from the keys within WINDOW of it.
