@@ -5,7 +5,6 @@
 //! no target is touched, so an existing output is only ever replaced by a complete one.
 
 use anyhow::{anyhow, bail, Result};
-use std::collections::HashSet;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -139,22 +138,11 @@ pub struct Outputs {
     staged: Vec<(PathBuf, PathBuf)>,
     /// Scratch files (spools, intermediate layers): removed at the end either way.
     scratch: Vec<PathBuf>,
-    /// Targets whose stale temporaries were looked for already: once a target, not once a
-    /// file (a USD stage of 8,000 animated meshes spools 16,000 files beside its target, and
-    /// reading the folder for each took 19 s at 2,000 meshes, 300 s at 8,000).
-    cleaned: HashSet<PathBuf>,
 }
 
 impl Outputs {
     pub fn new() -> Outputs {
         Outputs::default()
-    }
-
-    /// [`remove_stale`] for `path`, the first time this run writes beside it.
-    fn remove_stale(&mut self, path: &Path) {
-        if self.cleaned.insert(path.to_path_buf()) {
-            remove_stale(path);
-        }
     }
 
     /// Stage `path`, streaming its contents through `fill`; returns its size in bytes.
@@ -164,7 +152,7 @@ impl Outputs {
         fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
     ) -> Result<u64> {
         folder_exists(path)?;
-        self.remove_stale(path);
+        remove_stale(path);
         let tmp = temporary(path, "");
         let file = File::create(&tmp).map_err(|e| cannot_write(path, e))?;
         // Registered before it is filled, so that a failure below removes it.
@@ -187,7 +175,7 @@ impl Outputs {
 
     /// A scratch file beside `path` (tagged `tag`), removed when the run ends either way.
     pub fn scratch(&mut self, path: &Path, tag: &str) -> PathBuf {
-        self.remove_stale(path);
+        remove_stale(path);
         let p = temporary(path, tag);
         self.scratch.push(p.clone());
         p

@@ -388,11 +388,9 @@ fn factor_by_values(rows: &Rows, values: usize) -> Result<Factors> {
     let mut m = Mat::<f64>::zeros(n, values);
     let mut at = 0;
     rows.chunks(&mut |_, _, chunk| {
-        for c in 0..chunk.ncols() {
-            for r in 0..n {
-                m[(r, at + c)] = chunk[(r, c)];
-            }
-        }
+        m.as_mut()
+            .submatrix_mut(0, at, n, chunk.ncols())
+            .copy_from(chunk);
         at += chunk.ncols();
     });
     let mut cov = Mat::<f64>::zeros(values, values);

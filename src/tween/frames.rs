@@ -90,6 +90,9 @@ struct MeshTween<'a> {
 struct TrackKeys {
     /// Welded poses, empty for the keys not held.
     welded: Vec<Vec<DVec3>>,
+    /// Poses in input vertex order, held only where frames on keys hand on their deltas
+    /// (what those frames are); empty otherwise.
+    poses: Vec<Vec<DVec3>>,
     normals: Option<NormalKeys>,
     /// The keys held, ascending.
     held: Vec<usize>,
@@ -132,6 +135,7 @@ impl<'a> MeshTween<'a> {
         });
         TrackKeys {
             welded: vec![Vec::new(); count],
+            poses: vec![Vec::new(); count],
             normals,
             held: Vec::new(),
         }
@@ -152,6 +156,7 @@ impl<'a> MeshTween<'a> {
     fn hold(&self, track: &Track, keys: &mut TrackKeys, keep: &[usize]) {
         for &k in keys.held.iter().filter(|k| keep.binary_search(k).is_err()) {
             keys.welded[k] = Vec::new();
+            keys.poses[k] = Vec::new();
             if let Some(nk) = &mut keys.normals {
                 nk.recomputed[k] = Vec::new();
                 nk.authored[k] = Vec::new();
@@ -176,11 +181,13 @@ impl<'a> MeshTween<'a> {
                     };
                     (rec, authored)
                 });
-                (k, welded.weld(&pose), normals)
+                let welded = welded.weld(&pose);
+                (k, welded, self.key_deltas.then_some(pose), normals)
             })
             .collect();
-        for (k, pose, normals) in made {
-            keys.welded[k] = pose;
+        for (k, welded, pose, normals) in made {
+            keys.welded[k] = welded;
+            keys.poses[k] = pose.unwrap_or_default();
             if let (Some(nk), Some((rec, authored))) = (&mut keys.normals, normals) {
                 nk.recomputed[k] = rec;
                 nk.authored[k] = authored;
@@ -189,12 +196,11 @@ impl<'a> MeshTween<'a> {
         keys.held = keep.to_vec();
     }
 
-    /// The frame `f` of `track` (keys `keys`) whose welded positions its segment gave as `w`:
+    /// The frame `f` of a track (keys `keys`) whose welded positions its segment gave as `w`:
     /// its per-primitive deltas, and its figures when a report is asked for. A frame on a key
     /// is the key's own pose, every input vertex as authored (not welded).
     fn frame(
         &self,
-        track: &Track,
         keys: &TrackKeys,
         f: &FrameAt,
         w: Vec<DVec3>,
@@ -227,17 +233,21 @@ impl<'a> MeshTween<'a> {
                 figures,
             );
         }
-        let positions: Vec<DVec3> = match f.key() {
-            Some(k) => self.mesh.pose(&track.weights[k]),
-            None => (self.welded.of_vertex.iter())
-                .map(|&k| w[k as usize])
-                .collect(),
+        let unwelded: Vec<DVec3>;
+        let positions: &[DVec3] = match f.key() {
+            Some(k) => &keys.poses[k],
+            None => {
+                unwelded = (self.welded.of_vertex.iter())
+                    .map(|&k| w[k as usize])
+                    .collect();
+                &unwelded
+            }
         };
         drop(w);
         let normals = keys.normals.as_ref().map(|nk| {
             let rec = nk
                 .smoothing
-                .normals(&positions, &self.welded.input_triangles);
+                .normals(positions, &self.welded.input_triangles);
             (0..positions.len())
                 .map(|v| {
                     carry(
@@ -252,7 +262,7 @@ impl<'a> MeshTween<'a> {
                 .collect::<Vec<DVec3>>()
         });
         (
-            frame_deltas(self.mesh, &positions, normals.as_deref()),
+            frame_deltas(self.mesh, positions, normals.as_deref()),
             figures,
         )
     }
@@ -332,7 +342,7 @@ impl<'a> MeshTween<'a> {
                                     Some(k) => keys.welded[k].clone(),
                                     None => solved.next().expect("a frame for each time"),
                                 };
-                                let done = self.frame(track, &keys, f, w);
+                                let done = self.frame(&keys, f, w);
                                 progress();
                                 done
                             })

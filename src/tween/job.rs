@@ -321,13 +321,14 @@ fn usd_deltas(deltas: &[PrimitiveDelta]) -> Vec<Delta<'_>> {
 /// of its frames while the mesh takes a target for every frame of every track (a mesh that
 /// 2,000 clips animate: 122,000 targets, 122,000 keys of that many weights: about 170 GiB).
 /// In the rig layout uncompacted a frame on a key holds no vertex data and takes no target (a
-/// face rig baked at 60 keys/s and written as it is needs its weights only).
+/// face rig baked at 60 keys/s and written as it is needs its weights only). Returns how many
+/// frames the job has.
 fn check_budget(
     doc: &Document,
     meshes: &[MorphMesh],
     opts: &TweenOptions,
     held: bool,
-) -> Result<()> {
+) -> Result<usize> {
     for m in meshes {
         for (k, t) in m.tracks.iter().enumerate() {
             let frames = frame_estimate(&t.times, opts);
@@ -342,11 +343,12 @@ fn check_budget(
         }
     }
     let key_deltas = opts.gltf_reads_keys();
-    let mut bytes = 0.0;
+    let (mut bytes, mut total) = (0.0, 0);
     for m in meshes {
         let (mut frames, mut between) = (0.0, 0.0);
         for t in &m.tracks {
             let planned = plan(&t.times, opts);
+            total += planned.len();
             frames += planned.len() as f64;
             between += planned.iter().filter(|f| f.key().is_none()).count() as f64;
         }
@@ -374,7 +376,7 @@ fn check_budget(
             if opts.compact.is_none() { "--compact (a basis of few targets), " } else { "" }
         )));
     }
-    Ok(())
+    Ok(total)
 }
 
 const GIB: f64 = (1u64 << 30) as f64;
@@ -412,11 +414,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         layout: job.layout,
         compact: job.compact,
     };
-    check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
-    let total: usize = meshes
-        .iter()
-        .flat_map(|m| m.tracks.iter().map(|t| plan(&t.times, &opts).len()))
-        .sum();
+    let total = check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
     let mut run = Run {
         job,
         doc,

@@ -440,8 +440,6 @@ where
     ta * w[1] + b * w[2] + tb * w[3]
 }
 
-/// True when a track's last key repeats its first (RMS difference below 1e-6 of the first key's
-/// bounding-box diagonal): a cycle the spline wraps around.
 /// The window of segment a of a track of `count` keys, as positions along the track: WINDOW
 /// keys either side of a and a + 1, cut at the track's ends, or continuing past them round a
 /// loop (positions below 0 or above `count - 1`, taken modulo the loop's `count - 1` keys).
@@ -469,6 +467,8 @@ pub fn keys_read(count: usize, a: usize) -> Vec<usize> {
     keys
 }
 
+/// True when a track's last key repeats its first (RMS difference below 1e-6 of the first key's
+/// bounding-box diagonal): a cycle the spline wraps around.
 pub fn is_loop(keys: &[Vec<DVec3>]) -> bool {
     keys.len() > 2 && {
         let d = bbox_diagonal(&keys[0]).max(f64::MIN_POSITIVE);
