@@ -161,6 +161,174 @@ fn everything_else_comes_through() {
     }
 }
 
+/// flag_wave with texture-coordinate deltas in every target (VEC2) and colour deltas in the
+/// first (VEC4, the others lacking them), as a UV-animating face rig has.
+fn flag_with_uv_and_colour_deltas(path: &Path) {
+    let doc = Document::open(&sample("flag_wave.glb")).unwrap();
+    let mut json = doc.json.clone();
+    let mut bin = doc.buffers[0].clone();
+    let n = doc
+        .read_f64(
+            json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+                .as_u64()
+                .unwrap() as usize,
+        )
+        .unwrap()
+        .0
+        .len()
+        / 3;
+    let mut push = |json: &mut serde_json::Value, values: Vec<f32>, ty: &str| -> usize {
+        let offset = bin.len();
+        bin.extend(values.iter().flat_map(|x| x.to_le_bytes()));
+        let views = json["bufferViews"].as_array_mut().unwrap();
+        views.push(
+            serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": 4 * values.len()}),
+        );
+        let view = views.len() - 1;
+        let accessors = json["accessors"].as_array_mut().unwrap();
+        accessors.push(
+            serde_json::json!({"bufferView": view, "componentType": 5126, "count": n, "type": ty}),
+        );
+        accessors.len() - 1
+    };
+    let colour = push(&mut json, [0.5, 0.5, 0.5, 1.0].repeat(n), "VEC4");
+    json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = colour.into();
+    for t in 0..4 {
+        let uv: Vec<f32> = (0..n)
+            .flat_map(|v| [0.01 * (t + 1) as f32 * (v % 7) as f32, -0.02 * t as f32])
+            .collect();
+        let a = push(&mut json, uv, "VEC2");
+        json["meshes"][0]["primitives"][0]["targets"][t]["TEXCOORD_0"] = a.into();
+    }
+    let red = push(&mut json, [0.4, -0.3, -0.3, 0.0].repeat(n), "VEC4");
+    json["meshes"][0]["primitives"][0]["targets"][0]["COLOR_0"] = red.into();
+    json["buffers"][0]["byteLength"] = bin.len().into();
+    write_glb(path, &json, &bin);
+}
+
+/// Attribute `name` of mesh 0 primitive 0 as played at each key of its first weights channel
+/// (base + weights x target deltas), flat.
+fn played_attribute(path: &Path, name: &str) -> Vec<Vec<f64>> {
+    let doc = Document::open(path).unwrap();
+    let p = &doc.json["meshes"][0]["primitives"][0];
+    let read = |a: &serde_json::Value| doc.read_f64(a.as_u64().unwrap() as usize).unwrap().0;
+    let base = read(&p["attributes"][name]);
+    let deltas: Vec<Vec<f64>> = p["targets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| read(&t[name]))
+        .collect();
+    let (a, s) = mesh0_samplers(&doc)[0];
+    let out = doc.json["animations"][a]["samplers"][s]["output"]
+        .as_u64()
+        .unwrap() as usize;
+    let weights = doc.read_f64(out).unwrap().0;
+    weights
+        .chunks(deltas.len())
+        .map(|w| {
+            let mut v = base.clone();
+            for (w, d) in w.iter().zip(&deltas) {
+                for (x, d) in v.iter_mut().zip(d) {
+                    *x += w * d;
+                }
+            }
+            v
+        })
+        .collect()
+}
+
+#[test]
+fn texture_coordinate_and_colour_deltas_play_in_both_layouts() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = out_in(&dir, "uv.glb");
+    flag_with_uv_and_colour_deltas(&input);
+    assert_valid(&input);
+    let rig = out_in(&dir, "rig.glb");
+    let frames = out_in(&dir, "frames.glb");
+    tween_quietly(&input, &rig, &[]);
+    tween_quietly(&input, &frames, &["--layout", "frames"]);
+    let compact = out_in(&dir, "compact.glb");
+    tween_quietly(&input, &compact, &["--compact"]);
+    // Every target of a primitive carries the attribute, with its own type (the rig's new
+    // targets refer to zeros of VEC2 and VEC4).
+    for out in [&rig, &frames, &compact] {
+        assert_no_new_issues(&input, out);
+    }
+    let keys = played_attribute(&input, "TEXCOORD_0");
+    for name in ["TEXCOORD_0", "COLOR_0"] {
+        let a = played_attribute(&rig, name);
+        let b = played_attribute(&frames, name);
+        assert_eq!(a.len(), 61, "{name}: 5 keys and the 56 frames between them");
+        assert_eq!(a.len(), b.len());
+        for (f, (a, b)) in a.iter().zip(&b).enumerate() {
+            let most = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(most < 1e-6, "{name} frame {f}: layouts differ by {most}");
+        }
+        // Compaction reorders the vertices: each frame's mean value per component.
+        let c = if name == "COLOR_0" { 4 } else { 2 };
+        let mean = |f: &[f64]| -> Vec<f64> {
+            (0..c)
+                .map(|k| f.iter().skip(k).step_by(c).sum::<f64>() * c as f64 / f.len() as f64)
+                .collect()
+        };
+        let packed = played_attribute(&compact, name);
+        assert_eq!(packed.len(), a.len());
+        for (f, (a, p)) in a.iter().zip(&packed).enumerate() {
+            let (a, p) = (mean(a), mean(p));
+            let most = a
+                .iter()
+                .zip(&p)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                most < 1e-4,
+                "{name} frame {f}: compacted {p:?} against {a:?}"
+            );
+        }
+        if name == "TEXCOORD_0" {
+            // Keys play the input's; frames between keys move between them.
+            let first_key = &a[0];
+            assert!(first_key
+                .iter()
+                .zip(&keys[0])
+                .all(|(x, y)| (x - y).abs() < 1e-6));
+            assert!(a
+                .iter()
+                .skip(1)
+                .any(|f| f.iter().zip(first_key).any(|(x, y)| (x - y).abs() > 1e-3)));
+        }
+    }
+    // A USD point cache cannot play them: said, not dropped silently.
+    let usd = out_in(&dir, "uv.usda");
+    let said = run_ok(&["tween", s(&input), "-o", s(&usd)]);
+    let said =
+        String::from_utf8_lossy(&said.stderr).to_string() + &String::from_utf8_lossy(&said.stdout);
+    assert!(
+        said.contains("warning:") && said.contains("morphs COLOR_0, TEXCOORD_0 too"),
+        "{said}"
+    );
+    let refused = out_in(&dir, "refused.glb");
+    assert_refused(
+        &[
+            "tween",
+            s(&input),
+            "-o",
+            s(&refused),
+            "--layout",
+            "frames",
+            "--compact",
+        ],
+        "uv.glb",
+        "COLOR_0 morph deltas, which --compact cannot keep",
+        &refused,
+    );
+}
+
 #[test]
 fn output_is_deterministic_for_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();

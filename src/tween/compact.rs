@@ -505,7 +505,10 @@ pub fn compact(
     };
     // Frames between keys: the authored targets at the weights that come nearest the frame (least
     // squares), so the basis carries only what the rig cannot (keys keep their own weights).
-    if rig && opts.basis != Basis::Off {
+    // Not where the authored targets also move attributes the frames do not solve (TEXCOORD_n,
+    // COLOR_n): those play by the authored weights, which then stay blended between the keys.
+    let unsolved = mesh.primitives.iter().any(|p| !p.target_other.is_empty());
+    if rig && opts.basis != Basis::Off && !unsolved {
         fit_authored(&mut rows, &own)?;
     }
     let plan = Plan {

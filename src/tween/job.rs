@@ -270,6 +270,21 @@ impl Run<'_> {
         self.left_out = (stage.look.left_out.iter())
             .map(|what| format!("{input}: {what}"))
             .collect();
+        // A point cache animates points and normals; attributes the targets also move keep
+        // the base's values.
+        for m in &self.meshes {
+            let names: std::collections::BTreeSet<&str> = (m.primitives.iter())
+                .flat_map(|p| p.target_other.iter().map(|o| o.name.as_str()))
+                .collect();
+            if !names.is_empty() {
+                let names: Vec<&str> = names.into_iter().collect();
+                self.left_out.push(format!(
+                    "{input}: mesh {:?} morphs {} too; a USD point cache animates points and normals only, so they keep the base's values (a glTF output plays them)",
+                    m.name,
+                    names.join(", ")
+                ));
+            }
+        }
         let (meshes, opts, progress, doc) = (&self.meshes, &self.opts, &self.progress, &self.doc);
         let (stats, reports) = (&mut self.stats, &mut self.reports);
         self.output_bytes = usd::write_file(

@@ -39,8 +39,21 @@ pub struct Primitive {
     pub target_nrm: Vec<Option<Vec<DVec3>>>,
     /// TANGENT (xyz) deltas per target, when the target has them.
     pub target_tan: Vec<Option<Vec<DVec3>>>,
+    /// The targets' other attributes (TEXCOORD_n, COLOR_n, ...), in name order.
+    pub target_other: Vec<OtherDeltas>,
     /// Triangles in local vertex indices.
     pub triangles: Vec<[u32; 3]>,
+}
+
+/// Deltas of a target attribute that is not solved (TEXCOORD_n, COLOR_n, ...): a frame gets
+/// them blended by its authored weights, as a renderer blends them between keys.
+pub struct OtherDeltas {
+    /// The attribute's name.
+    pub name: String,
+    /// Components per vertex (2 for TEXCOORD_n, 3 or 4 for COLOR_n).
+    pub components: usize,
+    /// Per target, `components` values per vertex, when the target has the attribute.
+    pub deltas: Vec<Option<Vec<f32>>>,
 }
 
 /// One key sequence for a mesh.
@@ -460,6 +473,7 @@ fn read_primitive(
         target_nrm.push(delta(ti, t, "NORMAL")?);
         target_tan.push(delta(ti, t, "TANGENT")?);
     }
+    let target_other = other_deltas(doc, targets, n, &what)?;
     let triangles = read_triangles(doc, p, n, &what(""))?;
     Ok(Primitive {
         index: pi,
@@ -469,8 +483,55 @@ fn read_primitive(
         target_pos,
         target_nrm,
         target_tan,
+        target_other,
         triangles,
     })
+}
+
+/// The targets' attributes other than POSITION, NORMAL and TANGENT, each read as stored
+/// (float or normalized integers) with the components its first accessor has.
+fn other_deltas(
+    doc: &Document,
+    targets: &[Value],
+    n: usize,
+    what: &dyn Fn(&str) -> String,
+) -> Result<Vec<OtherDeltas>> {
+    let names: std::collections::BTreeSet<&str> = targets
+        .iter()
+        .filter_map(Value::as_object)
+        .flat_map(|t| t.keys().map(String::as_str))
+        .filter(|k| !matches!(*k, "POSITION" | "NORMAL" | "TANGENT"))
+        .collect();
+    let mut out = Vec::new();
+    for name in names {
+        let mut other = OtherDeltas {
+            name: name.to_string(),
+            components: 0,
+            deltas: Vec::new(),
+        };
+        for (ti, t) in targets.iter().enumerate() {
+            let Some(a) = t[name].as_u64() else {
+                other.deltas.push(None);
+                continue;
+            };
+            let (v, c) = doc.read_f64(a as usize)?;
+            if other.components == 0 {
+                other.components = c;
+            }
+            if c != other.components || v.len() != n * c {
+                bail!(doc.err(what(&format!(
+                    "target {ti} {name} (accessor {a}) has {} values of {c} components; the base has {n} vertices and target {name}s have {} components",
+                    v.len() / c.max(1),
+                    other.components
+                ))));
+            }
+            other
+                .deltas
+                .push(Some(v.into_iter().map(|x| x as f32).collect()));
+        }
+        out.push(other);
+    }
+    Ok(out)
 }
 
 /// Key times and weights of sampler `si` of animation `ai`.

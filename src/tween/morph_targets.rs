@@ -11,24 +11,26 @@
 //!   one-hot (LINEAR between consecutive frames); other weights animations of the mesh go.
 //!
 //! Every target of a primitive carries the same attributes: where one lacks an attribute the
-//! others have, it refers to one shared accessor of zeros. Accessors the new targets and
+//! others have, it refers to one shared accessor of zeros of that attribute's type. Attributes
+//! not solved (TEXCOORD_n, COLOR_n) play by the authored weights: zeros in a frame's own target
+//! (rig), the authored deltas blended at the frame (frames). Accessors the new targets and
 //! samplers replaced are dropped when nothing else refers to them.
 
 use super::base;
 use super::compact::{compact, sparse_pays, CompactFigures, CompactOptions, Compacted, Stored};
 use super::frames::{MeshFrames, PrimitiveFrames, TrackFrames};
-use super::keys::{MorphMesh, Primitive, TrackOrigin};
+use super::keys::{MorphMesh, OtherDeltas, Primitive, TrackOrigin};
 use super::options::Layout;
 use super::schedule::FrameAt;
 use crate::gltf::{
     self, arr, compact as drop_unused, drop_channels, row_components, Document, Output,
     ELEMENT_MARK, FILTER_GROUP, FILTER_MARK,
 };
-use anyhow::Result;
+use anyhow::{bail, Result};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 /// Accessors replaced by the new targets and samplers (dropped if nothing else refers to them),
 /// and the animation `inbetween` made for tracks built from targets.
@@ -115,9 +117,7 @@ impl Written<'_> {
         if self.layout == Layout::Frames {
             return Vec::new();
         }
-        let (a, b) = (&track.keys[f.key_a], &track.keys[f.key_b]);
-        let t = f.t.clamp(0.0, 1.0);
-        a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect()
+        blended(track, f)
     }
 
     /// The weights of every target (kept, then new) for each frame of `track`.
@@ -174,6 +174,17 @@ pub fn apply_frames(
     compact_opts: Option<&CompactOptions>,
 ) -> Result<Applied> {
     let mut applied = Applied::default();
+    if let (Layout::Frames, Some(_)) = (layout, compact_opts) {
+        let other = meshes.iter().find_map(|m| {
+            let o = m.primitives.iter().flat_map(|p| &p.target_other).next()?;
+            Some((&m.name, &o.name))
+        });
+        if let Some((mesh, name)) = other {
+            bail!(doc.err(format!(
+                "mesh {mesh:?} has {name} morph deltas, which --compact cannot keep in the frames layout (the rig layout keeps them)"
+            )));
+        }
+    }
     // Set first: the writers below decide sparse accessors by it, as the compaction did.
     out.meshopt = compact_opts.is_some_and(|o| o.meshopt);
     // glTF key times cannot be negative: a motion extended before 0 s shifts every written
@@ -358,10 +369,53 @@ fn new_targets(
                     false,
                 );
             }
+            // Attributes not solved: in the frames layout no authored target is left to blend
+            // them, so the frame's target holds their blend; in the rig layout the authored
+            // targets play them and the new target holds zeros (set_targets).
+            if w.layout == Layout::Frames {
+                let weights = blended(track, f);
+                for o in &read.target_other {
+                    let v = blend_other(o, &weights, read.base.len());
+                    let ty = vec_type(o.components);
+                    t.insert(
+                        o.name.clone(),
+                        json!(out.push_f32(&v, ty, o.components, false, Some(34962))),
+                    );
+                }
+            }
             targets.push(t);
         }
     }
     targets
+}
+
+/// The authored weights at a frame of `track`: linear between its keys, held at the ends.
+fn blended(track: &TrackFrames, f: &FrameAt) -> Vec<f64> {
+    let (a, b) = (&track.keys[f.key_a], &track.keys[f.key_b]);
+    let t = f.t.clamp(0.0, 1.0);
+    a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect()
+}
+
+/// The blend of an unsolved attribute's authored deltas by `weights`, per vertex.
+fn blend_other(o: &OtherDeltas, weights: &[f64], vertices: usize) -> Vec<f32> {
+    let mut v = vec![0.0f64; o.components * vertices];
+    for (w, d) in weights.iter().zip(&o.deltas) {
+        if let (true, Some(d)) = (*w != 0.0, d) {
+            for (x, d) in v.iter_mut().zip(d) {
+                *x += *w * *d as f64;
+            }
+        }
+    }
+    v.into_iter().map(|x| x as f32).collect()
+}
+
+/// The accessor type of `n` components (2, 3 or 4).
+fn vec_type(n: usize) -> &'static str {
+    match n {
+        2 => "VEC2",
+        4 => "VEC4",
+        _ => "VEC3",
+    }
 }
 
 /// The targets of every processed primitive of the mesh: the authored ones kept (rig) or
@@ -394,16 +448,29 @@ fn set_targets(
             }
         };
         targets.extend(new);
-        let names: BTreeSet<String> = targets.iter().flat_map(|t| t.keys().cloned()).collect();
-        // One accessor of zeros (on one zero-filled view) serves every target that lacks an
-        // attribute the others have.
-        let mut zeros: Option<usize> = None;
+        // Each attribute with the type its targets have (VEC2 for TEXCOORD_n, VEC3 or VEC4
+        // for COLOR_n, VEC3 for the rest).
+        let mut names: BTreeMap<String, usize> = BTreeMap::new();
+        for (name, a) in targets.iter().flatten() {
+            let ty = a
+                .as_u64()
+                .and_then(|a| out.json["accessors"][a as usize]["type"].as_str());
+            let c = match ty {
+                Some("VEC2") => 2,
+                Some("VEC4") => 4,
+                _ => 3,
+            };
+            names.entry(name.clone()).or_insert(c);
+        }
+        // One accessor of zeros per type serves every target that lacks an attribute the
+        // others have.
+        let mut zeros: BTreeMap<usize, usize> = BTreeMap::new();
         for t in &mut targets {
-            for name in &names {
+            for (name, &c) in &names {
                 if !t.contains_key(name) {
-                    let acc = *zeros.get_or_insert_with(|| {
-                        let z = vec![0.0f32; 3 * read.base.len()];
-                        out.push_f32(&z, "VEC3", 3, true, Some(34962))
+                    let acc = *zeros.entry(c).or_insert_with(|| {
+                        let z = vec![0.0f32; c * read.base.len()];
+                        out.push_f32(&z, vec_type(c), c, true, Some(34962))
                     });
                     t.insert(name.clone(), json!(acc));
                 }

@@ -210,6 +210,7 @@ mod tests {
                 target_pos,
                 target_nrm: vec![None, None],
                 target_tan: vec![None, None],
+                target_other: Vec::new(),
                 triangles: (0..count as u32 / 3)
                     .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
                     .collect(),
