@@ -427,7 +427,20 @@ fn set_targets(
     replaced: &mut BTreeSet<usize>,
 ) {
     let m = w.frames;
+    // Primitives drawing one vertex buffer (the same POSITION and target accessors, as three.js
+    // and Babylon.js export a mesh's material groups) whose frames came out the same share the
+    // first one's targets: (its vertex data, its frames, its targets as written).
+    let mut written: Vec<(Value, &PrimitiveFrames, Value)> = Vec::new();
     for (p, read) in m.primitives.iter().zip(&w.mesh.primitives) {
+        let prim = &out.json["meshes"][m.mesh]["primitives"][p.index];
+        let data = json!([prim["attributes"], prim["targets"]]);
+        if let Some((_, _, targets)) = written
+            .iter()
+            .find(|(d, f, _)| *d == data && same_frames(f, p))
+        {
+            out.json["meshes"][m.mesh]["primitives"][p.index]["targets"] = targets.clone();
+            continue;
+        }
         let new = new_targets(out, w, p, read, plays);
         let prim = &out.json["meshes"][m.mesh]["primitives"][p.index];
         let old: Vec<Map<String, Value>> = arr(prim, "targets")
@@ -478,7 +491,14 @@ fn set_targets(
         }
         let targets: Vec<Value> = targets.into_iter().map(Value::Object).collect();
         out.json["meshes"][m.mesh]["primitives"][p.index]["targets"] = Value::Array(targets);
+        let targets = out.json["meshes"][m.mesh]["primitives"][p.index]["targets"].clone();
+        written.push((data, p, targets));
     }
+}
+
+/// Whether two primitives' frames hold the same values.
+fn same_frames(a: &PrimitiveFrames, b: &PrimitiveFrames) -> bool {
+    a.positions == b.positions && a.normals == b.normals && a.tangents == b.tangents
 }
 
 /// The authored targets of a primitive, stored again as the compaction chose (through the
