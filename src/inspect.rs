@@ -5,7 +5,7 @@
 //! mix, and the required extensions with whether they are decoded. Text, or JSON
 //! (`schemas/inspect.schema.json`).
 
-use crate::gltf::{arr, listed, Access, Document, PASSED_THROUGH};
+use crate::gltf::{arr, listed, weights_target, Access, Document, PASSED_THROUGH};
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, KeyOptions, KeySource, MorphMesh,
     TrackOrigin, TweenOptions,
@@ -234,7 +234,7 @@ fn animations(doc: &Document) -> Vec<AnimationInfo> {
                 channels: arr(a, "channels").len(),
                 weights_channels: arr(a, "channels")
                     .iter()
-                    .filter(|c| c["target"]["path"] == "weights")
+                    .filter(|c| weights_target(&c["target"]).is_some())
                     .count(),
                 keys: times.iter().map(Vec::len).max().unwrap_or(0),
                 key_rate: rate,

@@ -329,6 +329,40 @@ fn texture_coordinate_and_colour_deltas_play_in_both_layouts() {
     );
 }
 
+/// `target` as a KHR_animation_pointer channel target aimed at `pointer`.
+fn pointer_target(pointer: &str) -> serde_json::Value {
+    serde_json::json!({"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": pointer}}})
+}
+
+#[test]
+fn weights_animated_through_animation_pointers_are_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = sample("flag_wave.glb");
+    for pointer in ["/nodes/0/weights", "/meshes/0/weights"] {
+        let input = out_in(&dir, "pointer.glb");
+        edited_glb(&plain, &input, |j| {
+            j["animations"][0]["channels"][0]["target"] = pointer_target(pointer);
+            j["extensionsUsed"] = serde_json::json!(["KHR_animation_pointer"]);
+        });
+        for args in [&[][..], &["--layout", "frames"], &["--keys", "targets"]] {
+            let (a, b) = (out_in(&dir, "a.glb"), out_in(&dir, "b.glb"));
+            tween_quietly(&plain, &a, args);
+            tween_quietly(&input, &b, args);
+            assert_no_new_issues(&input, &b);
+            // The same file as from the plain weights channel, the channel's target aside:
+            // its sampler rewritten (or, under --keys targets, padded) alike.
+            let (a, b) = (Document::open(&a).unwrap(), Document::open(&b).unwrap());
+            assert!(a.buffers == b.buffers, "{pointer} {args:?}: other data");
+            let mut json = b.json.clone();
+            let channel = &mut json["animations"][0]["channels"][0]["target"];
+            assert_eq!(*channel, pointer_target(pointer), "{args:?}");
+            *channel = serde_json::json!({"node": 0, "path": "weights"});
+            json.as_object_mut().unwrap().remove("extensionsUsed");
+            assert_eq!(json, a.json, "{pointer} {args:?}");
+        }
+    }
+}
+
 #[test]
 fn output_is_deterministic_for_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();

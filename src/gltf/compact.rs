@@ -79,6 +79,7 @@ pub const PASSED_THROUGH: &[&str] = &[
     "KHR_materials_volume",
     "KHR_materials_anisotropy",
     "KHR_materials_dispersion",
+    "KHR_materials_diffuse_transmission",
     "KHR_materials_pbrSpecularGlossiness",
     "KHR_texture_transform",
     "KHR_texture_basisu",
@@ -88,6 +89,9 @@ pub const PASSED_THROUGH: &[&str] = &[
     "EXT_texture_webp",
     "EXT_texture_avif",
     "EXT_mesh_gpu_instancing",
+    // JSON pointers to animated properties (node, mesh, material, camera, light values),
+    // never to accessors or views.
+    "KHR_animation_pointer",
 ];
 
 /// Drop the accessors in `candidates` that nothing refers to any more, and the buffer views

@@ -25,7 +25,7 @@ pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
 pub use encode::{
     exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,
 };
-pub use read::{arr, at, listed, Document};
+pub use read::{arr, at, listed, weights_target, Document, WeightsTarget};
 pub use reorder::reorder;
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

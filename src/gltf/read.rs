@@ -326,6 +326,44 @@ fn check_structure(json: &Value) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// What an animation channel's morph weights target is: the weights of a node (`path:
+/// "weights"`, or a `KHR_animation_pointer` channel aimed at `/nodes/N/weights`) or of a mesh
+/// (`/meshes/M/weights`: every node carrying it plays them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WeightsTarget {
+    Node(usize),
+    Mesh(usize),
+}
+
+/// The weights a channel `target` animates, if it animates weights.
+pub fn weights_target(target: &Value) -> Option<WeightsTarget> {
+    match target["path"].as_str()? {
+        "weights" => Some(WeightsTarget::Node(target["node"].as_u64()? as usize)),
+        "pointer" => {
+            let pointer = target["extensions"]["KHR_animation_pointer"]["pointer"].as_str()?;
+            let mut parts = pointer.strip_prefix('/')?.split('/');
+            let (kind, index, leaf) = (parts.next()?, parts.next()?, parts.next()?);
+            if leaf != "weights" || parts.next().is_some() {
+                return None;
+            }
+            // A JSON pointer's array index: digits, no leading zero.
+            if index.is_empty()
+                || !index.bytes().all(|b| b.is_ascii_digit())
+                || (index.len() > 1 && index.starts_with('0'))
+            {
+                return None;
+            }
+            let index: usize = index.parse().ok()?;
+            match kind {
+                "nodes" => Some(WeightsTarget::Node(index)),
+                "meshes" => Some(WeightsTarget::Mesh(index)),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
+}
+
 /// The array under `key`, or an empty slice.
 pub fn arr<'a>(v: &'a Value, key: &str) -> &'a [Value] {
     v.get(key)
@@ -389,4 +427,39 @@ fn decode_data_uri(uri: &str) -> Option<Vec<u8>> {
     base64::engine::general_purpose::STANDARD
         .decode(data.trim())
         .ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{weights_target, WeightsTarget};
+    use serde_json::json;
+
+    #[test]
+    fn weights_targets_by_path_and_by_pointer() {
+        let pointer = |p: &str| {
+            weights_target(
+                &json!({"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": p}}}),
+            )
+        };
+        assert_eq!(
+            weights_target(&json!({"node": 3, "path": "weights"})),
+            Some(WeightsTarget::Node(3))
+        );
+        assert_eq!(
+            weights_target(&json!({"node": 3, "path": "rotation"})),
+            None
+        );
+        assert_eq!(pointer("/nodes/12/weights"), Some(WeightsTarget::Node(12)));
+        assert_eq!(pointer("/meshes/0/weights"), Some(WeightsTarget::Mesh(0)));
+        for not in [
+            "/nodes/1/translation",
+            "/nodes/01/weights",
+            "/nodes//weights",
+            "/nodes/1/weights/0",
+            "/materials/0/weights",
+            "nodes/1/weights",
+        ] {
+            assert_eq!(pointer(not), None, "{not}");
+        }
+    }
 }

@@ -6,7 +6,8 @@
 
 use super::timegrid::snap;
 use crate::gltf::{
-    arr, listed, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
+    arr, listed, read_attribute, read_attribute3, read_triangles, read_vec3, weights_target,
+    Document, WeightsTarget,
 };
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -263,13 +264,14 @@ impl MeshUsers {
         let mut channels: HashMap<usize, Vec<(usize, usize, usize)>> = HashMap::new();
         for (ai, anim) in arr(json, "animations").iter().enumerate() {
             for (ci, ch) in arr(anim, "channels").iter().enumerate() {
-                let t = &ch["target"];
-                if let (Some("weights"), Some(node)) = (t["path"].as_str(), t["node"].as_u64()) {
-                    let sampler = ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize;
-                    channels
-                        .entry(node as usize)
-                        .or_default()
-                        .push((ai, ci, sampler));
+                let sampler = ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize;
+                let aimed: &[usize] = match weights_target(&ch["target"]) {
+                    Some(WeightsTarget::Node(n)) => &[n],
+                    Some(WeightsTarget::Mesh(m)) => nodes.get(&m).map_or(&[], Vec::as_slice),
+                    None => &[],
+                };
+                for &node in aimed {
+                    channels.entry(node).or_default().push((ai, ci, sampler));
                 }
             }
         }
@@ -285,7 +287,9 @@ impl MeshUsers {
             .flatten()
             .copied()
             .collect();
+        // A channel aimed at the mesh's own weights comes once per node carrying it.
         out.sort_unstable();
+        out.dedup();
         out
     }
 }
