@@ -364,6 +364,65 @@ fn weights_animated_through_animation_pointers_are_keys() {
 }
 
 #[test]
+fn keys_at_one_time_play_as_a_jump() {
+    // flag_wave's key times 0, 0.5, 1, 1.5, 2 s with the third moved onto the second: a pose
+    // that jumps at 0.5 s, as exporters write a cut (the validator asks for increasing times).
+    let dir = tempfile::tempdir().unwrap();
+    let plain = sample("flag_wave.glb");
+    let input = out_in(&dir, "cut.glb");
+    let doc = Document::open(&plain).unwrap();
+    let (a, s) = mesh0_samplers(&doc)[0];
+    let times = doc.json["animations"][a]["samplers"][s]["input"]
+        .as_u64()
+        .unwrap() as usize;
+    assert_eq!(doc.read_f64(times).unwrap().0, [0.0, 0.5, 1.0, 1.5, 2.0]);
+    poke_f32(&plain, &input, times, 2, 0, 0.5);
+    let keys = played(&input, 0, 0, 0);
+    for args in [&[][..], &["--layout", "frames"], &["--tweens", "2"]] {
+        let out = out_in(&dir, "out.glb");
+        tween_quietly(&input, &out, args);
+        assert_no_new_issues(&input, &out);
+        let p = played(&out, 0, 0, 0);
+        assert!(
+            p.times.windows(2).all(|w| w[1] > w[0]),
+            "{args:?}: increasing times"
+        );
+        // Both sides of the jump are played as authored, one float32 step apart.
+        let at = p
+            .times
+            .iter()
+            .position(|&t| t == 0.5)
+            .expect("a frame at the cut");
+        assert_eq!(p.times[at + 1], 0.5f32.next_up(), "{args:?}");
+        for (frame, key) in [(at, 1), (at + 1, 2)] {
+            let most = p.positions[frame]
+                .iter()
+                .zip(&keys.positions[key])
+                .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f32::max))
+                .fold(0.0, f32::max);
+            assert!(
+                most < 1e-6,
+                "{args:?}: frame {frame} is key {key} within {most}"
+            );
+        }
+        assert!(p
+            .positions
+            .iter()
+            .flatten()
+            .flatten()
+            .all(|x| x.is_finite()));
+    }
+    let usd = out_in(&dir, "cut.usda");
+    tween_quietly(&input, &usd, &[]);
+    let text = std::fs::read_to_string(&usd).unwrap();
+    assert!(!text.contains("NaN"), "no NaN in the point cache");
+    assert!(
+        text.contains(" 15: ") && text.contains(" 15.000000000000002: "),
+        "the cut's samples"
+    );
+}
+
+#[test]
 fn output_is_deterministic_for_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let a = out_in(&dir, "a.glb");

@@ -660,6 +660,7 @@ fn animate_track(
         .iter()
         .map(|f| (f.time + shift) as f32)
         .collect();
+    let times = increasing_f32(times);
     let input = key_times(out, &times, &mut edits.times);
     match &track.origin {
         TrackOrigin::Animation {
@@ -690,6 +691,17 @@ fn animate_track(
             }
         }
     }
+}
+
+/// `times` (non-decreasing) made increasing, as glTF asks of key times: a time equal to the one
+/// before it (the frames at a cut in the keys, where the pose jumps) moves one float32 step on.
+fn increasing_f32(mut times: Vec<f32>) -> Vec<f32> {
+    for i in 1..times.len() {
+        if times[i] <= times[i - 1] {
+            times[i] = times[i - 1].next_up();
+        }
+    }
+    times
 }
 
 /// An accessor of key times `times`: one written before when it holds the same times, else a

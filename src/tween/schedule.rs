@@ -75,7 +75,7 @@ pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
         .filter(|&k| times[k + 1] > times[k])
         .map(|k| (k, k + 1))
         .collect();
-    let Some(&(_, last_b)) = segments.last() else {
+    let Some(&(a, b)) = segments.last() else {
         return vec![FrameAt {
             time: times[0],
             key_a: 0,
@@ -83,13 +83,7 @@ pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
             t: 0.0,
         }];
     };
-    let (a, b) = segments[segments.len() - 1];
-    let last = FrameAt {
-        time: times[last_b],
-        key_a: a,
-        key_b: b,
-        t: 1.0,
-    };
+    let last = last_of(times, a, b);
     let mut out = Vec::new();
     if let Timing::Fps(fps) = timing {
         out = fixed_rate(times, &segments, fps);
@@ -99,7 +93,19 @@ pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
         }
         return out;
     }
-    for &(a, b) in &segments {
+    // Keys at one time are a cut (the pose jumps there): every key is still a frame, the
+    // frames at a cut sharing its time (the writers keep their times apart by the smallest
+    // step their formats store, so both sides of the jump play as authored).
+    let key = |k: usize| FrameAt {
+        time: times[k],
+        key_a: k,
+        key_b: k,
+        t: 0.0,
+    };
+    for k in 0..segments[0].0 {
+        out.push(key(k));
+    }
+    for (i, &(a, b)) in segments.iter().enumerate() {
         let n = tweens_between(times[b] - times[a], timing);
         for j in 0..=n {
             let t = j as f64 / (n + 1) as f64;
@@ -110,9 +116,25 @@ pub fn schedule(times: &[f64], timing: Timing) -> Vec<FrameAt> {
                 t,
             });
         }
+        let next = segments.get(i + 1).map_or(times.len(), |s| s.0);
+        if next > b {
+            out.push(last_of(times, a, b));
+            for k in b + 1..next {
+                out.push(key(k));
+            }
+        }
     }
-    out.push(last);
     out
+}
+
+/// The frame on key b of segment (a, b).
+fn last_of(times: &[f64], a: usize, b: usize) -> FrameAt {
+    FrameAt {
+        time: times[b],
+        key_a: a,
+        key_b: b,
+        t: 1.0,
+    }
 }
 
 /// Frames every 1/fps s from the first key; one that falls on the last key (within
@@ -169,17 +191,27 @@ pub fn plan(times: &[f64], opts: &TweenOptions) -> Vec<FrameAt> {
             })
             .collect()
     };
-    let spacing = frames[1].time - frames[0].time;
+    // The first and last segments' own frames (keys repeated at a track's ends, a cut there,
+    // are frames of no segment), and the spacing next to them.
+    let in_segment = |f: &FrameAt| f.key_a != f.key_b;
+    let (Some(i), Some(j)) = (
+        frames.iter().position(in_segment),
+        frames.iter().rposition(in_segment),
+    ) else {
+        return frames;
+    };
+    let (first, last) = (frames[i], frames[j]);
+    let spacing = frames[i + 1].time - first.time;
+    let mut ext = Vec::new();
     if spacing > 0.0 {
-        let mut ext = continued(frames[0], -spacing, before);
+        ext = continued(first, -spacing, before);
         ext.reverse();
-        frames.splice(0..0, ext);
     }
-    let last = frames[frames.len() - 1];
-    let spacing = last.time - frames[frames.len() - 2].time;
+    let spacing = last.time - frames[j - 1].time;
     if spacing > 0.0 {
         frames.extend(continued(last, spacing, after));
     }
+    frames.splice(0..0, ext);
     frames
 }
 
@@ -194,4 +226,74 @@ pub fn close_loop(track: &mut Track) {
     let spacing = if spacing > 0.0 { spacing } else { 1.0 };
     track.times.push(times[k - 1] + spacing);
     track.weights.push(track.weights[0].clone());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// (time, the key it is, if any) of each frame.
+    fn frames(times: &[f64], timing: Timing) -> Vec<(f64, Option<usize>)> {
+        schedule(times, timing)
+            .iter()
+            .map(|f| (f.time, f.key()))
+            .collect()
+    }
+
+    #[test]
+    fn keys_at_one_time_are_a_cut_with_every_key_a_frame() {
+        let tw = Timing::Tweens(1);
+        assert_eq!(
+            frames(&[0.0, 1.0, 2.0], tw),
+            [
+                (0.0, Some(0)),
+                (0.5, None),
+                (1.0, Some(1)),
+                (1.5, None),
+                (2.0, Some(2))
+            ]
+        );
+        // Interior cut: key 1 ends the first segment, key 2 starts the next at the same time.
+        assert_eq!(
+            frames(&[0.0, 1.0, 1.0, 2.0], tw),
+            [
+                (0.0, Some(0)),
+                (0.5, None),
+                (1.0, Some(1)),
+                (1.0, Some(2)),
+                (1.5, None),
+                (2.0, Some(3))
+            ]
+        );
+        // Three keys at one time, and cuts at both ends.
+        assert_eq!(
+            frames(&[0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0], Timing::Tweens(0)),
+            [
+                (0.0, Some(0)),
+                (0.0, Some(1)),
+                (1.0, Some(2)),
+                (1.0, Some(3)),
+                (1.0, Some(4)),
+                (2.0, Some(5)),
+                (2.0, Some(6))
+            ]
+        );
+        // Every frame between keys has a finite position in its segment.
+        for f in schedule(&[0.0, 0.5, 0.5, 1.5], Timing::Rate(30.0)) {
+            assert!(f.t.is_finite() && f.key_a <= f.key_b, "{f:?}");
+        }
+    }
+
+    #[test]
+    fn extensions_continue_the_segments_next_to_a_cut_at_the_ends() {
+        let opts = TweenOptions {
+            timing: Timing::Tweens(1),
+            extend: [1.0, 1.0],
+            ..TweenOptions::default()
+        };
+        let f = plan(&[0.0, 0.0, 1.0, 1.0], &opts);
+        let times: Vec<f64> = f.iter().map(|f| f.time).collect();
+        assert_eq!(times, [-1.0, -0.5, 0.0, 0.0, 0.5, 1.0, 1.0, 1.5, 2.0]);
+        assert!(f.iter().all(|f| f.t.is_finite()));
+    }
 }

@@ -602,6 +602,17 @@ impl<'a> SplineTrack<'a> {
             .unzip();
         let lo = *span.start();
         let ia = (a as isize - lo) as usize;
+        // Two keys at one time are a cut (the pose jumps there): the window stops at it, so
+        // the spline is C1 on each side and no tangent divides by a gap of zero.
+        let first = (0..ia)
+            .rev()
+            .find(|&i| times[i] >= times[i + 1])
+            .map_or(0, |i| i + 1);
+        let last = (ia + 1..keys.len() - 1)
+            .find(|&i| times[i + 1] <= times[i])
+            .unwrap_or(keys.len() - 1);
+        let (keys, times) = (keys[first..=last].to_vec(), times[first..=last].to_vec());
+        let ia = ia - first;
         let n = keys.len();
         // Tangent at window position c from the keys within WINDOW of it.
         let tangent = |c: usize| {

@@ -149,7 +149,12 @@ pub fn timeline(tracks: &[Vec<Vec<f64>>], fallback: Option<f64>) -> (f64, Vec<Ve
                     Some(s) if s > first => s - first,
                     _ => 0.0,
                 };
-                codes.extend(t.iter().map(|&time| code(time) + offset));
+                for &time in t {
+                    // Frames at a cut in the keys share its time: one double step apart here,
+                    // as USD time samples must be.
+                    let c = code(time) + offset;
+                    codes.push(codes.last().map_or(c, |&prev: &f64| c.max(prev.next_up())));
+                }
                 next_start = codes.last().map(|c| c + 1.0);
             }
             codes
