@@ -31,6 +31,43 @@ fn ink(rgb: &[u8], width: usize, y0: usize, y1: usize) -> usize {
 }
 
 #[test]
+fn a_waving_flag_is_seen_face_on() {
+    // The flag moves most along its own normal, so the view along the axis of least motion
+    // looked along its plane: a line, the cells left all but empty. Now the view must fill
+    // its cells at least a quarter as well as the best one does.
+    let dir = tempfile::tempdir().unwrap();
+    let sheet = dir.path().join("flag.png");
+    let r = run_ok(&[
+        "preview",
+        s(&sample("flag_wave.glb")),
+        "-o",
+        s(&sheet),
+        "--size",
+        "1200x240",
+        "--frames",
+        "6",
+    ]);
+    let said = String::from_utf8_lossy(&r.stdout).to_string() + &String::from_utf8_lossy(&r.stderr);
+    assert!(said.contains("Front view"), "{said}");
+    let (w, h, rgb) = decode_png(&sheet);
+    let band = h / 2;
+    for b in 0..2 {
+        let rows = &rgb[3 * w * b * band..3 * w * (b + 1) * band];
+        for c in 0..6 {
+            let cell: usize = rows
+                .chunks_exact(3 * w)
+                .map(|row| ink(&row[3 * 200 * c..3 * 200 * (c + 1)], 200, 0, 1))
+                .sum();
+            // A cell is 200 x 120 pixels; the flag covers about half of it.
+            assert!(
+                cell > 200 * band / 4,
+                "band {b} cell {c}: {cell} pixels of ink"
+            );
+        }
+    }
+}
+
+#[test]
 fn a_sheet_has_its_size_and_a_band_per_method_each_holding_the_mesh() {
     let dir = tempfile::tempdir().unwrap();
     let sheet = dir.path().join("sheet.png");

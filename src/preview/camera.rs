@@ -4,6 +4,11 @@
 
 use glam::DVec3;
 
+/// How well a view's picture must fill its cell, as a share of the best-filled view's, for
+/// `--view auto` to choose it: a sheet seen along its plane (a line) or a long bar seen from
+/// its side against its end (a square) fall below.
+pub const FILLED: f64 = 0.25;
+
 /// Which way the camera looks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum View {
@@ -26,9 +31,11 @@ impl View {
     }
 
     /// The view whose picture shows the most of the motion: the one looking along the axis in
-    /// which the vertices move least over `frames` (each frame: the same vertices in order).
-    /// Ties keep the order front, side, top.
-    pub fn most_motion(frames: &[Vec<DVec3>]) -> View {
+    /// which the vertices move least over `frames` (each frame: the same vertices in order),
+    /// among the views whose pictures fill their cells at least [`FILLED`] as well as the
+    /// best one's (`coverage`, front, side, top: a waving flag moves most across its own
+    /// plane, and seen along it would be a line). Ties keep the order front, side, top.
+    pub fn most_motion(frames: &[Vec<DVec3>], coverage: [f64; 3]) -> View {
         let Some(first) = frames.first() else {
             return View::Front;
         };
@@ -44,20 +51,19 @@ impl View {
                 .sum::<DVec3>();
         }
         let candidates = [
-            (View::Front, spread.z),
-            (View::Side, spread.x),
-            (View::Top, spread.y),
+            (View::Front, spread.z, coverage[0]),
+            (View::Side, spread.x, coverage[1]),
+            (View::Top, spread.y, coverage[2]),
         ];
+        let best = coverage.iter().copied().fold(0.0, f64::max);
         candidates
             .iter()
-            .fold(candidates[0], |best, &c| {
-                if c.1 < best.1 * (1.0 - 1e-9) {
-                    c
-                } else {
-                    best
-                }
+            .filter(|c| !(c.2 < FILLED * best))
+            .fold(None, |best: Option<(View, f64, f64)>, &c| match best {
+                Some(b) if c.1 >= b.1 * (1.0 - 1e-9) => Some(b),
+                _ => Some(c),
             })
-            .0
+            .map_or(View::Front, |c| c.0)
     }
 }
 

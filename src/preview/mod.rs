@@ -438,14 +438,59 @@ fn morph_scene(job: &PreviewJob, doc: &Document) -> Result<(Vec<MorphMesh>, Vec<
     Ok((meshes, shown))
 }
 
-/// The view of `--view auto`: the most motion over the first band's columns, or for a still
-/// the widest picture.
-fn auto_view(scene: &Scene) -> View {
-    let first: Vec<Vec<DVec3>> = scene.bands[0].1.iter().map(|c| c.meshes.concat()).collect();
-    match first.len() {
-        1 => View::widest(&first[0]),
-        _ => View::most_motion(&first),
+/// The view of `--view auto`: the most motion over the first band's columns among the views
+/// whose pictures fill the cell well ([`probe_coverage`]), or for a still the widest picture.
+fn auto_view(scene: &Scene, cell: (usize, usize)) -> View {
+    let columns = &scene.bands[0].1;
+    let first: Vec<Vec<DVec3>> = columns.iter().map(|c| c.meshes.concat()).collect();
+    if first.len() == 1 {
+        return View::widest(&first[0]);
     }
+    let coverage = [View::Front, View::Side, View::Top].map(|v| probe_coverage(scene, v, cell));
+    View::most_motion(&first, coverage)
+}
+
+/// Width in pixels of the small cells [`probe_coverage`] draws.
+const PROBE_WIDTH: usize = 64;
+
+/// Most triangles of a mesh [`probe_coverage`] draws (every k-th beyond).
+const PROBE_TRIANGLES: usize = 20_000;
+
+/// The share of a cell that the first band's first, middle and last columns cover seen by
+/// `view` (the camera fitted to every column), drawn small: how much of the surface the view
+/// shows, not how much area projects onto it (a flag seen along its plane is a line; a tube's
+/// walls seen down its axis overlap).
+fn probe_coverage(scene: &Scene, view: View, cell: (usize, usize)) -> f64 {
+    let columns = &scene.bands[0].1;
+    let (w, h) = (PROBE_WIDTH, (PROBE_WIDTH * cell.1 / cell.0.max(1)).max(1));
+    let points = columns.iter().flat_map(|c| c.meshes.iter()).flatten();
+    let camera = Camera::fit(view, points, w, h);
+    let sampled: Vec<Vec<[u32; 3]>> = scene
+        .triangles
+        .iter()
+        .map(|t| {
+            let step = (t.len() / PROBE_TRIANGLES).max(1);
+            t.iter().step_by(step).copied().collect()
+        })
+        .collect();
+    let mut picked = vec![0, columns.len() / 2, columns.len() - 1];
+    picked.dedup();
+    let covered: usize = picked
+        .par_iter()
+        .map(|&i| {
+            let drawn: Vec<Drawn> = columns[i]
+                .meshes
+                .iter()
+                .zip(&sampled)
+                .map(|(points, triangles)| Drawn {
+                    points: points.clone(),
+                    triangles,
+                })
+                .collect();
+            raster::draw(&drawn, &camera, w, h, Shading::Flat).count_not(BACKGROUND)
+        })
+        .sum();
+    covered as f64 / (picked.len() * w * h) as f64
 }
 
 /// The animation's frames: each the bands stacked (one cell each), shown for its own time.
@@ -540,7 +585,7 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
             .flat_map(|c| c.meshes.iter())
             .flatten()
     };
-    let view = job.view.unwrap_or_else(|| auto_view(&scene));
+    let view = job.view.unwrap_or_else(|| auto_view(&scene, cell));
     let camera = Camera::fit(view, all_points(), cell.0, cell.1);
     let draw_start = std::time::Instant::now();
     let drawn = draw_bands(&scene, &camera, cell, job.shading);
