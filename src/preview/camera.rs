@@ -58,7 +58,7 @@ impl View {
         let best = coverage.iter().copied().fold(0.0, f64::max);
         candidates
             .iter()
-            .filter(|c| !(c.2 < FILLED * best))
+            .filter(|c| c.2 >= FILLED * best)
             .fold(None, |best: Option<(View, f64, f64)>, &c| match best {
                 Some(b) if c.1 >= b.1 * (1.0 - 1e-9) => Some(b),
                 _ => Some(c),
