@@ -423,6 +423,49 @@ fn keys_at_one_time_play_as_a_jump() {
 }
 
 #[test]
+fn a_usd_stage_says_which_animated_meshes_its_scene_does_not_show() {
+    // flag_wave with a second flag (its own mesh and node, animated by the same keys) in a
+    // second scene: the file's scene 0 shows the first flag and the pole only.
+    let dir = tempfile::tempdir().unwrap();
+    let input = out_in(&dir, "scenes.glb");
+    edited_glb(&sample("flag_wave.glb"), &input, |j| {
+        let mesh = j["meshes"][0].clone();
+        j["meshes"].as_array_mut().unwrap().push(mesh);
+        j["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({"name": "second", "mesh": 2}));
+        let channel = serde_json::json!({"sampler": 0, "target": {"node": 2, "path": "weights"}});
+        j["animations"][0]["channels"]
+            .as_array_mut()
+            .unwrap()
+            .push(channel);
+        j["scenes"] = serde_json::json!([{"name": "shown", "nodes": [0, 1]}, {"name": "other", "nodes": [2]}]);
+    });
+    let usd = out_in(&dir, "scenes.usda");
+    let r = run_ok(&["tween", s(&input), "-o", s(&usd)]);
+    let said = String::from_utf8_lossy(&r.stderr).to_string() + &String::from_utf8_lossy(&r.stdout);
+    assert!(
+        said.contains("warning:") && said.contains("does not show \"flag\""),
+        "{said}"
+    );
+    let text = std::fs::read_to_string(&usd).unwrap();
+    assert_eq!(text.matches("points.timeSamples").count(), 1);
+    // With the first flag's node gone from scene 0 too, nothing animated is left: refused.
+    let none = out_in(&dir, "none.glb");
+    edited_glb(&input, &none, |j| {
+        j["scenes"][0]["nodes"] = serde_json::json!([1])
+    });
+    let out = out_in(&dir, "none.usda");
+    assert_refused(
+        &["tween", s(&none), "-o", s(&out)],
+        "none.glb",
+        "shows none of the animated meshes",
+        &out,
+    );
+}
+
+#[test]
 fn output_is_deterministic_for_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let a = out_in(&dir, "a.glb");

@@ -18,7 +18,9 @@
 //!   `_1`, `_2`, ... suffix, deterministically.
 
 use super::material::{st_name, Look, LookBuilder};
-use crate::gltf::{arr, read_attribute, read_attribute3, read_triangles, read_vec3, Document};
+use crate::gltf::{
+    arr, listed, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
+};
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
@@ -202,14 +204,46 @@ pub fn build_stage(
     } else {
         (0.0, 0.0)
     };
-    Ok(Stage {
+    let mut stage = Stage {
         root: identifier(&root_name),
         rate,
         start,
         end,
         children,
         look,
-    })
+    };
+    // The stage is the file's scene: a processed mesh no node of it carries has no frames
+    // there, which is said (and with none shown, refused) rather than passed over.
+    let shown = animated(&stage);
+    let missing: Vec<String> = (meshes.iter().enumerate())
+        .filter(|(k, _)| !shown.contains_key(k))
+        .map(|(_, m)| {
+            let name = json["meshes"][m.mesh]["name"].as_str();
+            name.map_or_else(|| format!("mesh {}", m.mesh), |n| format!("{n:?}"))
+        })
+        .collect();
+    if !missing.is_empty() {
+        let scene = match scene {
+            Some(s) => format!(
+                "scene {scene_index}{}",
+                s["name"]
+                    .as_str()
+                    .map_or(String::new(), |n| format!(" ({n:?})"))
+            ),
+            None => "the file's root nodes".to_string(),
+        };
+        if missing.len() == meshes.len() {
+            bail!(doc.err(format!(
+                "{scene}, which a USD stage is made of, shows none of the animated meshes ({}); a glTF output keeps them",
+                listed(&missing)
+            )));
+        }
+        stage.look.left_out.push(format!(
+            "{scene}, which a USD stage is made of, does not show {}: not in the point cache",
+            listed(&missing)
+        ));
+    }
+    Ok(stage)
 }
 
 struct Ctx<'a> {
