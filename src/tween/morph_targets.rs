@@ -664,8 +664,28 @@ fn animate_track(
     let input = key_times(out, &times, &mut edits.times);
     match &track.origin {
         TrackOrigin::Animation {
-            animation, sampler, ..
+            animation,
+            sampler,
+            channels,
         } => {
+            // A sampler that channels of other meshes also read (each mesh its own frames and,
+            // compacted, its own basis weights) stays theirs: this mesh's channels get a new one.
+            let anim = &mut out.json["animations"][*animation];
+            let others = arr(anim, "channels").iter().enumerate().any(|(c, ch)| {
+                ch["sampler"].as_u64() == Some(*sampler as u64) && !channels.contains(&c)
+            });
+            if others {
+                let samplers = anim["samplers"]
+                    .as_array_mut()
+                    .expect("the track's sampler");
+                samplers
+                    .push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
+                let new = samplers.len() - 1;
+                for &c in channels {
+                    anim["channels"][c]["sampler"] = json!(new);
+                }
+                return;
+            }
             let s = &mut out.json["animations"][*animation]["samplers"][*sampler];
             for k in ["input", "output"] {
                 if let Some(a) = s[k].as_u64() {
