@@ -1,7 +1,7 @@
 //! What fuzzing found, replayed: every input under `tests/fuzz-found/<target>/` goes through
-//! its target's harness (`inbetween::fuzz`) and must end in an error or a success, within a
-//! bounded allocation (the process runs these under the test's memory: an input that once
-//! reserved gigabytes must now be refused before that).
+//! its target's harness (`inbetween::fuzz`; for `keyframes`, the commands themselves) and must
+//! end in an error or a success, within a bounded allocation (the process runs these under the
+//! test's memory: an input that once reserved gigabytes must now be refused before that).
 
 use std::path::Path;
 
@@ -37,5 +37,39 @@ fn decoders_inputs_are_refused_cleanly() {
             "{}: {msg}",
             f.display()
         );
+    }
+}
+
+/// keyframes, flamingo-target-deltas-1.7e38.glb: Flamingo with bytes of its targets changed by
+/// the fuzzer (target 7's deltas reach 1.7e38, target 6's 1.3e13; the file reads: every value
+/// is finite). The spline's stretches at those keys overflow float32 and a frame came out NaN:
+/// 362 NaN floats in the .glb, found by the keyframes target's finite-frames check after 5
+/// minutes. Now refused in a line, for every output and the preview, with no file written.
+#[test]
+fn keyframes_inputs_give_finite_frames_or_a_refusal() {
+    let files = found("keyframes");
+    assert!(!files.is_empty());
+    let dir = tempfile::tempdir().unwrap();
+    for f in files {
+        for (cmd, out) in [
+            ("tween", "out.glb"),
+            ("tween", "out.usda"),
+            ("preview", "out.png"),
+        ] {
+            let out = dir.path().join(out);
+            let r = std::process::Command::new(env!("CARGO_BIN_EXE_inbetween"))
+                .args([cmd, f.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"])
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&r.stderr);
+            assert_eq!(r.status.code(), Some(2), "{cmd} {}: {err}", f.display());
+            assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+            assert!(
+                err.contains(f.file_name().unwrap().to_str().unwrap())
+                    && err.contains("not finite"),
+                "{err}"
+            );
+            assert!(!out.exists(), "{cmd}: no output");
+        }
     }
 }

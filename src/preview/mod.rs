@@ -302,7 +302,8 @@ fn scene(
         let mut cols: Vec<Column> = Vec::new();
         for (mi, m) in meshes.iter().enumerate() {
             let picked = spread(available(m, s, base), count);
-            let (tris, c) = columns(m, s, base, &picked, &worlds[m.mesh])?;
+            let (tris, c) = columns(m, s, base, &picked, &worlds[m.mesh])
+                .map_err(|e| doc.err(format!("{e:#}")))?;
             if b == 0 {
                 triangles.push(tris);
             }

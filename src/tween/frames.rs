@@ -10,7 +10,7 @@ use super::schedule::{plan, FrameAt};
 use super::segment::{keys_read, KeyTrack, Segment};
 use super::solve::Pattern;
 use super::weld::Welded;
-use anyhow::Result;
+use anyhow::{bail, Result};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -352,6 +352,15 @@ impl<'a> MeshTween<'a> {
                 let computed = computed.into_iter().flatten();
                 stats.solve += t0.elapsed();
                 for (frame, figures) in computed {
+                    // Key poses far beyond float32 (or slivers at that scale) can overflow a
+                    // solve: refused in a line rather than written as NaN.
+                    let finite = |v: &Vec<[f32; 3]>| v.iter().flatten().all(|x| x.is_finite());
+                    if !frame
+                        .iter()
+                        .all(|p| finite(&p.positions) && p.normals.as_ref().is_none_or(finite))
+                    {
+                        bail!(not_finite(self.mesh, track, (a, b)));
+                    }
                     if let (Some(r), Some(mut fig)) = (out.report.as_mut(), figures) {
                         fig.frame = stats.frames;
                         r.frames.push(fig);
@@ -448,6 +457,14 @@ pub fn collect_mesh(
     )?;
     out.primitives = primitives;
     Ok(out)
+}
+
+/// The refusal of a segment whose frames came out NaN or infinite.
+fn not_finite(mesh: &MorphMesh, track: &Track, (a, b): (usize, usize)) -> String {
+    format!(
+        "mesh {:?}: the frames between its keys at {} s and {} s come out not finite (key poses beyond what float32 holds, or slivers at that scale)",
+        mesh.name, track.times[a], track.times[b]
+    )
 }
 
 /// One frame of one primitive, as morph target deltas from the primitive's base.
@@ -555,7 +572,11 @@ pub fn frames_at(
                 .segment(opts.method, opts.wrap, ab.0, ab.1)?;
             current = Some((ab, s));
         }
-        out.push(current.as_ref().expect("made above").1.frame(f.t));
+        let frame = current.as_ref().expect("made above").1.frame(f.t);
+        if !frame.iter().all(|p| p.is_finite()) {
+            bail!(not_finite(mesh, track, ab));
+        }
+        out.push(frame);
     }
     Ok((tween.welded, out))
 }
