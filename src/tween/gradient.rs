@@ -18,12 +18,17 @@ pub const DEGENERATE_RATIO: f64 = 1e-10;
 
 /// The frame matrix `V` of a triangle, or `None` when it is degenerate.
 pub fn frame(a: DVec3, b: DVec3, c: DVec3) -> Option<DMat3> {
+    frame_above(a, b, c, DEGENERATE_RATIO)
+}
+
+/// [`frame`] with the sliver bound `ratio` (twice the area over the sum of squared edges).
+pub fn frame_above(a: DVec3, b: DVec3, c: DVec3, ratio: f64) -> Option<DMat3> {
     let e1 = b - a;
     let e2 = c - a;
     let n = e1.cross(e2);
     let len = n.length();
     let scale = e1.length_squared() + e2.length_squared() + (c - b).length_squared();
-    if len.is_nan() || len <= DEGENERATE_RATIO * scale {
+    if len.is_nan() || len <= ratio * scale {
         return None;
     }
     Some(DMat3::from_cols(e1, e2, n / len.sqrt()))

@@ -5,12 +5,21 @@
 //! between the keys'.
 
 use super::gradient::{
-    axis_angle_matrix, deformation, frame, gradient_operator, polar_of_triangle, quat_log,
+    axis_angle_matrix, deformation, frame_above, gradient_operator, polar_of_triangle, quat_log,
 };
 use super::solve::{in_order, scatter, Pattern, Placement};
 use anyhow::Result;
 use glam::DVec3;
 use rayon::prelude::*;
+
+/// Reference triangles thinner than this are left out of the seed's solve (twice the area over
+/// the sum of squared edges, unitless, as [`super::gradient::DEGENERATE_RATIO`]: a height below
+/// about 2e-6 of the triangle's size). Such slivers (an eyelid closed onto its lower lid in a
+/// blink key, its corners float32 steps apart) weigh 1/height^2 in the unweighted system and
+/// left it indefinite or ill-conditioned: "the system is not positive definite", or keys 0.04
+/// off on a 3-unit sheet. The spline weighs each term by its area and keeps the bound of
+/// [`super::gradient::frame`].
+const SLIVER_RATIO: f64 = 1e-6;
 
 /// What a seed segment keeps per valid triangle to assemble a frame's right-hand side.
 struct TriangleTween {
@@ -51,7 +60,7 @@ impl SeedSegment {
         let per_triangle: Vec<Option<TriangleTween>> = triangles
             .par_iter()
             .map(|&[a, b, c]| {
-                let v = frame(x0[a as usize], x0[b as usize], x0[c as usize])?;
+                let v = frame_above(x0[a as usize], x0[b as usize], x0[c as usize], SLIVER_RATIO)?;
                 let v_inv = v.inverse();
                 let g = gradient_operator(&v_inv);
                 let t = deformation(&v_inv, x1[a as usize], x1[b as usize], x1[c as usize]);
