@@ -444,8 +444,10 @@ fn morph_scene(job: &PreviewJob, doc: &Document) -> Result<(Vec<MorphMesh>, Vec<
 fn auto_view(scene: &Scene, cell: (usize, usize)) -> View {
     let columns = &scene.bands[0].1;
     let first: Vec<Vec<DVec3>> = columns.iter().map(|c| c.meshes.concat()).collect();
-    if first.len() == 1 {
-        return View::widest(&first[0]);
+    match first.len() {
+        0 => return View::Front,
+        1 => return View::widest(&first[0]),
+        _ => {}
     }
     let coverage = [View::Front, View::Side, View::Top].map(|v| probe_coverage(scene, v, cell));
     View::most_motion(&first, coverage)
