@@ -784,3 +784,76 @@ fn webp_textures_are_left_out_with_a_warning() {
         .count();
     assert_eq!(readers, 0);
 }
+
+/// A mesh carried by two nodes: each node's Mesh plays the frames of the clips that drive its
+/// node (a clip per node, one after the other on the timeline), and a node no clip drives
+/// stays still, as in the glTF. Both nodes played every clip before, the still one included.
+#[test]
+fn each_instance_plays_the_clips_that_drive_its_node() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let plain = sample("flag_wave.glb");
+    let instanced = |name: &str, clip: bool| {
+        let path = dir.path().join(name);
+        edited_glb(&plain, &path, |j| {
+            let node = serde_json::json!({"name": "second", "mesh": 0, "translation": [0, 0, 3]});
+            j["nodes"].as_array_mut().unwrap().push(node);
+            j["scenes"][0]["nodes"]
+                .as_array_mut()
+                .unwrap()
+                .push(2.into());
+            if clip {
+                let mut a = j["animations"][0].clone();
+                a["name"] = "second".into();
+                a["channels"][0]["target"]["node"] = 2.into();
+                j["animations"].as_array_mut().unwrap().push(a);
+            }
+        });
+        path
+    };
+    for (input, second) in [
+        (instanced("still.glb", false), None),
+        (instanced("clips.glb", true), Some((61.0, 121.0))),
+    ] {
+        for fmt in ["usda", "usdc"] {
+            let usd = dir.path().join(format!("out.{fmt}"));
+            tween_quietly(&input, &usd, &[]);
+            let dump = dir.path().join("dump.bin");
+            let out = run_tool(
+                &python,
+                "check_usd.py",
+                &[usd.as_os_str(), dump.as_os_str()],
+                fmt,
+            );
+            let r: serde_json::Value = serde_json::from_slice(&out).unwrap();
+            assert!(
+                r["errors"].as_array().unwrap().is_empty(),
+                "{}",
+                r["errors"]
+            );
+            let mesh = |path: &str| {
+                let m = r["meshes"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .find(|m| m["path"] == path);
+                m.unwrap_or_else(|| panic!("{path} in {}", r["meshes"]))
+                    .clone()
+            };
+            let span = |m: &serde_json::Value| {
+                let t = m["times"].as_array().unwrap();
+                (
+                    t[0].as_f64().unwrap(),
+                    t[t.len() - 1].as_f64().unwrap(),
+                    t.len(),
+                )
+            };
+            assert_eq!(span(&mesh("/samples/flag/flag")), (0.0, 60.0, 61), "{fmt}");
+            let other = mesh("/samples/second/flag");
+            match second {
+                None => assert_eq!(other["static"], true, "{fmt}: the undriven instance"),
+                Some((a, b)) => assert_eq!(span(&other), (a, b, 61), "{fmt}"),
+            }
+        }
+    }
+}

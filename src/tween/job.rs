@@ -4,7 +4,7 @@
 use super::compact::CompactFigures;
 use super::compact::CompactOptions;
 use super::frames::{collect_mesh, tween_mesh, MeshStats, PrimitiveDelta};
-use super::keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh};
+use super::keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh, TrackOrigin};
 use super::morph_targets::{apply_frames, Applied, MostTargets};
 use super::options::{Layout, Method, Timing, TweenOptions};
 use super::report::{CompactMesh, CompactReport, MeshReport, Report};
@@ -16,6 +16,7 @@ use crate::output::{Format, Outputs};
 use crate::progress::Progress;
 use crate::usd::{self, Delta, MeshPlan};
 use anyhow::{bail, Result};
+use std::collections::HashMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -252,13 +253,11 @@ impl Run<'_> {
             })
             .collect();
         let (rate, codes) = timeline(&times, fallback);
-        let plans: Vec<MeshPlan> = self
-            .meshes
-            .iter()
-            .zip(codes)
-            .map(|(m, codes)| MeshPlan {
+        let plans: Vec<MeshPlan> = (self.meshes.iter().zip(&times).zip(codes))
+            .map(|((m, times), codes)| MeshPlan {
                 mesh: m.mesh,
                 codes,
+                played: played_by_node(&self.doc.json, m, times),
             })
             .collect();
         // Texture files beside the layer are named after it: `<stem>_<image>.png`.
@@ -317,6 +316,56 @@ impl Run<'_> {
         progress.finish();
         Ok(())
     }
+}
+
+/// The frames each node carrying mesh `m` plays in a USD stage (its tracks' frames, `times`
+/// per track, in order): those of the tracks whose channels drive it; `None` when every node
+/// plays every frame (one node, or every track driving every node).
+fn played_by_node(
+    json: &serde_json::Value,
+    m: &MorphMesh,
+    times: &[Vec<f64>],
+) -> Option<HashMap<usize, Vec<usize>>> {
+    let carriers: Vec<usize> = (gltf::arr(json, "nodes").iter().enumerate())
+        .filter(|(_, n)| n["mesh"].as_u64() == Some(m.mesh as u64))
+        .map(|(i, _)| i)
+        .collect();
+    let mut played: HashMap<usize, Vec<usize>> = HashMap::new();
+    let mut first = 0;
+    for (track, times) in m.tracks.iter().zip(times) {
+        let driven: Vec<usize> = match &track.origin {
+            TrackOrigin::Targets { nodes } => nodes.clone(),
+            TrackOrigin::Animation {
+                animation,
+                channels,
+                ..
+            } => channels
+                .iter()
+                .flat_map(|&c| {
+                    match gltf::weights_target(
+                        &json["animations"][*animation]["channels"][c]["target"],
+                    ) {
+                        Some(gltf::WeightsTarget::Node(n)) => vec![n],
+                        Some(gltf::WeightsTarget::Mesh(_)) => carriers.clone(),
+                        None => Vec::new(),
+                    }
+                })
+                .collect(),
+        };
+        for n in driven {
+            played
+                .entry(n)
+                .or_default()
+                .extend(first..first + times.len());
+        }
+        first += times.len();
+    }
+    for frames in played.values_mut() {
+        frames.sort_unstable();
+        frames.dedup();
+    }
+    let every = |n: &usize| played.get(n).is_some_and(|f| f.len() == first);
+    (!carriers.iter().all(every)).then_some(played)
 }
 
 /// A frame's deltas as the USD writer takes them.

@@ -6,7 +6,8 @@
 //!   `upAxis = "Y"`, `metersPerUnit = 1`, `timeCodesPerSecond = framesPerSecond` = the output
 //!   frame rate, start and end time codes covering every frame;
 //! * time code of a frame = its time in seconds times the frame rate; when one mesh has several
-//!   clips they follow one another on the timeline, one frame apart;
+//!   clips they follow one another on the timeline, one frame apart; under each node carrying
+//!   it the mesh plays the clips that drive that node (none: written still);
 //! * each glTF node is an Xform (with `xformOp:transform` when it is not the identity), each
 //!   triangle primitive a Mesh (`subdivisionScheme = "none"`, `faceVertexCounts` of 3,
 //!   `faceVertexIndices`), `primvars:st` from TEXCOORD_0 with V flipped (`1 - v`),
@@ -60,8 +61,28 @@ pub struct Animation {
     pub mesh: usize,
     pub primitive: usize,
     pub times: Vec<f64>,
+    /// The frames this prim plays, when not every one (its node is driven by some of the
+    /// mesh's tracks only).
+    pub played: Option<Vec<usize>>,
     /// Whether the frames carry normals.
     pub normals: bool,
+}
+
+impl Animation {
+    /// The frames this prim plays, in order.
+    pub fn frames(&self) -> Vec<usize> {
+        self.played
+            .clone()
+            .unwrap_or_else(|| (0..self.times.len()).collect())
+    }
+
+    /// `per_frame` (one value per frame of the mesh) at the frames this prim plays.
+    pub fn pick<T: Copy>(&self, per_frame: &[T]) -> Vec<T> {
+        self.frames()
+            .into_iter()
+            .filter_map(|f| per_frame.get(f).copied())
+            .collect()
+    }
 }
 
 /// One frame of one primitive: deltas from its base points (and normals), in f32.
@@ -138,6 +159,10 @@ fn unique(name: String, taken: &mut HashMap<String, usize>) -> String {
 pub struct MeshPlan {
     pub mesh: usize,
     pub codes: Vec<f64>,
+    /// The frames each node carrying the mesh plays (those of the tracks that drive it), when
+    /// some node does not play them all; a node not listed plays none (its mesh is written
+    /// still). `None`: every node plays every frame.
+    pub played: Option<HashMap<usize, Vec<usize>>>,
 }
 
 /// Build the stage from the glTF document and the processed meshes' frames, at `rate` time
@@ -270,7 +295,7 @@ impl Ctx<'_> {
         let mut kids = HashMap::new();
         let mut children = Vec::new();
         if let Some(mi) = node["mesh"].as_u64() {
-            children.extend(self.mesh(mi as usize, &mut kids)?);
+            children.extend(self.mesh(index, mi as usize, &mut kids)?);
         }
         for c in arr(node, "children").iter().filter_map(Value::as_u64) {
             children.push(self.node(c as usize, &mut kids, depth + 1)?);
@@ -282,7 +307,12 @@ impl Ctx<'_> {
         })
     }
 
-    fn mesh(&self, mi: usize, taken: &mut HashMap<String, usize>) -> Result<Vec<Prim>> {
+    fn mesh(
+        &self,
+        node: usize,
+        mi: usize,
+        taken: &mut HashMap<String, usize>,
+    ) -> Result<Vec<Prim>> {
         let doc = self.doc;
         let mesh = &doc.json["meshes"][mi];
         let mesh_name = mesh["name"]
@@ -355,13 +385,23 @@ impl Ctx<'_> {
                 None => None,
             };
             // Processed meshes keep every primitive (a non-triangle one is an error there).
-            let animation = processed.map(|k| Animation {
-                mesh: k,
-                primitive: pi,
-                times: self.codes[k].clone(),
-                normals: normals.is_some()
-                    && prims.iter().all(|q| q["attributes"]["NORMAL"].is_u64()),
+            let played = processed.map(|k| {
+                (self.meshes[k].played.as_ref()).map(|p| p.get(&node).cloned().unwrap_or_default())
             });
+            let animation = processed
+                .filter(|_| {
+                    !played
+                        .as_ref()
+                        .is_some_and(|p| p.as_ref().is_some_and(Vec::is_empty))
+                })
+                .map(|k| Animation {
+                    mesh: k,
+                    primitive: pi,
+                    times: self.codes[k].clone(),
+                    played: played.clone().flatten(),
+                    normals: normals.is_some()
+                        && prims.iter().all(|q| q["attributes"]["NORMAL"].is_u64()),
+                });
             let base_name = if prims.len() == 1 {
                 identifier(&mesh_name)
             } else {

@@ -338,7 +338,7 @@ impl Spool {
         };
         let mut f = std::io::BufReader::with_capacity(1 << 16, std::fs::File::open(file)?);
         let (mut at, mut buf) = (0u64, Vec::new());
-        for &(offset, len) in chunks {
+        for (offset, len) in a.pick(chunks) {
             f.seek_relative(offset as i64 - at as i64)?;
             buf.resize(len as usize, 0);
             f.read_exact(&mut buf)?;

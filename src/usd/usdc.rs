@@ -426,7 +426,7 @@ impl<W: Write + Seek> Writer<W> {
         }
         match (&m.animation, reps) {
             (Some(a), Some(r)) => {
-                let rep = self.time_samples(&a.times, &r.extent)?;
+                let rep = self.time_samples(&a.pick(&a.times), &a.pick(&r.extent))?;
                 let v = self.raw_field("timeSamples", rep);
                 self.attribute(me, "extent", "float3[]", vec![v])?;
             }
@@ -448,7 +448,7 @@ impl<W: Write + Seek> Writer<W> {
         if let Some(normals) = &m.normals {
             let v = match (&m.animation, reps) {
                 (Some(a), Some(r)) if a.normals => {
-                    let rep = self.time_samples(&a.times, &r.normals)?;
+                    let rep = self.time_samples(&a.pick(&a.times), &a.pick(&r.normals))?;
                     self.raw_field("timeSamples", rep)
                 }
                 _ => self.field("default", Val::Vec3fs(normals))?,
@@ -458,7 +458,7 @@ impl<W: Write + Seek> Writer<W> {
         }
         let v = match (&m.animation, reps) {
             (Some(a), Some(r)) => {
-                let rep = self.time_samples(&a.times, &r.points)?;
+                let rep = self.time_samples(&a.pick(&a.times), &a.pick(&r.points))?;
                 self.raw_field("timeSamples", rep)
             }
             _ => self.field("default", Val::Vec3fs(&m.points))?,
