@@ -177,14 +177,7 @@ fn key_times_snap_to_their_grid() {
     for bird in ["Flamingo", "Parrot"] {
         let usd = dir.path().join(format!("{bird}.usda"));
         tween_quietly(&fx.join(format!("morph-keyframes/{bird}.glb")), &usd, &[]);
-        let dump = dir.path().join("dump.bin");
-        let r = run_tool(
-            &python,
-            "check_usd.py",
-            &[usd.as_os_str(), dump.as_os_str()],
-            bird,
-        );
-        let r: serde_json::Value = serde_json::from_slice(&r).unwrap();
+        let r = usd_report(&python, &usd, bird);
         let meta = &r["meta"];
         assert_eq!(
             meta["timeCodesPerSecond"].as_f64(),

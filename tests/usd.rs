@@ -818,14 +818,7 @@ fn each_instance_plays_the_clips_that_drive_its_node() {
         for fmt in ["usda", "usdc"] {
             let usd = dir.path().join(format!("out.{fmt}"));
             tween_quietly(&input, &usd, &[]);
-            let dump = dir.path().join("dump.bin");
-            let out = run_tool(
-                &python,
-                "check_usd.py",
-                &[usd.as_os_str(), dump.as_os_str()],
-                fmt,
-            );
-            let r: serde_json::Value = serde_json::from_slice(&out).unwrap();
+            let r = usd_report(&python, &usd, fmt);
             assert!(
                 r["errors"].as_array().unwrap().is_empty(),
                 "{}",

@@ -184,6 +184,19 @@ pub fn assert_no_new_issues(input: &Path, output: &Path) {
     }
 }
 
+/// `tools/check_usd.py`'s report of the USD file `usd` (its sample arrays dumped beside it,
+/// to `dump.bin`), parsed. `what` prefixes a failure message.
+pub fn usd_report(python: &Path, usd: &Path, what: &str) -> serde_json::Value {
+    let dump = usd.with_file_name("dump.bin");
+    let out = run_tool(
+        python,
+        "check_usd.py",
+        &[usd.as_os_str(), dump.as_os_str()],
+        what,
+    );
+    serde_json::from_slice(&out).unwrap()
+}
+
 /// Run `tools/<script>` with the project's python and `args`, insisting on success; returns
 /// its standard output. `what` prefixes the failure message.
 pub fn run_tool(python: &Path, script: &str, args: &[&std::ffi::OsStr], what: &str) -> Vec<u8> {
