@@ -514,6 +514,27 @@ fn meshes_sharing_a_sampler_each_play_their_own_frames() {
             "mesh {mesh}: {most} from its dense frames"
         );
     }
+    // Tweened from the targets, the shared clip stays and is padded for each mesh's new
+    // targets: a sampler each (the second mesh read the first's padding, an accessor the input
+    // lacks: "accessor 251 does not exist").
+    let targets = out_in(&dir, "targets.glb");
+    tween_quietly(&input, &targets, &["--keys", "targets"]);
+    assert_no_new_issues(&input, &targets);
+    let doc = Document::open(&targets).unwrap();
+    let clip = &doc.json["animations"][0];
+    for (c, mesh) in [(0, 0), (1, 2)] {
+        let s = clip["channels"][c]["sampler"].as_u64().unwrap() as usize;
+        let output = clip["samplers"][s]["output"].as_u64().unwrap() as usize;
+        let width = doc.json["meshes"][mesh]["primitives"][0]["targets"]
+            .as_array()
+            .unwrap()
+            .len();
+        assert_eq!(
+            doc.read_f64(output).unwrap().0.len(),
+            5 * width,
+            "mesh {mesh}: 5 keys"
+        );
+    }
 }
 
 #[test]

@@ -758,29 +758,49 @@ fn pad_other_channels(
         return Ok(());
     }
     let kept = w.kept();
-    let mut padded_samplers = BTreeSet::new();
+    // (animation, sampler) -> the sampler this mesh's channels on it play, padded.
+    let mut padded: BTreeMap<(usize, usize), usize> = BTreeMap::new();
     for &(a, c) in &w.frames.dropped_channels {
         let Some(s) = out.json["animations"][a]["channels"][c]["sampler"].as_u64() else {
             continue;
         };
-        let sampler = &out.json["animations"][a]["samplers"][s as usize];
-        let Some(output) = sampler["output"].as_u64().map(|o| o as usize) else {
-            continue;
-        };
-        if !padded_samplers.insert((a, s)) {
+        let s = s as usize;
+        if let Some(&own) = padded.get(&(a, s)) {
+            out.json["animations"][a]["channels"][c]["sampler"] = json!(own);
             continue; // shared with a channel already padded
         }
+        // The values as the file has them (another mesh may have padded or rewritten them).
+        let original = &doc.json["animations"][a]["samplers"][s];
+        let Some(output) = original["output"].as_u64().map(|o| o as usize) else {
+            continue;
+        };
         // CUBICSPLINE rows (in-tangent, value, out-tangent) are padded alike.
         let (values, _) = doc.read_f64(output)?;
         let rows = values.len() / kept.max(1);
-        let mut padded = Vec::with_capacity(rows * (kept + new));
+        let mut rows_padded = Vec::with_capacity(rows * (kept + new));
         for row in values.chunks(kept.max(1)) {
-            padded.extend(row.iter().map(|&x| x as f32));
-            padded.extend(std::iter::repeat_n(0.0f32, new));
+            rows_padded.extend(row.iter().map(|&x| x as f32));
+            rows_padded.extend(std::iter::repeat_n(0.0f32, new));
         }
-        let acc = out.push_f32(&padded, "SCALAR", 1, false, None);
-        edits.replaced.insert(output);
-        out.json["animations"][a]["samplers"][s as usize]["output"] = json!(acc);
+        let acc = out.push_f32(&rows_padded, "SCALAR", 1, false, None);
+        let current = &mut out.json["animations"][a]["samplers"][s];
+        let own = if current["output"].as_u64() == Some(output as u64) {
+            edits.replaced.insert(output);
+            current["output"] = json!(acc);
+            s
+        } else {
+            // Another mesh's channels read this sampler and it is theirs now: this mesh's
+            // channels get one of their own, over the file's keys.
+            let mut mine = original.clone();
+            mine["output"] = json!(acc);
+            let samplers = out.json["animations"][a]["samplers"]
+                .as_array_mut()
+                .expect("the channel's sampler");
+            samplers.push(mine);
+            samplers.len() - 1
+        };
+        padded.insert((a, s), own);
+        out.json["animations"][a]["channels"][c]["sampler"] = json!(own);
     }
     Ok(())
 }
