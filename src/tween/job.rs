@@ -253,11 +253,23 @@ impl Run<'_> {
             })
             .collect();
         let (rate, codes) = timeline(&times, fallback);
+        // The nodes carrying each mesh, found in one pass over the nodes.
+        let mut carriers: HashMap<usize, Vec<usize>> = HashMap::new();
+        for (i, n) in gltf::arr(&self.doc.json, "nodes").iter().enumerate() {
+            if let Some(m) = n["mesh"].as_u64() {
+                carriers.entry(m as usize).or_default().push(i);
+            }
+        }
         let plans: Vec<MeshPlan> = (self.meshes.iter().zip(&times).zip(codes))
             .map(|((m, times), codes)| MeshPlan {
                 mesh: m.mesh,
                 codes,
-                played: played_by_node(&self.doc.json, m, times),
+                played: played_by_node(
+                    &self.doc.json,
+                    m,
+                    carriers.get(&m.mesh).map_or(&[], Vec::as_slice),
+                    times,
+                ),
             })
             .collect();
         // Texture files beside the layer are named after it: `<stem>_<image>.png`.
@@ -318,18 +330,15 @@ impl Run<'_> {
     }
 }
 
-/// The frames each node carrying mesh `m` plays in a USD stage (its tracks' frames, `times`
-/// per track, in order): those of the tracks whose channels drive it; `None` when every node
-/// plays every frame (one node, or every track driving every node).
+/// The frames each of `carriers` (the nodes carrying mesh `m`) plays in a USD stage (its
+/// tracks' frames, `times` per track, in order): those of the tracks whose channels drive it;
+/// `None` when every node plays every frame (one node, or every track driving every node).
 fn played_by_node(
     json: &serde_json::Value,
     m: &MorphMesh,
+    carriers: &[usize],
     times: &[Vec<f64>],
 ) -> Option<HashMap<usize, Vec<usize>>> {
-    let carriers: Vec<usize> = (gltf::arr(json, "nodes").iter().enumerate())
-        .filter(|(_, n)| n["mesh"].as_u64() == Some(m.mesh as u64))
-        .map(|(i, _)| i)
-        .collect();
     let mut played: HashMap<usize, Vec<usize>> = HashMap::new();
     let mut first = 0;
     for (track, times) in m.tracks.iter().zip(times) {
@@ -346,7 +355,7 @@ fn played_by_node(
                         &json["animations"][*animation]["channels"][c]["target"],
                     ) {
                         Some(gltf::WeightsTarget::Node(n)) => vec![n],
-                        Some(gltf::WeightsTarget::Mesh(_)) => carriers.clone(),
+                        Some(gltf::WeightsTarget::Mesh(_)) => carriers.to_vec(),
                         None => Vec::new(),
                     }
                 })
