@@ -422,6 +422,123 @@ fn keys_at_one_time_play_as_a_jump() {
     );
 }
 
+/// flag_wave with the pole (node 1) moved by a channel of the flag's clip that reads the
+/// weights' key times (as Blender writes one time accessor for a clip), another channel of it
+/// with times of its own, and a second clip of its own; the key times moved by `offset`.
+fn flag_with_moving_pole(plain: &Path, out: &Path, offset: f32) {
+    let doc = Document::open(plain).unwrap();
+    let mut json = doc.json.clone();
+    let mut bin = doc.buffers[0].clone();
+    let mut push = |json: &mut serde_json::Value, values: &[f32], ty: &str| -> usize {
+        let views = json["bufferViews"].as_array_mut().unwrap();
+        views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4 * values.len()}));
+        let view = views.len() - 1;
+        bin.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+        let n = if ty == "VEC3" {
+            values.len() / 3
+        } else {
+            values.len()
+        };
+        let mut acc =
+            serde_json::json!({"bufferView": view, "componentType": 5126, "count": n, "type": ty});
+        if ty == "SCALAR" {
+            let (lo, hi) = (values[0], values[values.len() - 1]);
+            acc["min"] = serde_json::json!([lo]);
+            acc["max"] = serde_json::json!([hi]);
+        }
+        let accessors = json["accessors"].as_array_mut().unwrap();
+        accessors.push(acc);
+        accessors.len() - 1
+    };
+    let input = json["animations"][0]["samplers"][0]["input"]
+        .as_u64()
+        .unwrap() as usize;
+    let times: Vec<f32> = doc
+        .read_f64(input)
+        .unwrap()
+        .0
+        .iter()
+        .map(|&t| t as f32 + offset)
+        .collect();
+    let shared = push(&mut json, &times, "SCALAR");
+    let up: Vec<f32> = (0..5).flat_map(|k| [0.0, 0.1 * k as f32, 0.0]).collect();
+    let moved = push(&mut json, &up, "VEC3");
+    let own_times = push(&mut json, &[0.25 + offset, 1.75 + offset], "SCALAR");
+    let turned = push(&mut json, &[0.0, 0.0, 0.0, 1.0, 0.0, 0.6, 0.0, 0.8], "VEC4");
+    let other_times = push(&mut json, &[0.0, 1.0], "SCALAR");
+    let scaled = push(&mut json, &[1.0, 1.0, 1.0, 2.0, 2.0, 2.0], "VEC3");
+    json["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+    let clip = &mut json["animations"][0];
+    clip["samplers"][0]["input"] = serde_json::json!(shared);
+    clip["samplers"].as_array_mut().unwrap().extend([
+        serde_json::json!({"input": shared, "output": moved}),
+        serde_json::json!({"input": own_times, "output": turned}),
+    ]);
+    clip["channels"].as_array_mut().unwrap().extend([
+        serde_json::json!({"sampler": 1, "target": {"node": 1, "path": "translation"}}),
+        serde_json::json!({"sampler": 2, "target": {"node": 1, "path": "rotation"}}),
+    ]);
+    json["animations"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({
+            "name": "grow",
+            "samplers": [{"input": other_times, "output": scaled}],
+            "channels": [{"sampler": 0, "target": {"node": 1, "path": "scale"}}],
+        }));
+    write_glb(out, &json, &bin);
+}
+
+#[test]
+fn a_clip_s_other_channels_keep_time_with_its_weights() {
+    // The weights' frames are moved later when they would start before 0 s (glTF times are not
+    // negative): motion extended before the first key, or a file whose keys start before 0.
+    // The clip's other channels move with them, shared time accessor or not; other clips stay.
+    let dir = tempfile::tempdir().unwrap();
+    let plain = sample("flag_wave.glb");
+    for (offset, args) in [(0.0, &["--extend-before", "0.5"][..]), (-0.5, &[][..])] {
+        let input = out_in(&dir, "pole.glb");
+        flag_with_moving_pole(&plain, &input, offset);
+        let out = out_in(&dir, "out.glb");
+        tween_quietly(&input, &out, args);
+        assert_no_new_issues(&input, &out);
+        let (a, b) = (
+            Document::open(&input).unwrap(),
+            Document::open(&out).unwrap(),
+        );
+        let times = |doc: &Document, anim: usize, channel: usize| -> Vec<f64> {
+            let clip = &doc.json["animations"][anim];
+            let s = clip["channels"][channel]["sampler"].as_u64().unwrap() as usize;
+            let input = clip["samplers"][s]["input"].as_u64().unwrap() as usize;
+            doc.read_f64(input).unwrap().0
+        };
+        // Both clips move 0.5 s later: the flag's first key, at `offset`, plays at `offset` + 0.5.
+        let keys = played(&input, 0, 0, 0);
+        let p = played(&out, 0, 0, 0);
+        assert_eq!(p.times[0], 0.0, "{args:?}");
+        let at = p
+            .times
+            .iter()
+            .position(|&t| t == offset + 0.5)
+            .expect("the first key");
+        assert_eq!(p.positions[at], keys.positions[0], "{args:?}");
+        for channel in [1, 2] {
+            let before = times(&a, 0, channel);
+            let after = times(&b, 0, channel);
+            let moved: Vec<f64> = before.iter().map(|t| (*t as f32 + 0.5) as f64).collect();
+            assert_eq!(
+                after, moved,
+                "{args:?}: channel {channel} keeps time with the weights"
+            );
+        }
+        assert_eq!(
+            times(&b, 1, 0),
+            [0.0, 1.0],
+            "{args:?}: another clip is left as it was"
+        );
+    }
+}
+
 #[test]
 fn a_usd_stage_says_which_animated_meshes_its_scene_does_not_show() {
     // flag_wave with a second flag (its own mesh and node, animated by the same keys) in a

@@ -187,15 +187,7 @@ pub fn apply_frames(
     }
     // Set first: the writers below decide sparse accessors by it, as the compaction did.
     out.meshopt = compact_opts.is_some_and(|o| o.meshopt);
-    // glTF key times cannot be negative: a motion extended before 0 s shifts every written
-    // timeline by the same amount.
-    let earliest = frames
-        .iter()
-        .flat_map(|m| &m.tracks)
-        .flat_map(|t| t.frames.first())
-        .map(|f| f.time)
-        .fold(0.0, f64::min);
-    let shift = -earliest;
+    let shifts = ClipShifts::of(frames);
     let mut edits = Edits::default();
     let mut dropped: Vec<(usize, usize)> = Vec::new();
     for (m, mesh) in frames.iter().zip(meshes) {
@@ -237,16 +229,17 @@ pub fn apply_frames(
                 gltf::reorder(out, m.mesh, p.index, &mut edits.replaced);
             }
         }
-        name_targets(out, &w, &plays, new, shift);
+        name_targets(out, &w, &plays, new, &shifts);
         let outputs = push_weights(out, &w, &plays, new);
         for (track, output) in m.tracks.iter().zip(outputs) {
-            animate_track(out, track, output, shift, &mut edits);
+            animate_track(out, track, output, shifts.of_track(track), &mut edits);
         }
         match layout {
             Layout::Frames => dropped.extend(m.dropped_channels.iter().copied()),
             Layout::Rig => pad_other_channels(out, doc, &w, new, &mut edits)?,
         }
     }
+    shifts.move_other_channels(out, doc, &mut edits)?;
     drop_channels(&mut out.json, &dropped, &mut edits.replaced);
     if !edits.channels.is_empty() {
         out.push_to(
@@ -260,6 +253,72 @@ pub fn apply_frames(
     }
     drop_unused(out, &edits.replaced);
     Ok(applied)
+}
+
+/// Seconds each clip's written key times move later. glTF key times cannot be negative, so a
+/// clip whose frames would start before 0 s (motion extended before its first key, or a file
+/// whose keys start before 0) moves as a whole: its weights' frames and every other channel of
+/// it (a node's transforms, another mesh's weights) alike. Other clips keep their times.
+struct ClipShifts {
+    /// By animation index; `None`: the new animation of keys made from targets.
+    by_clip: BTreeMap<Option<usize>, f64>,
+}
+
+impl ClipShifts {
+    fn of(frames: &[MeshFrames]) -> Self {
+        let mut by_clip: BTreeMap<Option<usize>, f64> = BTreeMap::new();
+        for track in frames.iter().flat_map(|m| &m.tracks) {
+            let Some(first) = track.frames.first() else {
+                continue;
+            };
+            let shift = by_clip.entry(Self::clip(track)).or_insert(0.0);
+            *shift = shift.max(-first.time);
+        }
+        Self { by_clip }
+    }
+
+    fn clip(track: &TrackFrames) -> Option<usize> {
+        match track.origin {
+            TrackOrigin::Animation { animation, .. } => Some(animation),
+            TrackOrigin::Targets { .. } => None,
+        }
+    }
+
+    fn of_track(&self, track: &TrackFrames) -> f64 {
+        self.by_clip.get(&Self::clip(track)).copied().unwrap_or(0.0)
+    }
+
+    /// The key times of the samplers of a moved clip that no track rewrote, moved with it
+    /// (into accessors of their own: a time accessor may be shared with other clips).
+    fn move_other_channels(
+        &self,
+        out: &mut Output,
+        doc: &Document,
+        edits: &mut Edits,
+    ) -> Result<()> {
+        let file_accessors = arr(&doc.json, "accessors").len();
+        for (&clip, &shift) in &self.by_clip {
+            let (Some(a), true) = (clip, shift > 0.0) else {
+                continue;
+            };
+            for s in 0..arr(&out.json["animations"][a], "samplers").len() {
+                let Some(input) = out.json["animations"][a]["samplers"][s]["input"].as_u64() else {
+                    continue;
+                };
+                let input = input as usize;
+                let written = edits.times.iter().any(|(_, acc)| *acc == input);
+                if written || input >= file_accessors {
+                    continue;
+                }
+                let (times, _) = doc.read_f64(input)?;
+                let moved: Vec<f32> = times.iter().map(|t| (t + shift) as f32).collect();
+                let moved = key_times(out, &moved, &mut edits.times);
+                edits.replaced.insert(input);
+                out.json["animations"][a]["samplers"][s]["input"] = json!(moved);
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The frame's value of one attribute as the new target stores it: its delta from the base,
@@ -559,7 +618,13 @@ fn reencode_authored(
 /// The mesh's default weights (and its nodes' overrides) padded for the new targets (frame 0
 /// in the frames layout), and the targets' names in `extras.targetNames`: the authored names
 /// kept, each new target named after its frame (`f0007_t0.2917`: frame 7 at 0.2917 s).
-fn name_targets(out: &mut Output, w: &Written, plays: &[Vec<Played>], new: usize, shift: f64) {
+fn name_targets(
+    out: &mut Output,
+    w: &Written,
+    plays: &[Vec<Played>],
+    new: usize,
+    shifts: &ClipShifts,
+) {
     let m = w.frames;
     let kept = w.kept();
     let pad = |v: &Value| -> Value {
@@ -587,6 +652,7 @@ fn name_targets(out: &mut Output, w: &Written, plays: &[Vec<Played>], new: usize
         }
     }
     for (track, plays) in m.tracks.iter().zip(plays) {
+        let shift = shifts.of_track(track);
         for (i, (f, play)) in track.frames.iter().zip(plays).enumerate() {
             if matches!(play, Played::Target(_)) {
                 names.push(format!("f{:04}_t{:.4}", track.first + i, f.time + shift));
