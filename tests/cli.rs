@@ -699,6 +699,32 @@ fn summary_unless_quiet() {
 }
 
 #[test]
+fn held_keys_are_tweened_and_said_so() {
+    // A stepped clip (STEP: each key held until the next, a blocking pass as exporters write
+    // it) is keys like any other: tweened, played LINEAR, and the summary says so.
+    let dir = tempfile::tempdir().unwrap();
+    let (plain, input) = (sample("flag_wave.glb"), out_in(&dir, "stepped.glb"));
+    edited_glb(&plain, &input, |j| {
+        j["animations"][0]["samplers"][0]["interpolation"] = serde_json::json!("STEP");
+    });
+    let (a, b) = (out_in(&dir, "a.glb"), out_in(&dir, "b.glb"));
+    tween_quietly(&plain, &a, &[]);
+    let r = run_ok(&["tween", s(&input), "-o", s(&b)]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    let warned: Vec<&str> = err.lines().filter(|l| l.contains("STEP")).collect();
+    assert_eq!(warned.len(), 1, "{err}");
+    assert!(
+        warned[0].starts_with("warning: ") && warned[0].contains("stepped.glb: animation \"keys\""),
+        "{err}"
+    );
+    // The same file as from the clip played LINEAR.
+    let quiet = tween_quietly(&input, &out_in(&dir, "c.glb"), &[]);
+    assert!(quiet.stderr.is_empty());
+    let (a, b) = (Document::open(&a).unwrap(), Document::open(&b).unwrap());
+    assert!(a.buffers == b.buffers && a.json == b.json);
+}
+
+#[test]
 fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     let dir = tempfile::tempdir().unwrap();
     let good = sample("bar_twist.glb");

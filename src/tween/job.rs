@@ -16,7 +16,7 @@ use crate::output::{Format, Outputs};
 use crate::progress::Progress;
 use crate::usd::{self, Delta, MeshPlan};
 use anyhow::{bail, Result};
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -62,8 +62,9 @@ pub struct Summary {
     /// Seconds of set-up by part (see `clock`): symbolic, key gradients and turns, numeric
     /// factorization, spline window.
     pub setup_parts: [f64; 4],
-    /// What a USD output could not carry (textures USD cannot read), one line each.
-    pub left_out: Vec<String>,
+    /// What a user should know of the input or the output, one line each: keys held (STEP)
+    /// that were tweened, what a USD output could not carry (textures USD cannot read).
+    pub warnings: Vec<String>,
 }
 
 /// Morph targets some engines blend at once (what glTF asks every client to support, and
@@ -144,7 +145,7 @@ impl Summary {
                 );
             }
         }
-        for what in &self.left_out {
+        for what in &self.warnings {
             out += &format!("\nwarning: {what}");
         }
         if growth > GROWTH_WARNING {
@@ -176,7 +177,7 @@ struct Run<'a> {
     reports: Vec<MeshReport>,
     output_bytes: u64,
     applied: Applied,
-    left_out: Vec<String>,
+    warnings: Vec<String>,
 }
 
 impl Run<'_> {
@@ -278,9 +279,7 @@ impl Run<'_> {
             .unwrap_or("stage");
         let stage = usd::build_stage(&self.doc, &plans, rate, &format!("{stem}_"))?;
         let input = self.doc.path.display();
-        self.left_out = (stage.look.left_out.iter())
-            .map(|what| format!("{input}: {what}"))
-            .collect();
+        (self.warnings).extend((stage.look.left_out.iter()).map(|what| format!("{input}: {what}")));
         // A point cache animates points and normals; attributes the targets also move keep
         // the base's values.
         for m in &self.meshes {
@@ -289,7 +288,7 @@ impl Run<'_> {
                 .collect();
             if !names.is_empty() {
                 let names: Vec<&str> = names.into_iter().collect();
-                self.left_out.push(format!(
+                self.warnings.push(format!(
                     "{input}: mesh {:?} morphs {} too; a USD point cache animates points and normals only, so they keep the base's values (a glTF output plays them)",
                     m.name,
                     names.join(", ")
@@ -488,6 +487,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         compact: job.compact,
     };
     let total = check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
+    let warnings = held_keys(&doc, &meshes);
     let mut run = Run {
         job,
         doc,
@@ -498,7 +498,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         reports: Vec::new(),
         output_bytes: 0,
         applied: Applied::default(),
-        left_out: Vec::new(),
+        warnings,
     };
     let mut files = Outputs::new();
     match Container::of(format) {
@@ -516,6 +516,36 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         most_targets: run.applied.most_targets,
         compacted: run.applied.compacted,
         setup_parts: super::clock::seconds(),
-        left_out: run.left_out,
+        warnings: run.warnings,
     })
+}
+
+/// A line for each clip whose weights hold each key until the next (STEP interpolation, as
+/// exporters write stepped or "constant" keys: an animator's blocking pass): its keys are
+/// tweened as poses like any others, so the output moves between keys where the input held.
+fn held_keys(doc: &Document, meshes: &[MorphMesh]) -> Vec<String> {
+    let held: BTreeSet<usize> = (meshes.iter().flat_map(|m| &m.tracks))
+        .filter_map(|t| match t.origin {
+            TrackOrigin::Animation {
+                animation, sampler, ..
+            } => Some((animation, sampler)),
+            TrackOrigin::Targets { .. } => None,
+        })
+        .filter(|&(a, s)| {
+            doc.json["animations"][a]["samplers"][s]["interpolation"].as_str() == Some("STEP")
+        })
+        .map(|(a, _)| a)
+        .collect();
+    held.into_iter()
+        .map(|a| {
+            let name = match doc.json["animations"][a]["name"].as_str() {
+                Some(n) => format!("{n:?}"),
+                None => format!("{a}"),
+            };
+            format!(
+                "{}: animation {name} holds its weights from key to key (STEP interpolation); its keys are tweened as poses, so the output moves between them",
+                doc.path.display()
+            )
+        })
+        .collect()
 }
