@@ -1,7 +1,8 @@
 //! The character and its clips: every node of the scene as a joint (so any node a clip animates
 //! has a place), the skin in use marking the skeleton, and clips evaluated as local poses.
 
-use crate::gltf::{arr, Document};
+use crate::gltf::{arr, read_channels, Document};
+pub use crate::gltf::{slerp, Channel, Interp, Path};
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
@@ -9,10 +10,6 @@ use std::collections::BTreeSet;
 
 /// Shortest key span (seconds) a channel's key rate is measured over.
 const MIN_SPAN: f64 = 1e-9;
-
-/// A rotation key shorter than this (unitless) is no rotation at all (a zero-filled accessor):
-/// refused rather than normalised into NaN.
-const MIN_QUATERNION: f64 = 1e-6;
 
 /// World up: +Y in glTF and in the BVH files we read.
 pub const UP: DVec3 = DVec3::Y;
@@ -53,110 +50,6 @@ pub struct Pose {
     pub local: Vec<Trs>,
     /// Morph weights per node (empty for nodes without a mesh with targets).
     pub weights: Vec<Vec<f64>>,
-}
-
-/// What a channel animates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Path {
-    Translation,
-    Rotation,
-    Scale,
-    Weights,
-}
-
-impl Path {
-    pub fn name(self) -> &'static str {
-        match self {
-            Path::Translation => "translation",
-            Path::Rotation => "rotation",
-            Path::Scale => "scale",
-            Path::Weights => "weights",
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Interp {
-    Step,
-    Linear,
-    Cubic,
-}
-
-/// One animated property: keys and values (`width` numbers per key; CUBICSPLINE keeps its
-/// in-tangent, value, out-tangent triples).
-#[derive(Clone, Debug)]
-pub struct Channel {
-    pub node: usize,
-    pub path: Path,
-    pub interp: Interp,
-    pub times: Vec<f64>,
-    pub values: Vec<f64>,
-    pub width: usize,
-}
-
-impl Channel {
-    /// The value at time `t` (clamped to the keys).
-    pub fn sample(&self, t: f64, out: &mut [f64]) {
-        let w = self.width;
-        let per_key = if self.interp == Interp::Cubic {
-            3 * w
-        } else {
-            w
-        };
-        let value = |k: usize, part: usize| &self.values[k * per_key + part * w..][..w];
-        let mid = if self.interp == Interp::Cubic { 1 } else { 0 };
-        let n = self.times.len();
-        if n == 1 || t <= self.times[0] {
-            out.copy_from_slice(value(0, mid));
-            return;
-        }
-        if t >= self.times[n - 1] {
-            out.copy_from_slice(value(n - 1, mid));
-            return;
-        }
-        let k = self.times.partition_point(|&x| x <= t) - 1;
-        let (t0, t1) = (self.times[k], self.times[k + 1]);
-        let dt = t1 - t0;
-        let u = if dt > 0.0 { (t - t0) / dt } else { 0.0 };
-        match self.interp {
-            Interp::Step => out.copy_from_slice(value(k, 0)),
-            Interp::Linear => {
-                let (a, b) = (value(k, 0), value(k + 1, 0));
-                if self.path == Path::Rotation {
-                    let qa = DQuat::from_xyzw(a[0], a[1], a[2], a[3]);
-                    let qb = DQuat::from_xyzw(b[0], b[1], b[2], b[3]);
-                    let q = slerp(qa, qb, u);
-                    out.copy_from_slice(&q.to_array());
-                } else {
-                    for c in 0..w {
-                        out[c] = a[c] + (b[c] - a[c]) * u;
-                    }
-                }
-            }
-            Interp::Cubic => {
-                let (p0, m0) = (value(k, 1), value(k, 2));
-                let (p1, m1) = (value(k + 1, 1), value(k + 1, 0));
-                let (u2, u3) = (u * u, u * u * u);
-                let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
-                let h10 = u3 - 2.0 * u2 + u;
-                let h01 = -2.0 * u3 + 3.0 * u2;
-                let h11 = u3 - u2;
-                for c in 0..w {
-                    out[c] = h00 * p0[c] + h10 * dt * m0[c] + h01 * p1[c] + h11 * dt * m1[c];
-                }
-                if self.path == Path::Rotation {
-                    let q = DQuat::from_slice(out).normalize();
-                    out.copy_from_slice(&q.to_array());
-                }
-            }
-        }
-    }
-}
-
-/// Shortest-path spherical interpolation (the hemisphere of `b` is flipped to `a`'s).
-pub fn slerp(a: DQuat, b: DQuat, u: f64) -> DQuat {
-    let b = if a.dot(b) < 0.0 { -b } else { b };
-    a.slerp(b, u).normalize()
 }
 
 /// An animation clip.
@@ -401,86 +294,7 @@ fn read_clip(doc: &Document, rig: &Rig, index: usize, anim: &Value) -> Result<Cl
         .and_then(Value::as_str)
         .map(str::to_owned)
         .unwrap_or_else(|| format!("animation {index}"));
-    let samplers = arr(anim, "samplers");
-    let mut channels = Vec::new();
-    for ch in arr(anim, "channels") {
-        let Some(node) = ch["target"]["node"].as_u64().map(|v| v as usize) else {
-            continue; // a channel for an extension's target (KHR_animation_pointer)
-        };
-        if node >= rig.len() {
-            bail!(doc.err(format!(
-                "animation {name:?} targets node {node}, which does not exist"
-            )));
-        }
-        let path = match ch["target"]["path"].as_str().unwrap_or("") {
-            "translation" => Path::Translation,
-            "rotation" => Path::Rotation,
-            "scale" => Path::Scale,
-            "weights" => Path::Weights,
-            _ => continue,
-        };
-        let s = ch["sampler"]
-            .as_u64()
-            .and_then(|s| samplers.get(s as usize))
-            .ok_or_else(|| {
-                doc.err(format!(
-                    "animation {name:?} has a channel without a sampler"
-                ))
-            })?;
-        let interp = match s["interpolation"].as_str().unwrap_or("LINEAR") {
-            "STEP" => Interp::Step,
-            "CUBICSPLINE" => Interp::Cubic,
-            _ => Interp::Linear,
-        };
-        let input = s["input"].as_u64().unwrap_or(u64::MAX) as usize;
-        let output = s["output"].as_u64().unwrap_or(u64::MAX) as usize;
-        let (times, _) = doc.read_f64(input)?;
-        let (values, ncomp) = doc.read_f64(output)?;
-        if times.is_empty() {
-            bail!(doc.err(format!("animation {name:?} has a sampler without keys")));
-        }
-        if times.windows(2).any(|w| w[1] <= w[0]) {
-            bail!(doc.err(format!(
-                "animation {name:?}: the key times of accessor {input} do not increase"
-            )));
-        }
-        let per_key_values =
-            values.len() / times.len() / if interp == Interp::Cubic { 3 } else { 1 };
-        let width = match path {
-            Path::Weights => per_key_values,
-            Path::Rotation => 4,
-            _ => 3,
-        };
-        if path != Path::Weights && ncomp != width || per_key_values != width || width == 0 {
-            bail!(doc.err(format!(
-                "animation {name:?}: the {} values of node {node} do not match its {} keys",
-                path.name(),
-                times.len()
-            )));
-        }
-        if path == Path::Rotation {
-            let (per_key, mid) = match interp {
-                Interp::Cubic => (12, 4),
-                _ => (4, 0),
-            };
-            let zero = values
-                .chunks_exact(per_key)
-                .position(|k| DQuat::from_slice(&k[mid..mid + 4]).length() < MIN_QUATERNION);
-            if let Some(k) = zero {
-                bail!(doc.err(format!(
-                    "animation {name:?}: rotation key {k} of node {node} (accessor {output}) is not a unit quaternion"
-                )));
-            }
-        }
-        channels.push(Channel {
-            node,
-            path,
-            interp,
-            times,
-            values,
-            width,
-        });
-    }
+    let channels = read_channels(doc, &name, anim, rig.len())?;
     Ok(clip_from_channels(name, index, channels))
 }
 

@@ -3,14 +3,16 @@
 //! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
 //! container, buffers; [`uri`] says what external files it may read) -> [`decode`] (meshopt
 //! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`,
-//! triangles) ... the command's own work ... -> [`build`] (new accessors and buffer views on an
-//! [`Output`]) -> [`mod@reorder`] (with meshopt: triangles and vertices in mesh order) ->
-//! [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`] (meshopt
-//! compression, when asked for) -> [`write`] (`.glb` or `.gltf` with its `.bin` and images,
+//! triangles; [`channel`]: animation channels read and evaluated) ... the command's own work
+//! ... -> [`build`] (new accessors and buffer views on an [`Output`]) -> [`mod@reorder`] (with
+//! meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors
+//! nothing uses any more dropped) -> [`encode`] (meshopt compression, when asked for) ->
+//! [`write`] (`.glb` or `.gltf` with its `.bin` and images,
 //! staged as one all-or-nothing set of files).
 
 mod accessor;
 mod build;
+mod channel;
 mod compact;
 mod decode;
 mod encode;
@@ -21,11 +23,12 @@ mod write;
 
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{set_bounds, BinBuilder, Output, Storage};
+pub use channel::{read_channels, slerp, Channel, Interp, Path};
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
 pub use encode::{
     exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,
 };
-pub use read::{arr, at, listed, weights_target, Document, WeightsTarget};
+pub use read::{arr, at, listed, node_target, weights_target, Document, WeightsTarget};
 pub use reorder::reorder;
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

@@ -339,29 +339,43 @@ pub enum WeightsTarget {
 pub fn weights_target(target: &Value) -> Option<WeightsTarget> {
     match target["path"].as_str()? {
         "weights" => Some(WeightsTarget::Node(target["node"].as_u64()? as usize)),
-        "pointer" => {
-            let pointer = target["extensions"]["KHR_animation_pointer"]["pointer"].as_str()?;
-            let mut parts = pointer.strip_prefix('/')?.split('/');
-            let (kind, index, leaf) = (parts.next()?, parts.next()?, parts.next()?);
-            if leaf != "weights" || parts.next().is_some() {
-                return None;
-            }
-            // A JSON pointer's array index: digits, no leading zero.
-            if index.is_empty()
-                || !index.bytes().all(|b| b.is_ascii_digit())
-                || (index.len() > 1 && index.starts_with('0'))
-            {
-                return None;
-            }
-            let index: usize = index.parse().ok()?;
-            match kind {
-                "nodes" => Some(WeightsTarget::Node(index)),
-                "meshes" => Some(WeightsTarget::Mesh(index)),
-                _ => None,
-            }
-        }
+        "pointer" => match pointer_parts(target)? {
+            ("nodes", index, "weights") => Some(WeightsTarget::Node(index)),
+            ("meshes", index, "weights") => Some(WeightsTarget::Mesh(index)),
+            _ => None,
+        },
         _ => None,
     }
+}
+
+/// The node and property (`translation`, `rotation`, `scale`, `weights`) a channel `target`
+/// animates: its `node` and `path`, or a `KHR_animation_pointer` aimed at `/nodes/N/<property>`.
+pub fn node_target(target: &Value) -> Option<(usize, &str)> {
+    match target["path"].as_str()? {
+        "pointer" => match pointer_parts(target)? {
+            ("nodes", index, leaf) => Some((index, leaf)),
+            _ => None,
+        },
+        path => Some((target["node"].as_u64()? as usize, path)),
+    }
+}
+
+/// A `KHR_animation_pointer` target of the form `/<kind>/<index>/<property>`.
+fn pointer_parts(target: &Value) -> Option<(&str, usize, &str)> {
+    let pointer = target["extensions"]["KHR_animation_pointer"]["pointer"].as_str()?;
+    let mut parts = pointer.strip_prefix('/')?.split('/');
+    let (kind, index, leaf) = (parts.next()?, parts.next()?, parts.next()?);
+    if parts.next().is_some() {
+        return None;
+    }
+    // A JSON pointer's array index: digits, no leading zero.
+    if index.is_empty()
+        || !index.bytes().all(|b| b.is_ascii_digit())
+        || (index.len() > 1 && index.starts_with('0'))
+    {
+        return None;
+    }
+    Some((kind, index.parse().ok()?, leaf))
 }
 
 /// The array under `key`, or an empty slice.

@@ -1,0 +1,212 @@
+//! Animation channels as the file keys them: a node's translation, rotation, scale or morph
+//! weights, read from their samplers (STEP, LINEAR, CUBICSPLINE) and evaluated at any time as
+//! glTF asks (rotations by shortest-path slerp, cubic Hermite rotations normalised). Read by
+//! `blend` for the clips it mixes and by the USD stage for the node motion it carries.
+
+use super::{arr, node_target, Document};
+use anyhow::{bail, Result};
+use glam::DQuat;
+use serde_json::Value;
+
+/// A rotation key shorter than this (unitless) is no rotation at all (a zero-filled accessor):
+/// refused rather than normalised into NaN.
+const MIN_QUATERNION: f64 = 1e-6;
+
+/// What a channel animates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Path {
+    Translation,
+    Rotation,
+    Scale,
+    Weights,
+}
+
+impl Path {
+    pub fn name(self) -> &'static str {
+        match self {
+            Path::Translation => "translation",
+            Path::Rotation => "rotation",
+            Path::Scale => "scale",
+            Path::Weights => "weights",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interp {
+    Step,
+    Linear,
+    Cubic,
+}
+
+/// One animated property: keys and values (`width` numbers per key; CUBICSPLINE keeps its
+/// in-tangent, value, out-tangent triples).
+#[derive(Clone, Debug)]
+pub struct Channel {
+    pub node: usize,
+    pub path: Path,
+    pub interp: Interp,
+    pub times: Vec<f64>,
+    pub values: Vec<f64>,
+    pub width: usize,
+}
+
+impl Channel {
+    /// The value at time `t` (clamped to the keys).
+    pub fn sample(&self, t: f64, out: &mut [f64]) {
+        let w = self.width;
+        let per_key = if self.interp == Interp::Cubic {
+            3 * w
+        } else {
+            w
+        };
+        let value = |k: usize, part: usize| &self.values[k * per_key + part * w..][..w];
+        let mid = if self.interp == Interp::Cubic { 1 } else { 0 };
+        let n = self.times.len();
+        if n == 1 || t <= self.times[0] {
+            out.copy_from_slice(value(0, mid));
+            return;
+        }
+        if t >= self.times[n - 1] {
+            out.copy_from_slice(value(n - 1, mid));
+            return;
+        }
+        let k = self.times.partition_point(|&x| x <= t) - 1;
+        let (t0, t1) = (self.times[k], self.times[k + 1]);
+        let dt = t1 - t0;
+        let u = if dt > 0.0 { (t - t0) / dt } else { 0.0 };
+        match self.interp {
+            Interp::Step => out.copy_from_slice(value(k, 0)),
+            Interp::Linear => {
+                let (a, b) = (value(k, 0), value(k + 1, 0));
+                if self.path == Path::Rotation {
+                    let qa = DQuat::from_xyzw(a[0], a[1], a[2], a[3]);
+                    let qb = DQuat::from_xyzw(b[0], b[1], b[2], b[3]);
+                    let q = slerp(qa, qb, u);
+                    out.copy_from_slice(&q.to_array());
+                } else {
+                    for c in 0..w {
+                        out[c] = a[c] + (b[c] - a[c]) * u;
+                    }
+                }
+            }
+            Interp::Cubic => {
+                let (p0, m0) = (value(k, 1), value(k, 2));
+                let (p1, m1) = (value(k + 1, 1), value(k + 1, 0));
+                let (u2, u3) = (u * u, u * u * u);
+                let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
+                let h10 = u3 - 2.0 * u2 + u;
+                let h01 = -2.0 * u3 + 3.0 * u2;
+                let h11 = u3 - u2;
+                for c in 0..w {
+                    out[c] = h00 * p0[c] + h10 * dt * m0[c] + h01 * p1[c] + h11 * dt * m1[c];
+                }
+                if self.path == Path::Rotation {
+                    let q = DQuat::from_slice(out).normalize();
+                    out.copy_from_slice(&q.to_array());
+                }
+            }
+        }
+    }
+}
+
+/// Shortest-path spherical interpolation (the hemisphere of `b` is flipped to `a`'s).
+pub fn slerp(a: DQuat, b: DQuat, u: f64) -> DQuat {
+    let b = if a.dot(b) < 0.0 { -b } else { b };
+    a.slerp(b, u).normalize()
+}
+
+/// The channels of animation `anim` (named `name` in errors) that animate a node's
+/// translation, rotation, scale or weights (by `node` and `path`, or a `KHR_animation_pointer`
+/// aimed at `/nodes/N/...`), in the file's order; `nodes` is the node count. Channels aimed
+/// elsewhere (a material's or a light's property) are passed over.
+pub fn read_channels(
+    doc: &Document,
+    name: &str,
+    anim: &Value,
+    nodes: usize,
+) -> Result<Vec<Channel>> {
+    let samplers = arr(anim, "samplers");
+    let mut channels = Vec::new();
+    for ch in arr(anim, "channels") {
+        // A node's property, by `node` and `path` or through KHR_animation_pointer; a
+        // pointer to anything else (a material's colour, a light) is no node's.
+        let Some((node, property)) = node_target(&ch["target"]) else {
+            continue;
+        };
+        let path = match property {
+            "translation" => Path::Translation,
+            "rotation" => Path::Rotation,
+            "scale" => Path::Scale,
+            "weights" => Path::Weights,
+            _ => continue,
+        };
+        if node >= nodes {
+            bail!(doc.err(format!(
+                "animation {name:?} targets node {node}, which does not exist"
+            )));
+        }
+        let s = ch["sampler"]
+            .as_u64()
+            .and_then(|s| samplers.get(s as usize))
+            .ok_or_else(|| {
+                doc.err(format!(
+                    "animation {name:?} has a channel without a sampler"
+                ))
+            })?;
+        let interp = match s["interpolation"].as_str().unwrap_or("LINEAR") {
+            "STEP" => Interp::Step,
+            "CUBICSPLINE" => Interp::Cubic,
+            _ => Interp::Linear,
+        };
+        let input = s["input"].as_u64().unwrap_or(u64::MAX) as usize;
+        let output = s["output"].as_u64().unwrap_or(u64::MAX) as usize;
+        let (times, _) = doc.read_f64(input)?;
+        let (values, ncomp) = doc.read_f64(output)?;
+        if times.is_empty() {
+            bail!(doc.err(format!("animation {name:?} has a sampler without keys")));
+        }
+        if times.windows(2).any(|w| w[1] <= w[0]) {
+            bail!(doc.err(format!(
+                "animation {name:?}: the key times of accessor {input} do not increase"
+            )));
+        }
+        let per_key_values =
+            values.len() / times.len() / if interp == Interp::Cubic { 3 } else { 1 };
+        let width = match path {
+            Path::Weights => per_key_values,
+            Path::Rotation => 4,
+            _ => 3,
+        };
+        if path != Path::Weights && ncomp != width || per_key_values != width || width == 0 {
+            bail!(doc.err(format!(
+                "animation {name:?}: the {} values of node {node} do not match its {} keys",
+                path.name(),
+                times.len()
+            )));
+        }
+        if path == Path::Rotation {
+            let (per_key, mid) = match interp {
+                Interp::Cubic => (12, 4),
+                _ => (4, 0),
+            };
+            let zero = values
+                .chunks_exact(per_key)
+                .position(|k| DQuat::from_slice(&k[mid..mid + 4]).length() < MIN_QUATERNION);
+            if let Some(k) = zero {
+                bail!(doc.err(format!(
+                    "animation {name:?}: rotation key {k} of node {node} (accessor {output}) is not a unit quaternion"
+                )));
+            }
+        }
+        channels.push(Channel {
+            node,
+            path,
+            interp,
+            times,
+            values,
+            width,
+        });
+    }
+    Ok(channels)
+}
