@@ -850,3 +850,76 @@ fn each_instance_plays_the_clips_that_drive_its_node() {
         }
     }
 }
+
+/// A node the tweened clip also moves (the flag's pole, by a channel sharing the weights' key
+/// times and one with times of its own) moves in the point cache as in the glTF: its local
+/// transform time-sampled at every frame of the clip. A clip that tweens no mesh (`grow`) is
+/// not on the timeline and is named in a warning; the pole stood still before.
+#[test]
+fn nodes_the_tweened_clip_moves_move_in_the_point_cache() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let plain = dir.path().join("pole.glb");
+    flag_with_moving_pole(&sample("flag_wave.glb"), &plain, 0.0);
+    // The same, the rise keyed through KHR_animation_pointer.
+    let pointer = dir.path().join("pointer.glb");
+    edited_glb(&plain, &pointer, |j| {
+        j["animations"][0]["channels"][1]["target"] = serde_json::json!({"path": "pointer",
+            "extensions": {"KHR_animation_pointer": {"pointer": "/nodes/1/translation"}}});
+        j["extensionsUsed"] = serde_json::json!(["KHR_animation_pointer"]);
+    });
+    // The file's keys: the pole rises 0.1 per key (0, 0.5, ... 2 s) and turns from none at
+    // 0.25 s to (0, 0.6, 0, 0.8) at 1.75 s.
+    let turn = glam::DQuat::from_xyzw(0.0, 0.6, 0.0, 0.8);
+    let expected = |t: f64| {
+        let u = ((t - 0.25) / 1.5).clamp(0.0, 1.0);
+        let r = glam::DQuat::IDENTITY.slerp(turn, u);
+        let y = 0.1 * (t / 0.5);
+        glam::DMat4::from_rotation_translation(r, glam::DVec3::new(0.0, y, 0.0))
+    };
+    for (input, fmt) in [(&plain, "usda"), (&plain, "usdc"), (&pointer, "usda")] {
+        let usd = dir.path().join(format!("out.{fmt}"));
+        let r = run_ok(&["tween", s(input), "-o", s(&usd)]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            err.lines()
+                .any(|l| l.starts_with("warning: ") && l.contains("animation \"grow\" moves nodes")),
+            "{err}"
+        );
+        let r = usd_report(&python, &usd, fmt);
+        assert!(
+            r["errors"].as_array().unwrap().is_empty(),
+            "{}",
+            r["errors"]
+        );
+        assert!(
+            r["validation"].as_array().unwrap().is_empty(),
+            "{}",
+            r["validation"]
+        );
+        let xforms = r["xforms"].as_array().unwrap();
+        assert_eq!(xforms.len(), 1, "{fmt}: only the pole moves: {xforms:?}");
+        assert_eq!(xforms[0]["path"], "/samples/pole", "{fmt}");
+        let times = xforms[0]["times"].as_array().unwrap();
+        assert_eq!(times.len(), 61, "{fmt}: a sample per frame");
+        let mut most = 0.0f64;
+        for (code, local) in times.iter().zip(xforms[0]["local"].as_array().unwrap()) {
+            let code = code.as_f64().unwrap();
+            let local: Vec<f64> = local
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            // USD prints the matrix row by row, glam's columns.
+            let want = expected(code / 30.0).to_cols_array();
+            for (a, b) in local.iter().zip(want) {
+                most = most.max((a - b).abs());
+            }
+        }
+        assert!(
+            most < 1e-6,
+            "{fmt}: the pole's transform within {most} of the file's keys"
+        );
+    }
+}

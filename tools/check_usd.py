@@ -7,7 +7,9 @@ counts, extent == UsdGeom.PointBased.ComputeExtent of each sample), and writes t
 every time-sampled Mesh to DUMP.bin (float32, prims in path order, samples in time order)
 for the caller to compare with the glTF output. Prints one JSON object:
   {"errors": [...], "validation": [...], "meta": {...}, "meshes": [{path, samples, points,
-   times, static}]}
+   times, static}], "xforms": [{path, times, local}]}
+where "xforms" lists each prim whose local transform is time-sampled, with its local matrix
+(16 numbers, row by row as USD prints it) at each sample time.
 """
 import json
 import sys
@@ -82,4 +84,15 @@ for prim in sorted(stage.Traverse(), key=lambda p: str(p.GetPath())):
             errors.append(f"{prim.GetPath()}: sample {t} outside start/end time codes")
     meshes.append(info)
 out.close()
-print(json.dumps({"errors": errors, "validation": validation, "meta": meta, "meshes": meshes}))
+
+xforms = []
+for prim in sorted(stage.Traverse(), key=lambda p: str(p.GetPath())):
+    if not prim.IsA(UsdGeom.Xformable):
+        continue
+    x = UsdGeom.Xformable(prim)
+    times = x.GetTimeSamples()
+    if not times:
+        continue
+    local = [[v for row in x.GetLocalTransformation(t) for v in row] for t in times]
+    xforms.append({"path": str(prim.GetPath()), "times": list(times), "local": local})
+print(json.dumps({"errors": errors, "validation": validation, "meta": meta, "meshes": meshes, "xforms": xforms}))

@@ -254,6 +254,27 @@ impl Run<'_> {
             })
             .collect();
         let (rate, codes) = timeline(&times, fallback);
+        // Each clip whose frames the stage plays (the first mesh's placement of it, when
+        // several meshes' tracks come from one clip): its node motion is sampled at its codes.
+        let mut clips: Vec<usd::ClipOnStage> = Vec::new();
+        for ((m, times), codes) in self.meshes.iter().zip(&times).zip(&codes) {
+            let mut at = 0;
+            for (track, times) in m.tracks.iter().zip(times) {
+                let codes = &codes[at..at + times.len()];
+                at += times.len();
+                let TrackOrigin::Animation { animation, .. } = track.origin else {
+                    continue;
+                };
+                if times.is_empty() || clips.iter().any(|c| c.animation == animation) {
+                    continue;
+                }
+                clips.push(usd::ClipOnStage {
+                    animation,
+                    codes: codes.to_vec(),
+                    offset: codes[0] - times[0] * rate,
+                });
+            }
+        }
         // The nodes carrying each mesh, found in one pass over the nodes.
         let mut carriers: HashMap<usize, Vec<usize>> = HashMap::new();
         for (i, n) in gltf::arr(&self.doc.json, "nodes").iter().enumerate() {
@@ -277,7 +298,7 @@ impl Run<'_> {
         let stem = (self.job.output.file_stem())
             .and_then(|s| s.to_str())
             .unwrap_or("stage");
-        let stage = usd::build_stage(&self.doc, &plans, rate, &format!("{stem}_"))?;
+        let stage = usd::build_stage(&self.doc, &plans, clips, rate, &format!("{stem}_"))?;
         let input = self.doc.path.display();
         (self.warnings).extend((stage.look.left_out.iter()).map(|what| format!("{input}: {what}")));
         // A point cache animates points and normals; attributes the targets also move keep

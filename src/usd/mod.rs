@@ -2,16 +2,19 @@
 //!
 //! The pipeline, one module per stage: [`stage`] (the glTF scene as a USD stage model: Xforms,
 //! Meshes, which of them are animated and at which time codes; [`material`]: the glTF
-//! materials as UsdShade materials and the texture files they read) -> the frames, streamed in as
+//! materials as UsdShade materials and the texture files they read; [`motion`]: the node
+//! transforms the clips on the timeline key) -> the frames, streamed in as
 //! they are computed -> [`usda`] (text, samples spooled) | [`usdc`] (crate file) -> [`usdz`]
 //! (package); [`write`] picks the format and stages the file.
 
 mod material;
+mod motion;
 mod stage;
 mod usda;
 mod usdc;
 mod usdz;
 mod write;
 
+pub use motion::ClipOnStage;
 pub use stage::{build_stage, identifier, Delta, FrameSource, MeshPlan, Stage};
 pub use write::write_file;

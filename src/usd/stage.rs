@@ -8,7 +8,8 @@
 //! * time code of a frame = its time in seconds times the frame rate; when one mesh has several
 //!   clips they follow one another on the timeline, one frame apart; under each node carrying
 //!   it the mesh plays the clips that drive that node (none: written still);
-//! * each glTF node is an Xform (with `xformOp:transform` when it is not the identity), each
+//! * each glTF node is an Xform (with `xformOp:transform` when it is not the identity, time
+//!   sampled where a clip on the timeline moves the node: [`super::motion`]), each
 //!   triangle primitive a Mesh (`subdivisionScheme = "none"`, `faceVertexCounts` of 3,
 //!   `faceVertexIndices`), `primvars:st` from TEXCOORD_0 with V flipped (`1 - v`),
 //!   `primvars:displayColor` per vertex from COLOR_0 (linear, as glTF stores it; its alpha as
@@ -19,11 +20,12 @@
 //!   `_1`, `_2`, ... suffix, deterministically.
 
 use super::material::{st_name, Look, LookBuilder};
+use super::motion::{rest_trs, ClipOnStage, NodeMotion};
 use crate::gltf::{
     arr, listed, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
 };
 use anyhow::{bail, Result};
-use glam::{DMat4, DQuat, DVec3};
+use glam::{DMat4, DVec3};
 use serde_json::Value;
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
@@ -109,6 +111,9 @@ pub enum Prim {
     Xform {
         name: String,
         matrix: Option<[f64; 16]>,
+        /// The node's local transform at each time code a clip on the stage moves it (time
+        /// order); empty when none does, and then `matrix` stands.
+        motion: Vec<(f64, [f64; 16])>,
         children: Vec<Prim>,
     },
     Mesh(Box<MeshPrim>),
@@ -170,10 +175,12 @@ pub struct MeshPlan {
 pub fn build_stage(
     doc: &Document,
     meshes: &[MeshPlan],
+    clips: Vec<ClipOnStage>,
     rate: f64,
     texture_prefix: &str,
 ) -> Result<Stage> {
     let json = &doc.json;
+    let (motion, not_carried) = NodeMotion::new(doc, clips, rate);
     let codes: Vec<Vec<f64>> = meshes.iter().map(|m| m.codes.clone()).collect();
     let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
     let scene = arr(json, "scenes").get(scene_index);
@@ -210,6 +217,7 @@ pub fn build_stage(
         doc,
         meshes,
         codes: &codes,
+        motion: &motion,
         look: RefCell::new(LookBuilder::new(doc, texture_prefix)),
     };
     let mut taken = HashMap::new();
@@ -237,6 +245,7 @@ pub fn build_stage(
         children,
         look,
     };
+    stage.look.left_out.extend(not_carried);
     // The stage is the file's scene: a processed mesh no node of it carries has no frames
     // there, which is said (and with none shown, refused) rather than passed over.
     let shown = animated(&stage);
@@ -275,6 +284,7 @@ struct Ctx<'a> {
     doc: &'a Document,
     meshes: &'a [MeshPlan],
     codes: &'a [Vec<f64>],
+    motion: &'a NodeMotion,
     look: RefCell<LookBuilder<'a>>,
 }
 
@@ -303,6 +313,7 @@ impl Ctx<'_> {
         Ok(Prim::Xform {
             name,
             matrix,
+            motion: self.motion.samples(index, node),
             children,
         })
     }
@@ -435,21 +446,12 @@ fn node_matrix(node: &Value) -> Option<[f64; 16]> {
             .as_array()
             .map(|a| a.iter().filter_map(Value::as_f64).collect())
     };
-    let m = if let Some(m) = nums("matrix").filter(|m| m.len() == 16) {
-        DMat4::from_cols_slice(&m)
-    } else {
-        let t = nums("translation")
-            .filter(|v| v.len() == 3)
-            .map_or(DVec3::ZERO, |v| DVec3::new(v[0], v[1], v[2]));
-        let r = nums("rotation")
-            .filter(|v| v.len() == 4)
-            .map_or(DQuat::IDENTITY, |v| {
-                DQuat::from_xyzw(v[0], v[1], v[2], v[3]).normalize()
-            });
-        let s = nums("scale")
-            .filter(|v| v.len() == 3)
-            .map_or(DVec3::ONE, |v| DVec3::new(v[0], v[1], v[2]));
-        DMat4::from_scale_rotation_translation(s, r, t)
+    let m = match nums("matrix").filter(|m| m.len() == 16) {
+        Some(m) => DMat4::from_cols_slice(&m),
+        None => {
+            let (t, r, s) = rest_trs(node);
+            DMat4::from_scale_rotation_translation(s, r, t)
+        }
     };
     (m != DMat4::IDENTITY).then(|| m.to_cols_array())
 }

@@ -111,20 +111,28 @@ fn write_prim(
         Prim::Xform {
             name,
             matrix,
+            motion,
             children,
         } => {
             writeln!(out, "{pad}def Xform \"{name}\"")?;
             writeln!(out, "{pad}{{")?;
-            if let Some(m) = matrix {
+            let text = |m: &[f64; 16]| {
                 let rows: Vec<String> = m
                     .chunks(4)
                     .map(|r| format!("({}, {}, {}, {})", r[0], r[1], r[2], r[3]))
                     .collect();
-                writeln!(
-                    out,
-                    "{pad}    matrix4d xformOp:transform = ( {} )",
-                    rows.join(", ")
-                )?;
+                format!("( {} )", rows.join(", "))
+            };
+            if !motion.is_empty() {
+                writeln!(out, "{pad}    matrix4d xformOp:transform.timeSamples = {{")?;
+                for (code, m) in motion {
+                    writeln!(out, "{pad}        {code}: {},", text(m))?;
+                }
+                writeln!(out, "{pad}    }}")?;
+            } else if let Some(m) = matrix {
+                writeln!(out, "{pad}    matrix4d xformOp:transform = {}", text(m))?;
+            }
+            if !motion.is_empty() || matrix.is_some() {
                 writeln!(
                     out,
                     "{pad}    uniform token[] xformOpOrder = [\"xformOp:transform\"]"

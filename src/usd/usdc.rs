@@ -355,12 +355,24 @@ impl<W: Write + Seek> Writer<W> {
             Prim::Xform {
                 name,
                 matrix,
+                motion,
                 children,
             } => {
                 let me = self.path(Some(parent), name, false);
                 let mut props = Vec::new();
-                if let Some(m) = matrix {
-                    let v = self.field("default", Val::Matrix(*m))?;
+                let value = match (motion.is_empty(), matrix) {
+                    (false, _) => {
+                        let times: Vec<f64> = motion.iter().map(|(c, _)| *c).collect();
+                        let reps = (motion.iter())
+                            .map(|(_, m)| self.value(Val::Matrix(*m)))
+                            .collect::<Result<Vec<u64>>>()?;
+                        let rep = self.time_samples(&times, &reps)?;
+                        Some(self.raw_field("timeSamples", rep))
+                    }
+                    (true, Some(m)) => Some(self.field("default", Val::Matrix(*m))?),
+                    (true, None) => None,
+                };
+                if let Some(v) = value {
                     self.attribute(me, "xformOp:transform", "matrix4d", vec![v])?;
                     let u = self.field("variability", Val::Uniform)?;
                     let v = self.field("default", Val::Tokens(vec!["xformOp:transform"]))?;

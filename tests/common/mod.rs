@@ -630,3 +630,71 @@ pub fn node_tool<A: AsRef<std::ffi::OsStr>>(
     );
     out
 }
+
+/// flag_wave with the pole (node 1) moved by a channel of the flag's clip that reads the
+/// weights' key times (as Blender writes one time accessor for a clip), another channel of it
+/// with times of its own, and a second clip of its own; the key times moved by `offset`.
+pub fn flag_with_moving_pole(plain: &Path, out: &Path, offset: f32) {
+    let doc = inbetween::gltf::Document::open(plain).unwrap();
+    let mut json = doc.json.clone();
+    let mut bin = doc.buffers[0].clone();
+    let mut push = |json: &mut serde_json::Value, values: &[f32], ty: &str| -> usize {
+        let views = json["bufferViews"].as_array_mut().unwrap();
+        views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4 * values.len()}));
+        let view = views.len() - 1;
+        bin.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+        let n = values.len()
+            / match ty {
+                "VEC3" => 3,
+                "VEC4" => 4,
+                _ => 1,
+            };
+        let mut acc =
+            serde_json::json!({"bufferView": view, "componentType": 5126, "count": n, "type": ty});
+        if ty == "SCALAR" {
+            let (lo, hi) = (values[0], values[values.len() - 1]);
+            acc["min"] = serde_json::json!([lo]);
+            acc["max"] = serde_json::json!([hi]);
+        }
+        let accessors = json["accessors"].as_array_mut().unwrap();
+        accessors.push(acc);
+        accessors.len() - 1
+    };
+    let input = json["animations"][0]["samplers"][0]["input"]
+        .as_u64()
+        .unwrap() as usize;
+    let times: Vec<f32> = doc
+        .read_f64(input)
+        .unwrap()
+        .0
+        .iter()
+        .map(|&t| t as f32 + offset)
+        .collect();
+    let shared = push(&mut json, &times, "SCALAR");
+    let up: Vec<f32> = (0..5).flat_map(|k| [0.0, 0.1 * k as f32, 0.0]).collect();
+    let moved = push(&mut json, &up, "VEC3");
+    let own_times = push(&mut json, &[0.25 + offset, 1.75 + offset], "SCALAR");
+    let turned = push(&mut json, &[0.0, 0.0, 0.0, 1.0, 0.0, 0.6, 0.0, 0.8], "VEC4");
+    let other_times = push(&mut json, &[0.0, 1.0], "SCALAR");
+    let scaled = push(&mut json, &[1.0, 1.0, 1.0, 2.0, 2.0, 2.0], "VEC3");
+    json["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+    let clip = &mut json["animations"][0];
+    clip["samplers"][0]["input"] = serde_json::json!(shared);
+    clip["samplers"].as_array_mut().unwrap().extend([
+        serde_json::json!({"input": shared, "output": moved}),
+        serde_json::json!({"input": own_times, "output": turned}),
+    ]);
+    clip["channels"].as_array_mut().unwrap().extend([
+        serde_json::json!({"sampler": 1, "target": {"node": 1, "path": "translation"}}),
+        serde_json::json!({"sampler": 2, "target": {"node": 1, "path": "rotation"}}),
+    ]);
+    json["animations"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({
+            "name": "grow",
+            "samplers": [{"input": other_times, "output": scaled}],
+            "channels": [{"sampler": 0, "target": {"node": 1, "path": "scale"}}],
+        }));
+    write_glb(out, &json, &bin);
+}

@@ -1,0 +1,179 @@
+//! Node motion on the stage: the translations, rotations and scales that the clips on the
+//! stage's timeline (those whose morph frames it plays) key on the scene's nodes, sampled at
+//! those clips' time codes as `xformOp:transform` time samples, so a face rig on a moving head
+//! or a flag on a swaying pole moves in the point cache as in the glTF. A clip is sampled at
+//! every time code its frames have (the glTF sampler evaluated as glTF asks, rotations by
+//! slerp), so USD's linear interpolation of the matrices between two frames adds nothing a
+//! viewer could see; keys between two frames are not kept. What the stage does not carry is
+//! said: clips that move nodes but have no frames on the stage, and skins (a point cache has
+//! no skeleton: a skinned mesh is written in its bind pose).
+
+use crate::gltf::{arr, node_target, read_channels, Channel, Document, Path};
+use glam::{DMat4, DQuat, DVec3};
+use serde_json::Value;
+use std::collections::{BTreeMap, BTreeSet};
+
+/// A clip whose frames the stage plays: animation `animation` at time codes `codes`, code =
+/// time x rate + `offset` (clips of one mesh follow one another on the timeline).
+pub struct ClipOnStage {
+    pub animation: usize,
+    pub codes: Vec<f64>,
+    pub offset: f64,
+}
+
+/// The keyed node transforms of the clips on the stage, by node.
+pub struct NodeMotion {
+    rate: f64,
+    clips: Vec<ClipOnStage>,
+    /// node -> (clip on stage, that clip's transform channels of the node)
+    by_node: BTreeMap<usize, Vec<(usize, Vec<Channel>)>>,
+}
+
+impl NodeMotion {
+    /// The motion of `clips` at `rate` time codes a second, and a line for each thing the stage
+    /// will not carry.
+    pub fn new(doc: &Document, clips: Vec<ClipOnStage>, rate: f64) -> (Self, Vec<String>) {
+        let nodes = arr(&doc.json, "nodes").len();
+        let mut warnings = Vec::new();
+        let mut by_node: BTreeMap<usize, Vec<(usize, Vec<Channel>)>> = BTreeMap::new();
+        for (k, clip) in clips.iter().enumerate() {
+            let anim = &doc.json["animations"][clip.animation];
+            let name = clip_name(anim, clip.animation);
+            let channels = match read_channels(doc, &name, anim, nodes) {
+                Ok(c) => c,
+                Err(e) => {
+                    // The error names the file, as the warning line will.
+                    let e = format!("{e:#}");
+                    let e = e.trim_start_matches(&format!("{}: ", doc.path.display()));
+                    warnings.push(format!(
+                        "the node motion of animation {name:?} is not in the stage: {e}"
+                    ));
+                    continue;
+                }
+            };
+            let mut of_node: BTreeMap<usize, Vec<Channel>> = BTreeMap::new();
+            for c in channels.into_iter().filter(|c| c.path != Path::Weights) {
+                of_node.entry(c.node).or_default().push(c);
+            }
+            for (node, channels) in of_node {
+                by_node.entry(node).or_default().push((k, channels));
+            }
+        }
+        let on_stage: BTreeSet<usize> = clips.iter().map(|c| c.animation).collect();
+        let left: Vec<String> = (arr(&doc.json, "animations").iter().enumerate())
+            .filter(|(a, _)| !on_stage.contains(a))
+            .filter(|(_, anim)| {
+                arr(anim, "channels").iter().any(|c| {
+                    matches!(
+                        node_target(&c["target"]),
+                        Some((_, "translation" | "rotation" | "scale"))
+                    )
+                })
+            })
+            .map(|(a, anim)| format!("{:?}", clip_name(anim, a)))
+            .collect();
+        if !left.is_empty() {
+            let (what, move_, tween, they) = match left.len() {
+                1 => ("animation", "moves", "tweens", "it is"),
+                _ => ("animations", "move", "tween", "they are"),
+            };
+            warnings.push(format!(
+                "{what} {} {move_} nodes but {tween} no mesh, so {they} not on the point cache's timeline (a glTF output keeps them)",
+                crate::gltf::listed(&left)
+            ));
+        }
+        let skinned: Vec<String> = (arr(&doc.json, "nodes").iter())
+            .filter(|n| n["skin"].is_u64())
+            .filter_map(|n| n["mesh"].as_u64())
+            .collect::<BTreeSet<u64>>()
+            .into_iter()
+            .map(|m| {
+                let name = doc.json["meshes"][m as usize]["name"].as_str();
+                name.map_or_else(|| format!("mesh {m}"), |n| format!("{n:?}"))
+            })
+            .collect();
+        if !skinned.is_empty() {
+            let (what, are) = match skinned.len() {
+                1 => ("mesh", "is"),
+                _ => ("meshes", "are"),
+            };
+            warnings.push(format!(
+                "{what} {} {are} skinned; a USD point cache has no skeleton, so they are written in the bind pose (a glTF output keeps the skin)",
+                crate::gltf::listed(&skinned),
+            ));
+        }
+        let motion = Self {
+            rate,
+            clips,
+            by_node,
+        };
+        (motion, warnings)
+    }
+
+    /// The local transform of `node` (JSON `json`) at each time code of the clips that move
+    /// it, in time order (column-major, as `xformOp:transform` reads it row by row); empty
+    /// when no clip on the stage moves it.
+    pub fn samples(&self, node: usize, json: &Value) -> Vec<(f64, [f64; 16])> {
+        let Some(moved) = self.by_node.get(&node) else {
+            return Vec::new();
+        };
+        let rest = rest_trs(json);
+        let mut out: Vec<(f64, [f64; 16])> = Vec::new();
+        let mut buf = [0.0f64; 4];
+        for (k, channels) in moved {
+            let clip = &self.clips[*k];
+            for &code in &clip.codes {
+                let t = (code - clip.offset) / self.rate;
+                let (mut tr, mut r, mut s) = rest;
+                for c in channels {
+                    let v = &mut buf[..c.width];
+                    c.sample(t, v);
+                    match c.path {
+                        Path::Translation => tr = DVec3::new(v[0], v[1], v[2]),
+                        Path::Rotation => r = DQuat::from_slice(v).normalize(),
+                        Path::Scale => s = DVec3::new(v[0], v[1], v[2]),
+                        Path::Weights => {}
+                    }
+                }
+                let m = DMat4::from_scale_rotation_translation(s, r, tr);
+                out.push((code, m.to_cols_array()));
+            }
+        }
+        // Clips of different meshes may share codes: the first clip's sample stands.
+        out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        out.dedup_by(|b, a| a.0 == b.0);
+        out
+    }
+}
+
+/// An animation's name, or its index when it has none.
+fn clip_name(anim: &Value, index: usize) -> String {
+    anim["name"]
+        .as_str()
+        .map_or_else(|| format!("animation {index}"), str::to_owned)
+}
+
+/// A node's rest translation, rotation and scale (its `matrix` decomposed when it has one).
+pub(super) fn rest_trs(node: &Value) -> (DVec3, DQuat, DVec3) {
+    let nums = |k: &str| -> Option<Vec<f64>> {
+        node[k]
+            .as_array()
+            .map(|a| a.iter().filter_map(Value::as_f64).collect())
+    };
+    if let Some(m) = nums("matrix").filter(|m| m.len() == 16) {
+        let (s, r, t) = DMat4::from_cols_slice(&m).to_scale_rotation_translation();
+        return (t, r, s);
+    }
+    let t = nums("translation")
+        .filter(|v| v.len() == 3)
+        .map_or(DVec3::ZERO, |v| DVec3::new(v[0], v[1], v[2]));
+    let r = nums("rotation")
+        .filter(|v| v.len() == 4)
+        .map_or(DQuat::IDENTITY, |v| {
+            DQuat::from_xyzw(v[0], v[1], v[2], v[3]).normalize()
+        });
+    let s = nums("scale")
+        .filter(|v| v.len() == 3)
+        .map_or(DVec3::ONE, |v| DVec3::new(v[0], v[1], v[2]));
+    (t, r, s)
+}
