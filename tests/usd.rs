@@ -923,3 +923,94 @@ fn nodes_the_tweened_clip_moves_move_in_the_point_cache() {
         );
     }
 }
+
+/// A node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`, as gltfpack `-mi`
+/// writes scenes of repeated props) is a PointInstancer whose instances sit where the glTF
+/// draws them: flag_wave's pole three times (moved, turned, scaled; one still child node
+/// beside). Only the first instance was written before (as a plain mesh under the node).
+#[test]
+fn gpu_instances_become_a_point_instancer() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("poles.glb");
+    let doc = inbetween::gltf::Document::open(&sample("flag_wave.glb")).unwrap();
+    let (mut json, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let turn = glam::Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
+    let t = [[0.0, 0.0, 0.0], [1.0, 0.0, 2.0], [-1.0, 0.5, 4.0]];
+    let r = [[0.0, 0.0, 0.0, 1.0], turn.to_array(), [0.0, 0.0, 0.0, 1.0]];
+    let s = [[1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [1.0, 0.5, 1.0]];
+    let flat = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
+    let attributes = serde_json::json!({
+        "TRANSLATION": push_f32_accessor(&mut json, &mut bin, &flat(&t), "VEC3"),
+        "ROTATION": push_f32_accessor(&mut json, &mut bin, &r.concat(), "VEC4"),
+        "SCALE": push_f32_accessor(&mut json, &mut bin, &flat(&s), "VEC3"),
+    });
+    json["nodes"][1]["extensions"] =
+        serde_json::json!({"EXT_mesh_gpu_instancing": {"attributes": attributes}});
+    json["nodes"][1]["children"] = serde_json::json!([2]);
+    json["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"name": "tip", "translation": [0, 3, 0]}));
+    json["extensionsUsed"] = serde_json::json!(["EXT_mesh_gpu_instancing"]);
+    write_glb(&input, &json, &bin);
+    let glb = dir.path().join("out.glb");
+    tween_quietly(&input, &glb, &[]);
+    assert_no_new_issues(&input, &glb);
+    for fmt in ["usda", "usdc"] {
+        let usd = dir.path().join(format!("out.{fmt}"));
+        tween_quietly(&input, &usd, &[]);
+        let rep = usd_report(&python, &usd, fmt);
+        assert!(
+            rep["errors"].as_array().unwrap().is_empty(),
+            "{}",
+            rep["errors"]
+        );
+        assert!(
+            rep["validation"].as_array().unwrap().is_empty(),
+            "{}",
+            rep["validation"]
+        );
+        let instancers = rep["instancers"].as_array().unwrap();
+        assert_eq!(instancers.len(), 1, "{fmt}");
+        assert_eq!(instancers[0]["path"], "/samples/pole", "{fmt}");
+        assert_eq!(
+            instancers[0]["prototypes"],
+            serde_json::json!(["/samples/pole/Prototypes/pole"])
+        );
+        let transforms = instancers[0]["transforms"].as_array().unwrap();
+        assert_eq!(transforms.len(), 3, "{fmt}");
+        let mut most = 0.0f64;
+        for (i, m) in transforms.iter().enumerate() {
+            let want = glam::Mat4::from_scale_rotation_translation(
+                s[i].into(),
+                glam::Quat::from_array(r[i]),
+                t[i].into(),
+            )
+            .to_cols_array();
+            for (a, b) in m.as_array().unwrap().iter().zip(want) {
+                most = most.max((a.as_f64().unwrap() - b as f64).abs());
+            }
+        }
+        // Orientations are half floats in USD (quath).
+        assert!(most < 2e-3, "{fmt}: instances within {most} of the glTF's");
+        let paths: Vec<&str> = rep["meshes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| m["path"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            paths,
+            ["/samples/flag/flag", "/samples/pole/Prototypes/pole/pole"],
+            "{fmt}"
+        );
+        let text = std::fs::read_to_string(&usd).unwrap_or_default();
+        if fmt == "usda" {
+            assert!(
+                text.contains("def Xform \"tip\""),
+                "the node's child is kept"
+            );
+        }
+    }
+}

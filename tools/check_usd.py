@@ -7,9 +7,12 @@ counts, extent == UsdGeom.PointBased.ComputeExtent of each sample), and writes t
 every time-sampled Mesh to DUMP.bin (float32, prims in path order, samples in time order)
 for the caller to compare with the glTF output. Prints one JSON object:
   {"errors": [...], "validation": [...], "meta": {...}, "meshes": [{path, samples, points,
-   times, static}], "xforms": [{path, times, local}]}
+   times, static}], "xforms": [{path, times, local}], "instancers": [{path, prototypes,
+   transforms}]}
 where "xforms" lists each prim whose local transform is time-sampled, with its local matrix
-(16 numbers, row by row as USD prints it) at each sample time.
+(16 numbers, row by row as USD prints it) at each sample time, and "instancers" each
+PointInstancer with its prototypes' paths and each instance's transform (16 numbers, as
+UsdGeom.PointInstancer.ComputeInstanceTransformsAtTime gives it, relative to the instancer).
 """
 import json
 import sys
@@ -95,4 +98,16 @@ for prim in sorted(stage.Traverse(), key=lambda p: str(p.GetPath())):
         continue
     local = [[v for row in x.GetLocalTransformation(t) for v in row] for t in times]
     xforms.append({"path": str(prim.GetPath()), "times": list(times), "local": local})
-print(json.dumps({"errors": errors, "validation": validation, "meta": meta, "meshes": meshes, "xforms": xforms}))
+instancers = []
+for prim in sorted(stage.Traverse(), key=lambda p: str(p.GetPath())):
+    if not prim.IsA(UsdGeom.PointInstancer):
+        continue
+    pi = UsdGeom.PointInstancer(prim)
+    transforms = pi.ComputeInstanceTransformsAtTime(Usd.TimeCode.Default(), Usd.TimeCode.Default())
+    instancers.append({
+        "path": str(prim.GetPath()),
+        "prototypes": [str(t) for t in pi.GetPrototypesRel().GetTargets()],
+        "transforms": [[v for row in m for v in row] for m in transforms],
+    })
+print(json.dumps({"errors": errors, "validation": validation, "meta": meta, "meshes": meshes,
+                  "xforms": xforms, "instancers": instancers}))

@@ -15,6 +15,9 @@
 //!   `primvars:displayColor` per vertex from COLOR_0 (linear, as glTF stores it; its alpha as
 //!   `primvars:displayOpacity`), else one constant from the material's base colour,
 //!   `doubleSided` from the material;
+//! * a node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`, as gltfpack `-mi`
+//!   writes it) is a PointInstancer (positions, orientations, scales, the mesh as its one
+//!   prototype in a `Prototypes` scope);
 //! * meshes that are not animated are written once, without time samples;
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
@@ -25,7 +28,7 @@ use crate::gltf::{
     arr, listed, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
 };
 use anyhow::{bail, Result};
-use glam::{DMat4, DVec3};
+use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
@@ -117,7 +120,29 @@ pub enum Prim {
         children: Vec<Prim>,
     },
     Mesh(Box<MeshPrim>),
+    /// A node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`): a
+    /// PointInstancer whose one prototype (`prototype`, an Xform holding the mesh's primitives,
+    /// under a `Prototypes` scope) is placed by each instance's transform.
+    Instancer {
+        name: String,
+        matrix: Option<[f64; 16]>,
+        motion: Vec<(f64, [f64; 16])>,
+        instances: Instances,
+        prototype: Box<Prim>,
+        children: Vec<Prim>,
+    },
 }
+
+/// The instances of an instancing node, in its own space: translation, rotation (x, y, z,
+/// w) and scale of each.
+pub struct Instances {
+    pub positions: Vec<[f32; 3]>,
+    pub orientations: Vec<[f32; 4]>,
+    pub scales: Vec<[f32; 3]>,
+}
+
+/// The name of the scope under a PointInstancer that holds its prototype.
+pub const PROTOTYPES: &str = "Prototypes";
 
 /// The whole stage.
 pub struct Stage {
@@ -302,20 +327,119 @@ impl Ctx<'_> {
             taken,
         );
         let matrix = node_matrix(node);
+        let motion = self.motion.samples(index, node);
         let mut kids = HashMap::new();
         let mut children = Vec::new();
+        let instances = self.instances(node)?;
+        let mut mesh = Vec::new();
         if let Some(mi) = node["mesh"].as_u64() {
-            children.extend(self.mesh(index, mi as usize, &mut kids)?);
+            let mut taken = HashMap::new();
+            let names = if instances.is_some() {
+                &mut taken
+            } else {
+                &mut kids
+            };
+            mesh = self.mesh(index, mi as usize, names)?;
+        }
+        if instances.is_none() {
+            children.append(&mut mesh);
+        } else {
+            // The prototype's name is unique among the node's prims too.
+            kids.insert(PROTOTYPES.to_string(), 0);
         }
         for c in arr(node, "children").iter().filter_map(Value::as_u64) {
             children.push(self.node(c as usize, &mut kids, depth + 1)?);
         }
-        Ok(Prim::Xform {
-            name,
-            matrix,
-            motion: self.motion.samples(index, node),
-            children,
+        Ok(match instances {
+            Some(instances) => {
+                let mi = node["mesh"].as_u64().unwrap_or(0) as usize;
+                let mesh_name = self.doc.json["meshes"][mi]["name"].as_str();
+                let prototype = Prim::Xform {
+                    name: identifier(mesh_name.unwrap_or(&format!("mesh{mi}"))),
+                    matrix: None,
+                    motion: Vec::new(),
+                    children: mesh,
+                };
+                Prim::Instancer {
+                    name,
+                    matrix,
+                    motion,
+                    instances,
+                    prototype: Box::new(prototype),
+                    children,
+                }
+            }
+            None => Prim::Xform {
+                name,
+                matrix,
+                motion,
+                children,
+            },
         })
+    }
+
+    /// The instances of a node with a mesh and `EXT_mesh_gpu_instancing` (TRANSLATION,
+    /// ROTATION, SCALE; float or, for rotations, normalized integers; one missing is the
+    /// identity), or `None`.
+    fn instances(&self, node: &Value) -> Result<Option<Instances>> {
+        let attributes = &node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
+        if !node["mesh"].is_u64() || !attributes.is_object() {
+            return Ok(None);
+        }
+        let read = |name: &str, width: usize| -> Result<Option<Vec<f64>>> {
+            let Some(a) = attributes[name].as_u64() else {
+                return Ok(None);
+            };
+            let (values, n) = self.doc.read_f64(a as usize)?;
+            if n != width {
+                bail!(self.doc.err(format!(
+                    "EXT_mesh_gpu_instancing {name} (accessor {a}) has {n} components, not {width}"
+                )));
+            }
+            Ok(Some(values))
+        };
+        let (t, r, s) = (
+            read("TRANSLATION", 3)?,
+            read("ROTATION", 4)?,
+            read("SCALE", 3)?,
+        );
+        let counts: Vec<usize> = [(&t, 3), (&r, 4), (&s, 3)]
+            .iter()
+            .filter_map(|(v, w)| v.as_ref().map(|v| v.len() / w))
+            .collect();
+        let Some(&count) = counts.first() else {
+            return Ok(None);
+        };
+        if counts.iter().any(|&c| c != count) {
+            bail!(self.doc.err(
+                "EXT_mesh_gpu_instancing attributes of one node hold different instance counts"
+            ));
+        }
+        let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+        let vec3s = |v: Option<Vec<f64>>, default: [f32; 3]| -> Vec<[f32; 3]> {
+            match v {
+                Some(v) => f32s(&v)
+                    .chunks_exact(3)
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect(),
+                None => vec![default; count],
+            }
+        };
+        let orientations = match r {
+            Some(r) => r
+                .chunks_exact(4)
+                .map(|q| {
+                    let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3]).normalize();
+                    q.as_quat().to_array()
+                })
+                .collect(),
+            None => vec![[0.0, 0.0, 0.0, 1.0]; count],
+        };
+        Ok(Some(Instances {
+            positions: vec3s(t, [0.0; 3]),
+            orientations,
+            scales: vec3s(s, [1.0; 3]),
+        }))
     }
 
     fn mesh(
@@ -484,6 +608,14 @@ pub fn animated(stage: &Stage) -> HashMap<usize, Vec<&MeshPrim>> {
     ) {
         match p {
             Prim::Xform { children, .. } => children.iter().for_each(|c| walk(c, seen, out)),
+            Prim::Instancer {
+                prototype,
+                children,
+                ..
+            } => {
+                walk(prototype, seen, out);
+                children.iter().for_each(|c| walk(c, seen, out));
+            }
             Prim::Mesh(m) => {
                 if let Some(a) = &m.animation {
                     if seen.insert((a.mesh, a.primitive)) {

@@ -5,6 +5,7 @@
 use super::material::{Material, Value, SURFACE};
 use super::stage::{
     animated, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
+    PROTOTYPES,
 };
 use crate::output::{naming, Outputs};
 use anyhow::Result;
@@ -35,7 +36,7 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
     let look = &stage.look;
     let scope = format!("/{}/{}", stage.root, look.scope);
     for c in &stage.children {
-        write_prim(c, out, 1, &scope, spool)?;
+        write_prim(c, out, 1, &format!("/{}", stage.root), &scope, spool)?;
     }
     if !look.materials.is_empty() {
         writeln!(out, "    def Scope \"{}\"", look.scope)?;
@@ -103,6 +104,7 @@ fn write_prim(
     prim: &Prim,
     out: &mut dyn Write,
     depth: usize,
+    path: &str,
     scope: &str,
     spool: &Spool,
 ) -> Result<()> {
@@ -116,36 +118,97 @@ fn write_prim(
         } => {
             writeln!(out, "{pad}def Xform \"{name}\"")?;
             writeln!(out, "{pad}{{")?;
-            let text = |m: &[f64; 16]| {
-                let rows: Vec<String> = m
-                    .chunks(4)
-                    .map(|r| format!("({}, {}, {}, {})", r[0], r[1], r[2], r[3]))
-                    .collect();
-                format!("( {} )", rows.join(", "))
-            };
-            if !motion.is_empty() {
-                writeln!(out, "{pad}    matrix4d xformOp:transform.timeSamples = {{")?;
-                for (code, m) in motion {
-                    writeln!(out, "{pad}        {code}: {},", text(m))?;
-                }
-                writeln!(out, "{pad}    }}")?;
-            } else if let Some(m) = matrix {
-                writeln!(out, "{pad}    matrix4d xformOp:transform = {}", text(m))?;
-            }
-            if !motion.is_empty() || matrix.is_some() {
-                writeln!(
-                    out,
-                    "{pad}    uniform token[] xformOpOrder = [\"xformOp:transform\"]"
-                )?;
-            }
+            write_transform(out, &pad, matrix, motion)?;
+            let path = format!("{path}/{name}");
             for c in children {
-                write_prim(c, out, depth + 1, scope, spool)?;
+                write_prim(c, out, depth + 1, &path, scope, spool)?;
             }
             writeln!(out, "{pad}}}")?;
         }
         Prim::Mesh(m) => write_mesh(m, out, &pad, scope, spool)?,
+        Prim::Instancer {
+            name,
+            matrix,
+            motion,
+            instances,
+            prototype,
+            children,
+        } => {
+            writeln!(out, "{pad}def PointInstancer \"{name}\"")?;
+            writeln!(out, "{pad}{{")?;
+            write_transform(out, &pad, matrix, motion)?;
+            let path = format!("{path}/{name}");
+            let p = format!("{pad}    ");
+            write!(out, "{p}point3f[] positions = ")?;
+            write_vec3s(out, &instances.positions)?;
+            writeln!(out)?;
+            // Text order (real, i, j, k), at the half precision the type keeps.
+            let quats: Vec<String> = (instances.orientations.iter())
+                .map(|q| {
+                    let [x, y, z, w] = q.map(half_f32);
+                    format!("({}, {}, {}, {})", F(w), F(x), F(y), F(z))
+                })
+                .collect();
+            writeln!(out, "{p}quath[] orientations = [{}]", quats.join(", "))?;
+            write!(out, "{p}float3[] scales = ")?;
+            write_vec3s(out, &instances.scales)?;
+            writeln!(out)?;
+            let zeros = vec!["0"; instances.positions.len()];
+            writeln!(out, "{p}int[] protoIndices = [{}]", zeros.join(", "))?;
+            let proto = match prototype.as_ref() {
+                Prim::Xform { name, .. } => name.as_str(),
+                _ => unreachable!("a prototype is an Xform"),
+            };
+            writeln!(out, "{p}rel prototypes = [<{path}/{PROTOTYPES}/{proto}>]")?;
+            writeln!(out, "{p}def Scope \"{PROTOTYPES}\"")?;
+            writeln!(out, "{p}{{")?;
+            let protos = format!("{path}/{PROTOTYPES}");
+            write_prim(prototype, out, depth + 2, &protos, scope, spool)?;
+            writeln!(out, "{p}}}")?;
+            for c in children {
+                write_prim(c, out, depth + 1, &path, scope, spool)?;
+            }
+            writeln!(out, "{pad}}}")?;
+        }
     }
     Ok(())
+}
+
+/// An Xformable's `xformOp:transform` (time-sampled when it moves) and `xformOpOrder`.
+fn write_transform(
+    out: &mut dyn Write,
+    pad: &str,
+    matrix: &Option<[f64; 16]>,
+    motion: &[(f64, [f64; 16])],
+) -> Result<()> {
+    let text = |m: &[f64; 16]| {
+        let rows: Vec<String> = m
+            .chunks(4)
+            .map(|r| format!("({}, {}, {}, {})", r[0], r[1], r[2], r[3]))
+            .collect();
+        format!("( {} )", rows.join(", "))
+    };
+    if !motion.is_empty() {
+        writeln!(out, "{pad}    matrix4d xformOp:transform.timeSamples = {{")?;
+        for (code, m) in motion {
+            writeln!(out, "{pad}        {code}: {},", text(m))?;
+        }
+        writeln!(out, "{pad}    }}")?;
+    } else if let Some(m) = matrix {
+        writeln!(out, "{pad}    matrix4d xformOp:transform = {}", text(m))?;
+    }
+    if !motion.is_empty() || matrix.is_some() {
+        writeln!(
+            out,
+            "{pad}    uniform token[] xformOpOrder = [\"xformOp:transform\"]"
+        )?;
+    }
+    Ok(())
+}
+
+/// `x` rounded to the nearest half-precision float (USD's `half`, as `quath` stores it).
+pub(super) fn half_f32(x: f32) -> f32 {
+    half::f16::from_f32(x).to_f32()
 }
 
 /// A float in its shortest round-trip form, in exponent notation when that is shorter

@@ -13,7 +13,7 @@
 
 use super::material::{Look, Shader, Value, SURFACE};
 use super::stage::{
-    animated, extent, for_each_sample, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
+    animated, extent, for_each_sample, DisplayColor, FrameSource, MeshPrim, Prim, Stage, PROTOTYPES,
 };
 use anyhow::Result;
 use std::collections::HashMap;
@@ -33,6 +33,7 @@ const T_STRING: u64 = 10;
 const T_TOKEN: u64 = 11;
 const T_ASSET_PATH: u64 = 12;
 const T_MATRIX4D: u64 = 15;
+const T_QUATH: u64 = 18;
 const T_VEC2F: u64 = 20;
 const T_VEC3F: u64 = 24;
 const T_VEC4F: u64 = 28;
@@ -80,6 +81,8 @@ enum Val<'a> {
     Matrix([f64; 16]),
     Ints(Vec<i32>),
     Vec3fs(&'a [[f32; 3]]),
+    /// Quaternions (x, y, z, w) stored as `quath` (half floats, imaginary part first).
+    Quaths(&'a [[f32; 4]]),
     Vec2fs(&'a [[f32; 2]]),
     Floats(&'a [f32]),
     Float(f32),
@@ -199,6 +202,15 @@ impl<W: Write + Seek> Writer<W> {
                 }
             }
             Val::Vec3fs(v) => self.vec3f_array(v)?,
+            Val::Quaths(v) => {
+                let at = self.pos;
+                self.u64(v.len() as u64)?;
+                let raw: Vec<u8> = (v.iter().flatten())
+                    .flat_map(|&x| half::f16::from_f32(x).to_le_bytes())
+                    .collect();
+                self.bytes(&raw)?;
+                rep_heap(T_QUATH, at, true)
+            }
             Val::Vec2fs(v) => {
                 let at = self.pos;
                 self.u64(v.len() as u64)?;
@@ -359,33 +371,92 @@ impl<W: Write + Seek> Writer<W> {
                 children,
             } => {
                 let me = self.path(Some(parent), name, false);
-                let mut props = Vec::new();
-                let value = match (motion.is_empty(), matrix) {
-                    (false, _) => {
-                        let times: Vec<f64> = motion.iter().map(|(c, _)| *c).collect();
-                        let reps = (motion.iter())
-                            .map(|(_, m)| self.value(Val::Matrix(*m)))
-                            .collect::<Result<Vec<u64>>>()?;
-                        let rep = self.time_samples(&times, &reps)?;
-                        Some(self.raw_field("timeSamples", rep))
-                    }
-                    (true, Some(m)) => Some(self.field("default", Val::Matrix(*m))?),
-                    (true, None) => None,
-                };
-                if let Some(v) = value {
-                    self.attribute(me, "xformOp:transform", "matrix4d", vec![v])?;
-                    let u = self.field("variability", Val::Uniform)?;
-                    let v = self.field("default", Val::Tokens(vec!["xformOp:transform"]))?;
-                    self.attribute(me, "xformOpOrder", "token[]", vec![u, v])?;
-                    props = vec!["xformOp:transform".to_owned(), "xformOpOrder".to_owned()];
-                }
+                let props = self.transform(me, matrix, motion)?;
                 for c in children {
                     self.prim(c, me, frames)?;
                 }
                 self.prim_spec(me, "Xform", props, children.iter().map(prim_name).collect())
             }
             Prim::Mesh(m) => self.mesh(m, parent, frames),
+            Prim::Instancer {
+                name,
+                matrix,
+                motion,
+                instances,
+                prototype,
+                children,
+            } => {
+                let me = self.path(Some(parent), name, false);
+                let mut props = self.transform(me, matrix, motion)?;
+                let v = self.field("default", Val::Vec3fs(&instances.positions))?;
+                self.attribute(me, "positions", "point3f[]", vec![v])?;
+                let v = self.field("default", Val::Quaths(&instances.orientations))?;
+                self.attribute(me, "orientations", "quath[]", vec![v])?;
+                let v = self.field("default", Val::Vec3fs(&instances.scales))?;
+                self.attribute(me, "scales", "float3[]", vec![v])?;
+                let zeros = vec![0; instances.positions.len()];
+                let v = self.field("default", Val::Ints(zeros))?;
+                self.attribute(me, "protoIndices", "int[]", vec![v])?;
+                let protos = self.path(Some(me), PROTOTYPES, false);
+                self.prim(prototype, protos, frames)?;
+                let target = self.path(Some(protos), &prim_name(prototype), false);
+                let rel = self.path(Some(me), "prototypes", true);
+                let uniform = self.field("variability", Val::Uniform)?;
+                let targets = self.field("targetPaths", Val::Paths(vec![target]))?;
+                self.spec(rel, vec![uniform, targets], SPEC_RELATIONSHIP);
+                props.extend(
+                    [
+                        "positions",
+                        "orientations",
+                        "scales",
+                        "protoIndices",
+                        "prototypes",
+                    ]
+                    .map(String::from),
+                );
+                self.prim_spec(protos, "Scope", vec![], vec![prim_name(prototype)])?;
+                for c in children {
+                    self.prim(c, me, frames)?;
+                }
+                let kids = std::iter::once(PROTOTYPES.to_string())
+                    .chain(children.iter().map(prim_name))
+                    .collect();
+                self.prim_spec(me, "PointInstancer", props, kids)
+            }
         }
+    }
+
+    /// An Xformable's `xformOp:transform` (time-sampled when it moves) and `xformOpOrder`;
+    /// returns the property names written.
+    fn transform(
+        &mut self,
+        me: usize,
+        matrix: &Option<[f64; 16]>,
+        motion: &[(f64, [f64; 16])],
+    ) -> Result<Vec<String>> {
+        let value = match (motion.is_empty(), matrix) {
+            (false, _) => {
+                let times: Vec<f64> = motion.iter().map(|(c, _)| *c).collect();
+                let reps = (motion.iter())
+                    .map(|(_, m)| self.value(Val::Matrix(*m)))
+                    .collect::<Result<Vec<u64>>>()?;
+                let rep = self.time_samples(&times, &reps)?;
+                Some(self.raw_field("timeSamples", rep))
+            }
+            (true, Some(m)) => Some(self.field("default", Val::Matrix(*m))?),
+            (true, None) => None,
+        };
+        let Some(v) = value else {
+            return Ok(Vec::new());
+        };
+        self.attribute(me, "xformOp:transform", "matrix4d", vec![v])?;
+        let u = self.field("variability", Val::Uniform)?;
+        let v = self.field("default", Val::Tokens(vec!["xformOp:transform"]))?;
+        self.attribute(me, "xformOpOrder", "token[]", vec![u, v])?;
+        Ok(vec![
+            "xformOp:transform".to_owned(),
+            "xformOpOrder".to_owned(),
+        ])
     }
 
     fn prim_spec(
@@ -695,7 +766,7 @@ impl<W: Write + Seek> Writer<W> {
 
 fn prim_name(p: &Prim) -> String {
     match p {
-        Prim::Xform { name, .. } => name.clone(),
+        Prim::Xform { name, .. } | Prim::Instancer { name, .. } => name.clone(),
         Prim::Mesh(m) => m.name.clone(),
     }
 }

@@ -638,27 +638,8 @@ pub fn flag_with_moving_pole(plain: &Path, out: &Path, offset: f32) {
     let doc = inbetween::gltf::Document::open(plain).unwrap();
     let mut json = doc.json.clone();
     let mut bin = doc.buffers[0].clone();
-    let mut push = |json: &mut serde_json::Value, values: &[f32], ty: &str| -> usize {
-        let views = json["bufferViews"].as_array_mut().unwrap();
-        views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4 * values.len()}));
-        let view = views.len() - 1;
-        bin.extend(values.iter().flat_map(|v| v.to_le_bytes()));
-        let n = values.len()
-            / match ty {
-                "VEC3" => 3,
-                "VEC4" => 4,
-                _ => 1,
-            };
-        let mut acc =
-            serde_json::json!({"bufferView": view, "componentType": 5126, "count": n, "type": ty});
-        if ty == "SCALAR" {
-            let (lo, hi) = (values[0], values[values.len() - 1]);
-            acc["min"] = serde_json::json!([lo]);
-            acc["max"] = serde_json::json!([hi]);
-        }
-        let accessors = json["accessors"].as_array_mut().unwrap();
-        accessors.push(acc);
-        accessors.len() - 1
+    let mut push = |json: &mut serde_json::Value, values: &[f32], ty: &str| {
+        push_f32_accessor(json, &mut bin, values, ty)
     };
     let input = json["animations"][0]["samplers"][0]["input"]
         .as_u64()
@@ -697,4 +678,37 @@ pub fn flag_with_moving_pole(plain: &Path, out: &Path, offset: f32) {
             "channels": [{"sampler": 0, "target": {"node": 1, "path": "scale"}}],
         }));
     write_glb(out, &json, &bin);
+}
+
+/// Append float accessor `values` of type `ty` (SCALAR, VEC3, VEC4; SCALAR with its bounds)
+/// to the GLB `json` and its buffer `bin`, in a view of its own; returns the accessor's index.
+pub fn push_f32_accessor(
+    json: &mut serde_json::Value,
+    bin: &mut Vec<u8>,
+    values: &[f32],
+    ty: &str,
+) -> usize {
+    let views = json["bufferViews"].as_array_mut().unwrap();
+    views.push(
+        serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4 * values.len()}),
+    );
+    let view = views.len() - 1;
+    bin.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+    json["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+    let n = values.len()
+        / match ty {
+            "VEC3" => 3,
+            "VEC4" => 4,
+            _ => 1,
+        };
+    let mut acc =
+        serde_json::json!({"bufferView": view, "componentType": 5126, "count": n, "type": ty});
+    if ty == "SCALAR" {
+        let (lo, hi) = (values[0], values[values.len() - 1]);
+        acc["min"] = serde_json::json!([lo]);
+        acc["max"] = serde_json::json!([hi]);
+    }
+    let accessors = json["accessors"].as_array_mut().unwrap();
+    accessors.push(acc);
+    accessors.len() - 1
 }
