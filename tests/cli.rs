@@ -658,6 +658,46 @@ fn held_keys_are_tweened_and_said_so() {
 }
 
 #[test]
+fn weights_that_move_no_vertex_are_refused_saying_why() {
+    // flag_wave with its targets' POSITION deltas gone (targets of normals only, as shading
+    // shapes are), and with one key: nothing to tween, each said as it is.
+    let dir = tempfile::tempdir().unwrap();
+    let plain = sample("flag_wave.glb");
+    let normals = out_in(&dir, "normals.glb");
+    edited_glb(&plain, &normals, |j| {
+        for t in j["meshes"][0]["primitives"][0]["targets"]
+            .as_array_mut()
+            .unwrap()
+        {
+            t.as_object_mut().unwrap().remove("POSITION");
+        }
+    });
+    let one = out_in(&dir, "one.glb");
+    edited_glb(&plain, &one, |j| {
+        let s = &mut j["animations"][0]["samplers"][0];
+        *s = serde_json::json!({"input": s["input"], "output": s["output"], "interpolation": "LINEAR"});
+        let times = j["animations"][0]["samplers"][0]["input"].as_u64().unwrap() as usize;
+        j["accessors"][times]["count"] = 1.into();
+        j["accessors"][times]["max"] = serde_json::json!([0.0]);
+        let values = j["animations"][0]["samplers"][0]["output"]
+            .as_u64()
+            .unwrap() as usize;
+        j["accessors"][values]["count"] = 4.into();
+    });
+    let out = out_in(&dir, "out.glb");
+    for (input, name, why) in [
+        (
+            &normals,
+            "normals.glb",
+            "change only targets that move no vertex",
+        ),
+        (&one, "one.glb", "hold a single pose"),
+    ] {
+        assert_refused(&["tween", s(input), "-o", s(&out)], name, why, &out);
+    }
+}
+
+#[test]
 fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     let dir = tempfile::tempdir().unwrap();
     let good = sample("bar_twist.glb");

@@ -147,7 +147,9 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
         Some(sel) => Some(find_animation(doc, sel)?),
     };
     let mut out = Vec::new();
-    let mut held_one_pose = false;
+    // Why a mesh animated by its weights was passed over: its weights hold one pose, or
+    // they change only targets that move no vertex (normals, texture coordinates, colours).
+    let (mut held_one_pose, mut moves_no_vertex) = (false, false);
     let users = MeshUsers::of(&doc.json);
     for mi in 0..arr(&doc.json, "meshes").len() {
         let Some((mm, use_animation)) = morph_mesh(doc, mi, &users, opts, selected)? else {
@@ -156,12 +158,19 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
         if mm.tracks.iter().any(|t| has_distinct_keys(&mm, t)) {
             out.push(mm);
         } else if use_animation {
-            held_one_pose = true;
+            let varies = |t: &Track| t.weights.iter().any(|w| *w != t.weights[0]);
+            match mm.tracks.iter().any(varies) {
+                true => moves_no_vertex = true,
+                false => held_one_pose = true,
+            }
         }
     }
     if out.is_empty() {
         let clips = skeletal_clips(&doc.json);
-        let hint = if held_one_pose {
+        let hint = if moves_no_vertex {
+            " (its weights animations change only targets that move no vertex: normals, texture coordinates or colours, which a viewer blends as authored)"
+                .to_string()
+        } else if held_one_pose {
             " (its weights animations hold a single pose; --keys targets tweens the targets)"
                 .to_string()
         } else if !arr(&doc.json, "skins").is_empty() && !clips.is_empty() {
