@@ -1014,3 +1014,57 @@ fn gpu_instances_become_a_point_instancer() {
         }
     }
 }
+
+/// What a point cache cannot carry is named in a warning line, not dropped without a word:
+/// cameras, lights, and skins (RobotExpressive's hands, when the fixtures are here).
+#[test]
+fn what_a_point_cache_does_not_carry_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("lit.glb");
+    edited_glb(&sample("flag_wave.glb"), &input, |j| {
+        j["cameras"] = serde_json::json!([{"name": "shot", "type": "perspective",
+            "perspective": {"yfov": 0.7, "znear": 0.1}}]);
+        j["extensions"] = serde_json::json!({"KHR_lights_punctual": {"lights": [
+            {"name": "key", "type": "point"}, {"type": "spot"}]}});
+        j["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        nodes.push(serde_json::json!({"name": "camera", "camera": 0}));
+        nodes.push(serde_json::json!({"name": "lamp",
+            "extensions": {"KHR_lights_punctual": {"light": 0}}}));
+        j["scenes"][0]["nodes"] = serde_json::json!([0, 1, 2, 3]);
+    });
+    let warnings = |input: &Path, args: &[&str]| -> Vec<String> {
+        let usd = dir.path().join("out.usda");
+        let mut all = vec!["tween", s(input), "-o", s(&usd)];
+        all.extend_from_slice(args);
+        let r = run_ok(&all);
+        (String::from_utf8_lossy(&r.stderr).lines())
+            .filter(|l| l.starts_with("warning: ") && !l.contains("the size of the input"))
+            .map(str::to_owned)
+            .collect()
+    };
+    let w = warnings(&input, &[]);
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(
+        w[0].ends_with("camera \"shot\" is not written to the USD stage (a glTF output keeps it)"),
+        "{w:?}"
+    );
+    assert!(
+        w[1].contains("lights \"key\", light 1 are not written"),
+        "{w:?}"
+    );
+    let Some(fx) = fixtures() else { return };
+    let robot = fx.join("skinned/RobotExpressive.glb");
+    let w = warnings(&robot, &["--keys", "targets"]);
+    assert!(
+        w.iter().any(|l| l.contains(
+            "meshes \"Hand.R\", \"Hand.L\" are skinned; a USD point cache has no skeleton"
+        )),
+        "{w:?}"
+    );
+    assert!(
+        w.iter()
+            .any(|l| l.contains("animations \"Dance\", \"Death\"")),
+        "{w:?}"
+    );
+}

@@ -4,9 +4,8 @@
 //! or a flag on a swaying pole moves in the point cache as in the glTF. A clip is sampled at
 //! every time code its frames have (the glTF sampler evaluated as glTF asks, rotations by
 //! slerp), so USD's linear interpolation of the matrices between two frames adds nothing a
-//! viewer could see; keys between two frames are not kept. What the stage does not carry is
-//! said: clips that move nodes but have no frames on the stage, and skins (a point cache has
-//! no skeleton: a skinned mesh is written in its bind pose).
+//! viewer could see; keys between two frames are not kept. Clips that move nodes but have no
+//! frames on the stage are named in a warning.
 
 use crate::gltf::{arr, node_target, read_channels, Channel, Document, Path};
 use glam::{DMat4, DQuat, DVec3};
@@ -80,26 +79,6 @@ impl NodeMotion {
             warnings.push(format!(
                 "{what} {} {move_} nodes but {tween} no mesh, so {they} not on the point cache's timeline (a glTF output keeps them)",
                 crate::gltf::listed(&left)
-            ));
-        }
-        let skinned: Vec<String> = (arr(&doc.json, "nodes").iter())
-            .filter(|n| n["skin"].is_u64())
-            .filter_map(|n| n["mesh"].as_u64())
-            .collect::<BTreeSet<u64>>()
-            .into_iter()
-            .map(|m| {
-                let name = doc.json["meshes"][m as usize]["name"].as_str();
-                name.map_or_else(|| format!("mesh {m}"), |n| format!("{n:?}"))
-            })
-            .collect();
-        if !skinned.is_empty() {
-            let (what, are) = match skinned.len() {
-                1 => ("mesh", "is"),
-                _ => ("meshes", "are"),
-            };
-            warnings.push(format!(
-                "{what} {} {are} skinned; a USD point cache has no skeleton, so they are written in the bind pose (a glTF output keeps the skin)",
-                crate::gltf::listed(&skinned),
             ));
         }
         let motion = Self {

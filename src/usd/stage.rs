@@ -271,6 +271,7 @@ pub fn build_stage(
         look,
     };
     stage.look.left_out.extend(not_carried);
+    stage.look.left_out.extend(not_in_a_point_cache(doc));
     // The stage is the file's scene: a processed mesh no node of it carries has no frames
     // there, which is said (and with none shown, refused) rather than passed over.
     let shown = animated(&stage);
@@ -303,6 +304,52 @@ pub fn build_stage(
         ));
     }
     Ok(stage)
+}
+
+/// A line for each kind of thing in the file that a point cache does not carry, naming them:
+/// skins (no skeleton: a skinned mesh is written as its vertices are stored, the bind pose),
+/// cameras and lights (`KHR_lights_punctual`).
+fn not_in_a_point_cache(doc: &Document) -> Vec<String> {
+    let json = &doc.json;
+    let named = |kind: &str, i: usize, v: &Value| {
+        v["name"]
+            .as_str()
+            .map_or_else(|| format!("{kind} {i}"), |n| format!("{n:?}"))
+    };
+    let mut out = Vec::new();
+    let skinned: Vec<String> = (arr(json, "nodes").iter())
+        .filter(|n| n["skin"].is_u64())
+        .filter_map(|n| n["mesh"].as_u64())
+        .collect::<std::collections::BTreeSet<u64>>()
+        .into_iter()
+        .map(|m| named("mesh", m as usize, &json["meshes"][m as usize]))
+        .collect();
+    if !skinned.is_empty() {
+        let (what, are) = match skinned.len() {
+            1 => ("mesh", "is"),
+            _ => ("meshes", "are"),
+        };
+        out.push(format!(
+            "{what} {} {are} skinned; a USD point cache has no skeleton, so they are written in the bind pose (a glTF output keeps the skin)",
+            listed(&skinned),
+        ));
+    }
+    let lights = arr(&json["extensions"]["KHR_lights_punctual"], "lights");
+    for (kind, list) in [("camera", arr(json, "cameras")), ("light", lights)] {
+        let names: Vec<String> = (list.iter().enumerate())
+            .map(|(i, v)| named(kind, i, v))
+            .collect();
+        let (s, are, them) = match names.len() {
+            0 => continue,
+            1 => ("", "is", "it"),
+            _ => ("s", "are", "them"),
+        };
+        out.push(format!(
+            "{kind}{s} {} {are} not written to the USD stage (a glTF output keeps {them})",
+            listed(&names)
+        ));
+    }
+    out
 }
 
 struct Ctx<'a> {
