@@ -123,14 +123,17 @@ pub enum Prim {
     /// A node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`): a
     /// PointInstancer whose one prototype (`prototype`, an Xform holding the mesh's primitives,
     /// under a `Prototypes` scope) is placed by each instance's transform.
-    Instancer {
-        name: String,
-        matrix: Option<[f64; 16]>,
-        motion: Vec<(f64, [f64; 16])>,
-        instances: Instances,
-        prototype: Box<Prim>,
-        children: Vec<Prim>,
-    },
+    Instancer(Box<InstancerPrim>),
+}
+
+/// A PointInstancer prim: an instancing node, its instances and its mesh as the prototype.
+pub struct InstancerPrim {
+    pub name: String,
+    pub matrix: Option<[f64; 16]>,
+    pub motion: Vec<(f64, [f64; 16])>,
+    pub instances: Instances,
+    pub prototype: Prim,
+    pub children: Vec<Prim>,
 }
 
 /// The instances of an instancing node, in its own space: translation, rotation (x, y, z,
@@ -407,14 +410,14 @@ impl Ctx<'_> {
                     motion: Vec::new(),
                     children: mesh,
                 };
-                Prim::Instancer {
+                Prim::Instancer(Box::new(InstancerPrim {
                     name,
                     matrix,
                     motion,
                     instances,
-                    prototype: Box::new(prototype),
+                    prototype,
                     children,
-                }
+                }))
             }
             None => Prim::Xform {
                 name,
@@ -655,13 +658,9 @@ pub fn animated(stage: &Stage) -> HashMap<usize, Vec<&MeshPrim>> {
     ) {
         match p {
             Prim::Xform { children, .. } => children.iter().for_each(|c| walk(c, seen, out)),
-            Prim::Instancer {
-                prototype,
-                children,
-                ..
-            } => {
-                walk(prototype, seen, out);
-                children.iter().for_each(|c| walk(c, seen, out));
+            Prim::Instancer(i) => {
+                walk(&i.prototype, seen, out);
+                i.children.iter().for_each(|c| walk(c, seen, out));
             }
             Prim::Mesh(m) => {
                 if let Some(a) = &m.animation {

@@ -126,24 +126,17 @@ fn write_prim(
             writeln!(out, "{pad}}}")?;
         }
         Prim::Mesh(m) => write_mesh(m, out, &pad, scope, spool)?,
-        Prim::Instancer {
-            name,
-            matrix,
-            motion,
-            instances,
-            prototype,
-            children,
-        } => {
-            writeln!(out, "{pad}def PointInstancer \"{name}\"")?;
+        Prim::Instancer(i) => {
+            writeln!(out, "{pad}def PointInstancer \"{}\"", i.name)?;
             writeln!(out, "{pad}{{")?;
-            write_transform(out, &pad, matrix, motion)?;
-            let path = format!("{path}/{name}");
+            write_transform(out, &pad, &i.matrix, &i.motion)?;
+            let path = format!("{path}/{}", i.name);
             let p = format!("{pad}    ");
             write!(out, "{p}point3f[] positions = ")?;
-            write_vec3s(out, &instances.positions)?;
+            write_vec3s(out, &i.instances.positions)?;
             writeln!(out)?;
             // Text order (real, i, j, k), at the half precision the type keeps.
-            let quats: Vec<String> = (instances.orientations.iter())
+            let quats: Vec<String> = (i.instances.orientations.iter())
                 .map(|q| {
                     let [x, y, z, w] = q.map(half_f32);
                     format!("({}, {}, {}, {})", F(w), F(x), F(y), F(z))
@@ -151,11 +144,11 @@ fn write_prim(
                 .collect();
             writeln!(out, "{p}quath[] orientations = [{}]", quats.join(", "))?;
             write!(out, "{p}float3[] scales = ")?;
-            write_vec3s(out, &instances.scales)?;
+            write_vec3s(out, &i.instances.scales)?;
             writeln!(out)?;
-            let zeros = vec!["0"; instances.positions.len()];
+            let zeros = vec!["0"; i.instances.positions.len()];
             writeln!(out, "{p}int[] protoIndices = [{}]", zeros.join(", "))?;
-            let proto = match prototype.as_ref() {
+            let proto = match &i.prototype {
                 Prim::Xform { name, .. } => name.as_str(),
                 _ => unreachable!("a prototype is an Xform"),
             };
@@ -163,9 +156,9 @@ fn write_prim(
             writeln!(out, "{p}def Scope \"{PROTOTYPES}\"")?;
             writeln!(out, "{p}{{")?;
             let protos = format!("{path}/{PROTOTYPES}");
-            write_prim(prototype, out, depth + 2, &protos, scope, spool)?;
+            write_prim(&i.prototype, out, depth + 2, &protos, scope, spool)?;
             writeln!(out, "{p}}}")?;
-            for c in children {
+            for c in &i.children {
                 write_prim(c, out, depth + 1, &path, scope, spool)?;
             }
             writeln!(out, "{pad}}}")?;

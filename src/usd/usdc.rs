@@ -378,28 +378,21 @@ impl<W: Write + Seek> Writer<W> {
                 self.prim_spec(me, "Xform", props, children.iter().map(prim_name).collect())
             }
             Prim::Mesh(m) => self.mesh(m, parent, frames),
-            Prim::Instancer {
-                name,
-                matrix,
-                motion,
-                instances,
-                prototype,
-                children,
-            } => {
-                let me = self.path(Some(parent), name, false);
-                let mut props = self.transform(me, matrix, motion)?;
-                let v = self.field("default", Val::Vec3fs(&instances.positions))?;
+            Prim::Instancer(i) => {
+                let me = self.path(Some(parent), &i.name, false);
+                let mut props = self.transform(me, &i.matrix, &i.motion)?;
+                let v = self.field("default", Val::Vec3fs(&i.instances.positions))?;
                 self.attribute(me, "positions", "point3f[]", vec![v])?;
-                let v = self.field("default", Val::Quaths(&instances.orientations))?;
+                let v = self.field("default", Val::Quaths(&i.instances.orientations))?;
                 self.attribute(me, "orientations", "quath[]", vec![v])?;
-                let v = self.field("default", Val::Vec3fs(&instances.scales))?;
+                let v = self.field("default", Val::Vec3fs(&i.instances.scales))?;
                 self.attribute(me, "scales", "float3[]", vec![v])?;
-                let zeros = vec![0; instances.positions.len()];
+                let zeros = vec![0; i.instances.positions.len()];
                 let v = self.field("default", Val::Ints(zeros))?;
                 self.attribute(me, "protoIndices", "int[]", vec![v])?;
                 let protos = self.path(Some(me), PROTOTYPES, false);
-                self.prim(prototype, protos, frames)?;
-                let target = self.path(Some(protos), &prim_name(prototype), false);
+                self.prim(&i.prototype, protos, frames)?;
+                let target = self.path(Some(protos), &prim_name(&i.prototype), false);
                 let rel = self.path(Some(me), "prototypes", true);
                 let uniform = self.field("variability", Val::Uniform)?;
                 let targets = self.field("targetPaths", Val::Paths(vec![target]))?;
@@ -414,12 +407,12 @@ impl<W: Write + Seek> Writer<W> {
                     ]
                     .map(String::from),
                 );
-                self.prim_spec(protos, "Scope", vec![], vec![prim_name(prototype)])?;
-                for c in children {
+                self.prim_spec(protos, "Scope", vec![], vec![prim_name(&i.prototype)])?;
+                for c in &i.children {
                     self.prim(c, me, frames)?;
                 }
                 let kids = std::iter::once(PROTOTYPES.to_string())
-                    .chain(children.iter().map(prim_name))
+                    .chain(i.children.iter().map(prim_name))
                     .collect();
                 self.prim_spec(me, "PointInstancer", props, kids)
             }
@@ -766,7 +759,8 @@ impl<W: Write + Seek> Writer<W> {
 
 fn prim_name(p: &Prim) -> String {
     match p {
-        Prim::Xform { name, .. } | Prim::Instancer { name, .. } => name.clone(),
+        Prim::Xform { name, .. } => name.clone(),
+        Prim::Instancer(i) => i.name.clone(),
         Prim::Mesh(m) => m.name.clone(),
     }
 }

@@ -197,6 +197,19 @@ pub fn usd_report(python: &Path, usd: &Path, what: &str) -> serde_json::Value {
     serde_json::from_slice(&out).unwrap()
 }
 
+/// [`usd_report`], insisting that it found no errors and usd-core's validators nothing.
+pub fn clean_usd_report(python: &Path, usd: &Path, what: &str) -> serde_json::Value {
+    let r = usd_report(python, usd, what);
+    for key in ["errors", "validation"] {
+        assert!(
+            r[key].as_array().unwrap().is_empty(),
+            "{what}: {key} {}",
+            r[key]
+        );
+    }
+    r
+}
+
 /// Run `tools/<script>` with the project's python and `args`, insisting on success; returns
 /// its standard output. `what` prefixes the failure message.
 pub fn run_tool(python: &Path, script: &str, args: &[&std::ffi::OsStr], what: &str) -> Vec<u8> {
