@@ -903,12 +903,12 @@ fn gpu_instances_become_a_point_instancer() {
     let turn = glam::Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
     let t = [[0.0, 0.0, 0.0], [1.0, 0.0, 2.0], [-1.0, 0.5, 4.0]];
     let r = [[0.0, 0.0, 0.0, 1.0], turn.to_array(), [0.0, 0.0, 0.0, 1.0]];
-    let s = [[1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [1.0, 0.5, 1.0]];
+    let sc = [[1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [1.0, 0.5, 1.0]];
     let flat = |v: &[[f32; 3]]| v.iter().flatten().copied().collect::<Vec<f32>>();
     let attributes = serde_json::json!({
         "TRANSLATION": push_f32_accessor(&mut json, &mut bin, &flat(&t), "VEC3"),
         "ROTATION": push_f32_accessor(&mut json, &mut bin, &r.concat(), "VEC4"),
-        "SCALE": push_f32_accessor(&mut json, &mut bin, &flat(&s), "VEC3"),
+        "SCALE": push_f32_accessor(&mut json, &mut bin, &flat(&sc), "VEC3"),
     });
     json["nodes"][1]["extensions"] =
         serde_json::json!({"EXT_mesh_gpu_instancing": {"attributes": attributes}});
@@ -922,6 +922,19 @@ fn gpu_instances_become_a_point_instancer() {
     let glb = dir.path().join("out.glb");
     tween_quietly(&input, &glb, &[]);
     assert_no_new_issues(&input, &glb);
+    // A zero rotation (a zero-filled accessor) is refused, not written as NaN.
+    let zero = dir.path().join("zero.glb");
+    let (mut j, mut b) = (json.clone(), bin.clone());
+    let r0 = push_f32_accessor(&mut j, &mut b, &[0.0; 12], "VEC4");
+    j["nodes"][1]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["ROTATION"] = r0.into();
+    write_glb(&zero, &j, &b);
+    let usd = dir.path().join("zero.usda");
+    assert_refused(
+        &["tween", s(&zero), "-o", s(&usd)],
+        "zero.glb",
+        "ROTATION of instance 0 is not a rotation",
+        &usd,
+    );
     for fmt in ["usda", "usdc"] {
         let usd = dir.path().join(format!("out.{fmt}"));
         tween_quietly(&input, &usd, &[]);
@@ -938,7 +951,7 @@ fn gpu_instances_become_a_point_instancer() {
         let mut most = 0.0f64;
         for (i, m) in transforms.iter().enumerate() {
             let want = glam::Mat4::from_scale_rotation_translation(
-                s[i].into(),
+                sc[i].into(),
                 glam::Quat::from_array(r[i]),
                 t[i].into(),
             )

@@ -144,6 +144,10 @@ pub struct Instances {
     pub scales: Vec<[f32; 3]>,
 }
 
+/// An instance rotation shorter than this (unitless) is no rotation (a zero-filled accessor):
+/// refused rather than normalised into NaN.
+const MIN_QUATERNION: f64 = 1e-6;
+
 /// The name of the scope under a PointInstancer that holds its prototype.
 pub const PROTOTYPES: &str = "Prototypes";
 
@@ -380,7 +384,7 @@ impl Ctx<'_> {
         let motion = self.motion.samples(index, node);
         let mut kids = HashMap::new();
         let mut children = Vec::new();
-        let instances = self.instances(node)?;
+        let instances = self.instances(index, node)?;
         let mut mesh = Vec::new();
         if let Some(mi) = node["mesh"].as_u64() {
             let mut taken = HashMap::new();
@@ -431,7 +435,7 @@ impl Ctx<'_> {
     /// The instances of a node with a mesh and `EXT_mesh_gpu_instancing` (TRANSLATION,
     /// ROTATION, SCALE; float or, for rotations, normalized integers; one missing is the
     /// identity), or `None`.
-    fn instances(&self, node: &Value) -> Result<Option<Instances>> {
+    fn instances(&self, index: usize, node: &Value) -> Result<Option<Instances>> {
         let attributes = &node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
         if !node["mesh"].is_u64() || !attributes.is_object() {
             return Ok(None);
@@ -443,7 +447,7 @@ impl Ctx<'_> {
             let (values, n) = self.doc.read_f64(a as usize)?;
             if n != width {
                 bail!(self.doc.err(format!(
-                    "EXT_mesh_gpu_instancing {name} (accessor {a}) has {n} components, not {width}"
+                    "node {index}'s EXT_mesh_gpu_instancing {name} (accessor {a}) has {n} components, not {width}"
                 )));
             }
             Ok(Some(values))
@@ -461,9 +465,9 @@ impl Ctx<'_> {
             return Ok(None);
         };
         if counts.iter().any(|&c| c != count) {
-            bail!(self.doc.err(
-                "EXT_mesh_gpu_instancing attributes of one node hold different instance counts"
-            ));
+            bail!(self.doc.err(format!(
+                "node {index}'s EXT_mesh_gpu_instancing attributes hold different instance counts"
+            )));
         }
         let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
         let vec3s = |v: Option<Vec<f64>>, default: [f32; 3]| -> Vec<[f32; 3]> {
@@ -476,13 +480,17 @@ impl Ctx<'_> {
             }
         };
         let orientations = match r {
-            Some(r) => r
-                .chunks_exact(4)
-                .map(|q| {
-                    let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3]).normalize();
-                    q.as_quat().to_array()
+            Some(r) => (r.chunks_exact(4).enumerate())
+                .map(|(k, q)| {
+                    let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3]);
+                    if q.length() < MIN_QUATERNION {
+                        bail!(self.doc.err(format!(
+                            "node {index}'s EXT_mesh_gpu_instancing ROTATION of instance {k} is not a rotation (a zero quaternion)"
+                        )));
+                    }
+                    Ok(q.normalize().as_quat().to_array())
                 })
-                .collect(),
+                .collect::<Result<_>>()?,
             None => vec![[0.0, 0.0, 0.0, 1.0]; count],
         };
         Ok(Some(Instances {

@@ -177,7 +177,7 @@ fn write_transform(
     let text = |m: &[f64; 16]| {
         let rows: Vec<String> = m
             .chunks(4)
-            .map(|r| format!("({}, {}, {}, {})", r[0], r[1], r[2], r[3]))
+            .map(|r| format!("({}, {}, {}, {})", D(r[0]), D(r[1]), D(r[2]), D(r[3])))
             .collect();
         format!("( {} )", rows.join(", "))
     };
@@ -200,12 +200,26 @@ fn write_transform(
 }
 
 /// `x` rounded to the nearest half-precision float (USD's `half`, as `quath` stores it).
-pub(super) fn half_f32(x: f32) -> f32 {
+fn half_f32(x: f32) -> f32 {
     half::f16::from_f32(x).to_f32()
 }
 
 /// A float in its shortest round-trip form, in exponent notation when that is shorter
 /// (USD parses both back to the same f32).
+/// A double as USD text: Rust's shortest form, with an exponent from 1e15 on (USD reads a
+/// longer run of digits as an integer literal, out of range past 2^63).
+struct D(f64);
+
+impl std::fmt::Display for D {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0.abs() >= 1e15 {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
 struct F(f32);
 
 impl std::fmt::Display for F {
@@ -476,4 +490,21 @@ fn spool_frames(
     .map_err(|e| naming(path, e))?;
     w.flush().map_err(|e| naming(path, e.into()))?;
     Ok(spool)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn doubles_usd_would_read_as_integers_get_an_exponent() {
+        assert_eq!(D(1e39).to_string(), "1e39");
+        assert_eq!(D(-2.5e15).to_string(), "-2.5e15");
+        assert_eq!(D(123456.75).to_string(), "123456.75");
+        assert_eq!(
+            D(6.123233995736766e-17).to_string(),
+            "0.00000000000000006123233995736766"
+        );
+        assert_eq!(half_f32(0.70710677), 0.70703125);
+    }
 }
