@@ -5,13 +5,13 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 F=../../shared/fixtures
-mkdir -p corpus/{gltf_read,keyframes,blend,bvh}
-for t in gltf_read keyframes; do
+mkdir -p corpus/{gltf_read,keyframes,blend,bvh,usd_stage}
+for t in gltf_read keyframes usd_stage; do
   cp ../samples/*.glb corpus/$t/
   [ -d $F ] && cp $F/morph-keyframes/*.glb $F/morph-khronos/SimpleMorph/glTF-Embedded/*.gltf \
     $F/morph-khronos/MorphStressTest/glTF-Embedded-bevy/*.gltf corpus/$t/ || true
 done
-[ -d $F ] && cp $F/skinned/*.glb corpus/blend/ && cp $F/skinned/*.glb corpus/gltf_read/ || true
+[ -d $F ] && cp $F/skinned/*.glb corpus/blend/ && cp $F/skinned/*.glb corpus/gltf_read/ && cp $F/skinned/*.glb corpus/usd_stage/ || true
 [ -d $F ] && cp $F/bvh/*.bvh corpus/bvh/ || true
 echo "corpora: $(for t in corpus/*; do echo -n "$(basename $t)=$(ls $t | wc -l) "; done)"
 # The decoders: streams cut from compressed variants made by the real tools (when installed).

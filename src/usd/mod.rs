@@ -16,5 +16,5 @@ mod usdz;
 mod write;
 
 pub use motion::ClipOnStage;
-pub use stage::{build_stage, identifier, Delta, FrameSource, MeshPlan, Stage};
+pub use stage::{build_stage, identifier, Delta, FrameSource, InstancerPrim, MeshPlan, Prim, Stage};
 pub use write::write_file;
