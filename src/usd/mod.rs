@@ -16,5 +16,7 @@ mod usdz;
 mod write;
 
 pub use motion::ClipOnStage;
-pub use stage::{build_stage, identifier, Delta, FrameSource, InstancerPrim, MeshPlan, Prim, Stage};
+pub use stage::{
+    build_stage, identifier, Delta, FrameSource, InstancerPrim, MeshPlan, Prim, Stage,
+};
 pub use write::write_file;
