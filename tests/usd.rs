@@ -416,7 +416,10 @@ fn every_material_feature(fx: &Path, out: &Path) {
     json["extensionsUsed"] = serde_json::json!([
         "KHR_texture_transform",
         "KHR_texture_basisu",
-        "KHR_materials_emissive_strength"
+        "KHR_materials_emissive_strength",
+        "KHR_materials_clearcoat",
+        "KHR_materials_ior",
+        "KHR_materials_sheen"
     ]);
     json["materials"][0] = serde_json::json!({
         "name": "red",
@@ -431,7 +434,11 @@ fn every_material_feature(fx: &Path, out: &Path) {
         "occlusionTexture": {"index": 0, "strength": 0.7},
         "emissiveTexture": {"index": 0},
         "emissiveFactor": [0.5, 0.25, 1],
-        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2}},
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2},
+            "KHR_materials_clearcoat": {"clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.25,
+                "clearcoatRoughnessTexture": {"index": 0}},
+            "KHR_materials_ior": {"ior": 1.4},
+            "KHR_materials_sheen": {"sheenColorFactor": [1, 1, 1]}},
         "alphaMode": "MASK", "alphaCutoff": 0.3
     });
     json["materials"][1]["pbrMetallicRoughness"]["baseColorTexture"] =
@@ -564,6 +571,14 @@ fn materials_and_textures_travel_to_usd() {
             wired("occlusion", "Occlusion.outputs:r");
             wired("emissiveColor", "Emissive.outputs:rgb");
             assert!(close(&surface["opacityThreshold"], &[0.3]), "{what}");
+            // KHR_materials_clearcoat and _ior carried; _sheen named as left out.
+            assert!(close(&surface["clearcoat"], &[0.8]), "{what}");
+            wired("clearcoatRoughness", "ClearcoatRoughness.outputs:g");
+            assert!(close(&surface["ior"], &[1.4]), "{what}");
+            assert!(
+                stderr.contains("material 0 KHR_materials_sheen left out"),
+                "{what}: {stderr}"
+            );
             let tex = |n: &str| &shader(&looks, &red(n))["inputs"];
             assert!(
                 close(&tex("BaseColor")["scale"], &[1.0, 0.5, 0.25, 0.8]),
@@ -599,6 +614,13 @@ fn materials_and_textures_travel_to_usd() {
             );
             assert!(
                 close(&tex("Emissive")["scale"], &[1.0, 0.5, 2.0, 1.0]),
+                "{what}"
+            );
+            assert!(
+                close(
+                    &tex("ClearcoatRoughness")["scale"],
+                    &[0.25, 0.25, 0.25, 1.0]
+                ),
                 "{what}"
             );
             for t in &textures {

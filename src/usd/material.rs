@@ -15,7 +15,11 @@
 //! * `emissiveColor` from `emissiveFactor` (times `KHR_materials_emissive_strength`), or
 //!   `emissiveTexture` (sRGB) scaled by it;
 //! * `opacity` from the base colour's alpha for `BLEND` and `MASK`, with `opacityThreshold` =
-//!   `alphaCutoff` (default 0.5) for `MASK`; nothing for `OPAQUE`.
+//!   `alphaCutoff` (default 0.5) for `MASK`; nothing for `OPAQUE`;
+//! * `clearcoat`, `clearcoatRoughness` from `KHR_materials_clearcoat` (factors, or the R and G
+//!   channels of its textures scaled by them), `ior` from `KHR_materials_ior`; other material
+//!   extensions (sheen, transmission, volume, specular, unlit, ...) are named in
+//!   [`Look::left_out`].
 //!
 //! Every texture reads `primvars:st` (TEXCOORD_0; `st1`, ... for other sets) through a
 //! `UsdPrimvarReader_float2`, with the sampler's wrap modes (`repeat`, `mirror`, `clamp`) and
@@ -166,6 +170,7 @@ impl<'a> LookBuilder<'a> {
         let mut parts = Parts::default();
         self.base_color(m, mat, vertex_color, &mut parts)?;
         self.maps(m, mat, &mut parts)?;
+        self.extensions(m, mat, &mut parts)?;
         let surface = Shader {
             name: SURFACE.into(),
             id: "UsdPreviewSurface",
@@ -304,6 +309,71 @@ impl<'a> LookBuilder<'a> {
                 parts.set("emissiveColor", "color3f", Value::Vec3(emissive))
             }
             None => {}
+        }
+        Ok(())
+    }
+
+    /// The material extensions UsdPreviewSurface has inputs for: `KHR_materials_clearcoat`
+    /// (`clearcoat`, `clearcoatRoughness`: factors, or the R and G channels of their textures
+    /// scaled by them) and `KHR_materials_ior` (`ior`). Any other material extension (sheen,
+    /// transmission, volume, specular, unlit, ...) and the clearcoat normal map are left out,
+    /// named in `left_out`.
+    fn extensions(&mut self, m: usize, mat: &Json, parts: &mut Parts) -> Result<()> {
+        let ext = &mat["extensions"];
+        let coat = &ext["KHR_materials_clearcoat"];
+        if coat.is_object() {
+            for (key, factor_key, input, channel) in [
+                ("clearcoatTexture", "clearcoatFactor", "clearcoat", "r"),
+                (
+                    "clearcoatRoughnessTexture",
+                    "clearcoatRoughnessFactor",
+                    "clearcoatRoughness",
+                    "g",
+                ),
+            ] {
+                let f = coat[factor_key].as_f64().unwrap_or(0.0) as f32;
+                let slot = Slot {
+                    key,
+                    shader: if input == "clearcoat" {
+                        "Clearcoat"
+                    } else {
+                        "ClearcoatRoughness"
+                    },
+                    srgb: false,
+                    scale: [f, f, f, 1.0],
+                    bias: [0.0; 4],
+                };
+                match self.texture(&coat[key], slot, m, &mut parts.more)? {
+                    Some(tex) => parts.set(input, "float", connect(&tex, channel)),
+                    None => parts.set(input, "float", Value::Float(f)),
+                }
+            }
+            if coat["clearcoatNormalTexture"].is_object() {
+                self.look.left_out.push(format!(
+                    "material {m} clearcoatNormalTexture left out (UsdPreviewSurface has one normal input)"
+                ));
+            }
+        }
+        if let Some(ior) = ext["KHR_materials_ior"]["ior"].as_f64() {
+            parts.set("ior", "float", Value::Float(ior as f32));
+        } else if ext["KHR_materials_ior"].is_object() {
+            parts.set("ior", "float", Value::Float(1.5));
+        }
+        let carried = [
+            "KHR_materials_clearcoat",
+            "KHR_materials_ior",
+            "KHR_materials_emissive_strength",
+        ];
+        let left: Vec<&str> = (ext.as_object().into_iter().flatten())
+            .map(|(k, _)| k.as_str())
+            .filter(|k| k.starts_with("KHR_materials_") && !carried.contains(k))
+            .collect();
+        if !left.is_empty() {
+            self.look.left_out.push(format!(
+                "material {m} {} left out (UsdPreviewSurface has no inputs for {})",
+                left.join(", "),
+                if left.len() == 1 { "it" } else { "them" }
+            ));
         }
         Ok(())
     }
