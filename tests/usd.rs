@@ -1058,3 +1058,64 @@ fn what_a_point_cache_does_not_carry_is_named() {
         "{w:?}"
     );
 }
+
+/// Primitives drawing one vertex buffer (three.js' and Babylon.js' material groups) are one
+/// Mesh with a GeomSubset per primitive, each bound to its material: flag_wave in two such
+/// groups plays the single primitive's points exactly, at about half the size of a Mesh per
+/// primitive (each carried every vertex's points at every frame before).
+#[test]
+fn material_groups_of_one_vertex_buffer_are_subsets_of_one_mesh() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let groups = dir.path().join("groups.glb");
+    flag_in_two_groups(&groups);
+    let dump = |input: &Path, fmt: &str| {
+        let usd = dir.path().join(format!("out.{fmt}"));
+        tween_quietly(input, &usd, &[]);
+        let r = clean_usd_report(&python, &usd, fmt);
+        let size = std::fs::metadata(&usd).unwrap().len();
+        (
+            r,
+            std::fs::read(usd.with_file_name("dump.bin")).unwrap(),
+            size,
+            usd,
+        )
+    };
+    for fmt in ["usda", "usdc"] {
+        let (plain, plain_points, plain_size, _) = dump(&sample("flag_wave.glb"), fmt);
+        let (r, points, size, usd) = dump(&groups, fmt);
+        assert_eq!(
+            r["meshes"], plain["meshes"],
+            "{fmt}: one Mesh per mesh, the same samples"
+        );
+        assert!(
+            points == plain_points,
+            "{fmt}: the same points at every frame"
+        );
+        // The single primitive's file and the subsets' few lines.
+        assert!(
+            (size as f64) < 1.05 * plain_size as f64,
+            "{fmt}: {size} bytes against {plain_size}"
+        );
+        let looks: serde_json::Value =
+            serde_json::from_slice(&run_tool(&python, "usd_looks.py", &[usd.as_os_str()], fmt))
+                .unwrap();
+        assert_eq!(looks["validation"], serde_json::json!([]), "{fmt}");
+        let subsets = looks["subsets"].as_array().unwrap();
+        assert_eq!(subsets.len(), 2, "{fmt}: {subsets:?}");
+        let bound: Vec<&str> = subsets
+            .iter()
+            .map(|s| s["material"].as_str().unwrap())
+            .collect();
+        assert!(
+            bound[0].ends_with("/Materials/flag_material"),
+            "{fmt}: {bound:?}"
+        );
+        assert!(bound[1].ends_with("/Materials/back"), "{fmt}: {bound:?}");
+        let faces: usize = subsets
+            .iter()
+            .map(|s| s["faces"].as_u64().unwrap() as usize)
+            .sum();
+        assert_eq!(faces, 768, "{fmt}: the subsets cover the mesh's faces");
+    }
+}

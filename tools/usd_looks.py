@@ -1,5 +1,6 @@
 """Print the materials of a USD file (usd-core) as JSON, with usd-core's validation:
 {"validation": [...], "meshes": [{"path", "material", "primvars"}],
+ "subsets": [{"path", "material", "faces"}],
  "materials": [{"path", "surface"}],
  "shaders": [{"path", "id", "inputs": {name: value | {"connect": "PATH.outputs:x"}},
               "files": {name: {"resolved", "bytes", "crc32"}}}]}
@@ -19,6 +20,7 @@ ctx = UsdValidation.ValidationContext(UsdValidation.ValidationRegistry().GetOrLo
 out = {
     "validation": [f"{e.GetName()}: {e.GetMessage()}" for e in ctx.Validate(stage)],
     "meshes": [],
+    "subsets": [],
     "materials": [],
     "shaders": [],
 }
@@ -42,6 +44,13 @@ for prim in sorted(stage.Traverse(), key=lambda p: str(p.GetPath())):
             "path": str(prim.GetPath()),
             "material": str(mat.GetPath()) if mat else None,
             "primvars": sorted(p.GetPrimvarName() for p in UsdGeom.PrimvarsAPI(prim).GetPrimvars()),
+        })
+    elif prim.IsA(UsdGeom.Subset):
+        mat, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        out["subsets"].append({
+            "path": str(prim.GetPath()),
+            "material": str(mat.GetPath()) if mat else None,
+            "faces": len(UsdGeom.Subset(prim).GetIndicesAttr().Get() or []),
         })
     elif prim.IsA(UsdShade.Material):
         src = UsdShade.Material(prim).ComputeSurfaceSource()

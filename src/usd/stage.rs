@@ -15,6 +15,8 @@
 //!   `primvars:displayColor` per vertex from COLOR_0 (linear, as glTF stores it; its alpha as
 //!   `primvars:displayOpacity`), else one constant from the material's base colour,
 //!   `doubleSided` from the material;
+//! * primitives with the same attributes and targets (material groups drawing one vertex
+//!   buffer) are one Mesh with a `GeomSubset` per primitive bound to its material;
 //! * a node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`, as gltfpack `-mi`
 //!   writes it) is a PointInstancer (positions, orientations, scales, the mesh as its one
 //!   prototype in a `Prototypes` scope);
@@ -29,7 +31,7 @@ use crate::gltf::{
 };
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
-use serde_json::Value;
+use serde_json::{json, Value};
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
 
@@ -51,12 +53,72 @@ pub struct MeshPrim {
     pub material: Option<String>,
     /// For an animated primitive: where its frames come from and their time codes.
     pub animation: Option<Animation>,
+    /// The faces of each primitive drawing this one's vertex buffer (a material group), bound
+    /// to its own material; empty for a Mesh of one primitive.
+    pub subsets: Vec<Subset>,
+}
+
+/// A `GeomSubset` of a Mesh (family `materialBind`): faces `faces` of the Mesh, bound to
+/// `material`.
+pub struct Subset {
+    pub name: String,
+    pub faces: Vec<i32>,
+    pub material: Option<String>,
+}
+
+impl MeshPrim {
+    /// Take in `other`, a primitive drawing the same vertex buffer (the same attributes and
+    /// targets, so the same points and frames): its faces appended as a subset of their own
+    /// with its material (this one's faces becoming the first subset), its base colour per
+    /// face where the two differ, double-sided if either is.
+    fn absorb(&mut self, other: MeshPrim) {
+        let faces = |m: &MeshPrim| m.indices.len() / 3;
+        let start = faces(self);
+        if self.subsets.is_empty() {
+            self.subsets.push(Subset {
+                name: self.name.clone(),
+                faces: (0..start as i32).collect(),
+                material: self.material.take(),
+            });
+        }
+        let count = faces(&other);
+        self.subsets.push(Subset {
+            name: other.name,
+            faces: (start as i32..(start + count) as i32).collect(),
+            material: other.material,
+        });
+        // USD's fallback display colour where a primitive has none.
+        const GRAY: [f32; 3] = [0.5; 3];
+        let per_face = |c: Option<DisplayColor>, n: usize| match c {
+            Some(DisplayColor::Constant(c)) => vec![c; n],
+            Some(DisplayColor::Face(v)) => v,
+            _ => vec![GRAY; n],
+        };
+        self.color = match (self.color.take(), other.color) {
+            // One COLOR_0 for both: the vertex colours stand.
+            (Some(DisplayColor::Vertex(v)), _) => Some(DisplayColor::Vertex(v)),
+            (Some(DisplayColor::Constant(a)), Some(DisplayColor::Constant(b))) if a == b => {
+                Some(DisplayColor::Constant(a))
+            }
+            (None, None) => None,
+            (a, b) => {
+                let mut v = per_face(a, start);
+                v.extend(per_face(b, count));
+                Some(DisplayColor::Face(v))
+            }
+        };
+        self.indices.extend(other.indices);
+        self.double_sided |= other.double_sided;
+    }
 }
 
 /// Where a mesh's display colour comes from.
 pub enum DisplayColor {
     Constant([f32; 3]),
     Vertex(Vec<[f32; 3]>),
+    /// One colour per face (`uniform`): material groups of one vertex buffer, each its own
+    /// material's base colour.
+    Face(Vec<[f32; 3]>),
 }
 
 /// The frames of an animated primitive: frame f of primitive `primitive` (its position in the
@@ -514,7 +576,9 @@ impl Ctx<'_> {
             .unwrap_or_else(|| format!("mesh{mi}"));
         let processed = self.meshes.iter().position(|m| m.mesh == mi);
         let prims = arr(mesh, "primitives");
-        let mut out = Vec::new();
+        // Primitives with the same attributes and targets draw one vertex buffer (three.js'
+        // and Babylon.js' material groups): one Mesh with a subset per primitive.
+        let mut groups: Vec<(Value, MeshPrim)> = Vec::new();
         for (pi, p) in prims.iter().enumerate() {
             if !matches!(p["mode"].as_u64().unwrap_or(4), 4..=6) {
                 continue; // points and lines have no Mesh form
@@ -603,8 +667,8 @@ impl Ctx<'_> {
             let f32s = |v: Vec<DVec3>| -> Vec<[f32; 3]> {
                 v.into_iter().map(|p| p.as_vec3().to_array()).collect()
             };
-            out.push(Prim::Mesh(Box::new(MeshPrim {
-                name: unique(base_name, taken),
+            let prim = MeshPrim {
+                name: base_name,
                 points: f32s(points),
                 normals: normals.map(f32s),
                 st,
@@ -614,9 +678,25 @@ impl Ctx<'_> {
                 double_sided,
                 material,
                 animation,
-            })));
+                subsets: Vec::new(),
+            };
+            let vertices = json!([p["attributes"], p["targets"]]);
+            match groups.iter_mut().find(|(v, _)| *v == vertices) {
+                Some((_, first)) => first.absorb(prim),
+                None => groups.push((vertices, prim)),
+            }
         }
-        Ok(out)
+        let whole = groups.len() == 1 && !groups[0].1.subsets.is_empty();
+        Ok(groups
+            .into_iter()
+            .map(|(_, mut m)| {
+                if whole {
+                    m.name = identifier(&mesh_name);
+                }
+                m.name = unique(std::mem::take(&mut m.name), taken);
+                Prim::Mesh(Box::new(m))
+            })
+            .collect())
     }
 }
 

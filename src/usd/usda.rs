@@ -328,7 +328,32 @@ fn write_mesh(
         }
     }
     write_primvars(m, out, &p)?;
+    if !m.subsets.is_empty() {
+        writeln!(
+            out,
+            "{p}uniform token subsetFamily:materialBind:familyType = \"partition\""
+        )?;
+    }
     writeln!(out, "{p}uniform token subdivisionScheme = \"none\"")?;
+    for sub in &m.subsets {
+        match &sub.material {
+            Some(_) => {
+                writeln!(out, "{p}def GeomSubset \"{}\" (", sub.name)?;
+                writeln!(out, "{p}    prepend apiSchemas = [\"MaterialBindingAPI\"]")?;
+                writeln!(out, "{p})")?;
+            }
+            None => writeln!(out, "{p}def GeomSubset \"{}\"", sub.name)?,
+        }
+        writeln!(out, "{p}{{")?;
+        writeln!(out, "{p}    uniform token elementType = \"face\"")?;
+        writeln!(out, "{p}    uniform token familyName = \"materialBind\"")?;
+        let faces: Vec<String> = sub.faces.iter().map(i32::to_string).collect();
+        writeln!(out, "{p}    int[] indices = [{}]", faces.join(", "))?;
+        if let Some(material) = &sub.material {
+            writeln!(out, "{p}    rel material:binding = <{scope}/{material}>")?;
+        }
+        writeln!(out, "{p}}}")?;
+    }
     writeln!(out, "{pad}}}")?;
     Ok(())
 }
@@ -347,7 +372,7 @@ fn write_primvars(m: &MeshPrim, out: &mut dyn Write, p: &str) -> Result<()> {
             writeln!(out, "{p}    interpolation = \"constant\"")?;
             writeln!(out, "{p})")?;
         }
-        Some(DisplayColor::Vertex(colors)) => {
+        Some(DisplayColor::Vertex(colors) | DisplayColor::Face(colors)) => {
             write!(out, "{p}color3f[] primvars:displayColor = [")?;
             for (i, c) in colors.iter().enumerate() {
                 if i > 0 {
@@ -356,7 +381,11 @@ fn write_primvars(m: &MeshPrim, out: &mut dyn Write, p: &str) -> Result<()> {
                 write!(out, "({}, {}, {})", F(c[0]), F(c[1]), F(c[2]))?;
             }
             writeln!(out, "] (")?;
-            writeln!(out, "{p}    interpolation = \"vertex\"")?;
+            let interpolation = match m.color {
+                Some(DisplayColor::Face(_)) => "uniform",
+                _ => "vertex",
+            };
+            writeln!(out, "{p}    interpolation = \"{interpolation}\"")?;
             writeln!(out, "{p})")?;
         }
         None => {}

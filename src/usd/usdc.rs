@@ -547,6 +547,7 @@ impl<W: Write + Seek> Writer<W> {
                     ("constant", self.field("default", Val::Vec3fs(&[*c]))?)
                 }
                 DisplayColor::Vertex(c) => ("vertex", self.field("default", Val::Vec3fs(c))?),
+                DisplayColor::Face(c) => ("uniform", self.field("default", Val::Vec3fs(c))?),
             };
             let interpolation = self.field("interpolation", Val::Token(interpolation))?;
             self.attribute(
@@ -568,19 +569,55 @@ impl<W: Write + Seek> Writer<W> {
             self.attribute(me, &name, "texCoord2f[]", vec![vertex, v])?;
             props.push(name);
         }
+        if !m.subsets.is_empty() {
+            let v = self.field("default", Val::Token("partition"))?;
+            let family = "subsetFamily:materialBind:familyType";
+            self.attribute(me, family, "token", vec![uniform, v])?;
+            props.push(family.into());
+        }
         let v = self.field("default", Val::Token("none"))?;
         self.attribute(me, "subdivisionScheme", "token", vec![uniform, v])?;
         props.push("subdivisionScheme".into());
-        let mut extra = Vec::new();
-        if let (Some(material), Some(scope)) = (&m.material, self.scope) {
-            let target = self.path(Some(scope), material, false);
-            let rel = self.path(Some(me), "material:binding", true);
-            let targets = self.field("targetPaths", Val::Paths(vec![target]))?;
-            self.spec(rel, vec![uniform, targets], SPEC_RELATIONSHIP);
-            props.push("material:binding".into());
-            extra.push(self.field("apiSchemas", Val::PrependTokens(vec!["MaterialBindingAPI"]))?);
+        let extra = self.bind(me, &m.material, &mut props)?;
+        for sub in &m.subsets {
+            let at = self.path(Some(me), &sub.name, false);
+            let mut props = Vec::new();
+            for (name, value) in [("elementType", "face"), ("familyName", "materialBind")] {
+                let v = self.field("default", Val::Token(value))?;
+                self.attribute(at, name, "token", vec![uniform, v])?;
+                props.push(name.to_string());
+            }
+            let v = self.field("default", Val::Ints(sub.faces.clone()))?;
+            self.attribute(at, "indices", "int[]", vec![v])?;
+            props.push("indices".into());
+            let extra = self.bind(at, &sub.material, &mut props)?;
+            self.prim_spec_with(at, "GeomSubset", props, vec![], extra)?;
         }
-        self.prim_spec_with(me, "Mesh", props, vec![], extra)
+        let subsets = m.subsets.iter().map(|s| s.name.clone()).collect();
+        self.prim_spec_with(me, "Mesh", props, subsets, extra)
+    }
+
+    /// Bind prim `at` to `material` (in the materials scope), when it has one: the
+    /// relationship (its name pushed to `props`), and the prim's `apiSchemas` field returned.
+    fn bind(
+        &mut self,
+        at: usize,
+        material: &Option<String>,
+        props: &mut Vec<String>,
+    ) -> Result<Vec<u32>> {
+        let (Some(material), Some(scope)) = (material, self.scope) else {
+            return Ok(Vec::new());
+        };
+        let uniform = self.field("variability", Val::Uniform)?;
+        let target = self.path(Some(scope), material, false);
+        let rel = self.path(Some(at), "material:binding", true);
+        let targets = self.field("targetPaths", Val::Paths(vec![target]))?;
+        self.spec(rel, vec![uniform, targets], SPEC_RELATIONSHIP);
+        props.push("material:binding".into());
+        Ok(vec![self.field(
+            "apiSchemas",
+            Val::PrependTokens(vec!["MaterialBindingAPI"]),
+        )?])
     }
 
     /// The materials scope (at path `scope`) with its materials and their shaders.

@@ -725,3 +725,39 @@ pub fn push_f32_accessor(
     accessors.push(acc);
     accessors.len() - 1
 }
+
+/// flag_wave's triangles drawn by two primitives (two materials) over one vertex buffer: the
+/// same POSITION, NORMAL, TEXCOORD_0 and target accessors, half the indices each, as three.js
+/// and Babylon.js export a mesh's material groups.
+pub fn flag_in_two_groups(path: &Path) {
+    let doc = inbetween::gltf::Document::open(&sample("flag_wave.glb")).unwrap();
+    let mut json = doc.json.clone();
+    let prim = json["meshes"][0]["primitives"][0].clone();
+    let ia = prim["indices"].as_u64().unwrap() as usize;
+    let whole = json["accessors"][ia].clone();
+    assert_eq!(whole["componentType"], 5125);
+    let count = whole["count"].as_u64().unwrap() as usize;
+    let half = count / 6 * 3;
+    let mut first = whole.clone();
+    first["count"] = half.into();
+    let mut second = whole.clone();
+    second["count"] = (count - half).into();
+    second["byteOffset"] = (whole["byteOffset"].as_u64().unwrap_or(0) as usize + 4 * half).into();
+    for a in [&mut first, &mut second] {
+        let a = a.as_object_mut().unwrap();
+        a.remove("min");
+        a.remove("max");
+    }
+    let accessors = json["accessors"].as_array_mut().unwrap();
+    accessors.extend([first, second]);
+    let n = accessors.len();
+    let materials = json["materials"].as_array_mut().unwrap();
+    materials.push(serde_json::json!({"name": "back", "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.1, 0.9, 1.0]}}));
+    let back = materials.len() - 1;
+    let (mut a, mut b) = (prim.clone(), prim);
+    a["indices"] = (n - 2).into();
+    b["indices"] = (n - 1).into();
+    b["material"] = back.into();
+    json["meshes"][0]["primitives"] = serde_json::json!([a, b]);
+    write_glb(path, &json, &doc.buffers[0]);
+}
