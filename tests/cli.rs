@@ -698,6 +698,50 @@ fn weights_that_move_no_vertex_are_refused_saying_why() {
 }
 
 #[test]
+fn a_morph_mesh_no_clip_animates_keeps_its_pose_beside_an_animated_one() {
+    // `--keys auto`: the flag is tweened from its clip; its posed copy, animated by nothing,
+    // is left as authored and named in a warning (it was tweened through its targets, a new
+    // clip making a still prop run through every blend shape).
+    let dir = tempfile::tempdir().unwrap();
+    let input = out_in(&dir, "posed.glb");
+    flag_beside_a_posed_copy(&input);
+    let out = out_in(&dir, "out.glb");
+    let r = run_ok(&["tween", s(&input), "-o", s(&out)]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("1 mesh (768 triangles)"), "{err}");
+    assert!(
+        err.contains("\"still_flag\" has morph targets and no weights animation: left as authored"),
+        "{err}"
+    );
+    assert_no_new_issues(&input, &out);
+    let (a, b) = (
+        Document::open(&input).unwrap(),
+        Document::open(&out).unwrap(),
+    );
+    assert_eq!(
+        b.json["animations"].as_array().unwrap().len(),
+        1,
+        "no new clip"
+    );
+    assert_eq!(
+        b.json["meshes"][2]["weights"],
+        a.json["meshes"][2]["weights"]
+    );
+    assert_eq!(b.json["nodes"][2]["weights"], a.json["nodes"][2]["weights"]);
+    let targets = |d: &Document| {
+        d.json["meshes"][2]["primitives"][0]["targets"]
+            .as_array()
+            .unwrap()
+            .len()
+    };
+    assert_eq!(targets(&b), targets(&a), "the copy's targets as authored");
+    // --keys targets still tweens every mesh's targets.
+    let all = out_in(&dir, "all.glb");
+    let r = run_ok(&["tween", s(&input), "-o", s(&all), "--keys", "targets"]);
+    assert!(String::from_utf8_lossy(&r.stderr).contains("2 meshes"));
+}
+
+#[test]
 fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     let dir = tempfile::tempdir().unwrap();
     let good = sample("bar_twist.glb");

@@ -4,7 +4,10 @@
 use super::compact::CompactFigures;
 use super::compact::CompactOptions;
 use super::frames::{collect_mesh, tween_mesh, MeshStats, PrimitiveDelta};
-use super::keys::{find_morph_meshes, KeyOptions, KeySource, MorphMesh, TrackOrigin};
+use super::keys::{
+    find_morph_meshes, meshes_without_weights_animation, KeyOptions, KeySource, MorphMesh,
+    TrackOrigin,
+};
 use super::morph_targets::{apply_frames, Applied, MostTargets};
 use super::options::{Layout, Method, Timing, TweenOptions};
 use super::report::{CompactMesh, CompactReport, MeshReport, Report};
@@ -508,7 +511,8 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         compact: job.compact,
     };
     let total = check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
-    let warnings = held_keys(&doc, &meshes);
+    let mut warnings = held_keys(&doc, &meshes);
+    warnings.extend(left_as_authored(&doc, &meshes, job.keys));
     let mut run = Run {
         job,
         doc,
@@ -539,6 +543,32 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         setup_parts: super::clock::seconds(),
         warnings: run.warnings,
     })
+}
+
+/// A line naming the morph meshes `--keys auto` left as authored: in a file that animates
+/// some meshes' weights, those with no weights animation keep their pose.
+fn left_as_authored(doc: &Document, meshes: &[MorphMesh], keys: KeySource) -> Vec<String> {
+    let from_clips = (meshes.iter().flat_map(|m| &m.tracks))
+        .any(|t| matches!(t.origin, TrackOrigin::Animation { .. }));
+    if keys != KeySource::Auto || !from_clips {
+        return Vec::new();
+    }
+    let names: Vec<String> = meshes_without_weights_animation(doc)
+        .into_iter()
+        .map(|mi| match doc.json["meshes"][mi]["name"].as_str() {
+            Some(n) => format!("{n:?}"),
+            None => format!("mesh {mi}"),
+        })
+        .collect();
+    if names.is_empty() {
+        return Vec::new();
+    }
+    vec![format!(
+        "{}: {} {} morph targets and no weights animation: left as authored (--keys targets tweens every mesh's targets)",
+        doc.path.display(),
+        gltf::listed(&names),
+        if names.len() == 1 { "has" } else { "have" }
+    )]
 }
 
 /// A line for each clip whose weights hold each key until the next (STEP interpolation, as

@@ -151,8 +151,14 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
     // they change only targets that move no vertex (normals, texture coordinates, colours).
     let (mut held_one_pose, mut moves_no_vertex) = (false, false);
     let users = MeshUsers::of(&doc.json);
+    // `--keys auto` tweens a mesh's targets only in a file that animates no mesh's weights
+    // (the clip picked by `--animation`, when given): beside a weights animation, a morph mesh
+    // with none keeps its authored pose (a prop held by its default weights).
+    let animates_weights =
+        (users.channels.values().flatten()).any(|&(a, _, _)| selected.is_none_or(|s| s == a));
     for mi in 0..arr(&doc.json, "meshes").len() {
-        let Some((mm, use_animation)) = morph_mesh(doc, mi, &users, opts, selected)? else {
+        let found = morph_mesh(doc, mi, &users, opts, selected, animates_weights)?;
+        let Some((mm, use_animation)) = found else {
             continue;
         };
         if mm.tracks.iter().any(|t| has_distinct_keys(&mm, t)) {
@@ -190,6 +196,24 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
     Ok(out)
 }
 
+/// The meshes with morph targets that no weights channel animates, by index: under
+/// `--keys auto` in a file that animates other meshes' weights, they keep their authored pose.
+pub fn meshes_without_weights_animation(doc: &Document) -> Vec<usize> {
+    let users = MeshUsers::of(&doc.json);
+    (arr(&doc.json, "meshes").iter().enumerate())
+        .filter(|(_, m)| {
+            arr(m, "primitives")
+                .iter()
+                .any(|p| !arr(p, "targets").is_empty())
+        })
+        .filter(|(mi, _)| {
+            let nodes = users.nodes.get(mi).map_or(&[][..], Vec::as_slice);
+            users.channels(nodes).is_empty()
+        })
+        .map(|(mi, _)| mi)
+        .collect()
+}
+
 /// Mesh `mi` with its tracks, and whether they come from an animation; `None` when it has no
 /// morph targets, or no track under `--keys auto` with `--animation`.
 fn morph_mesh(
@@ -198,6 +222,7 @@ fn morph_mesh(
     users: &MeshUsers,
     opts: &KeyOptions,
     selected: Option<usize>,
+    animates_weights: bool,
 ) -> Result<Option<(MorphMesh, bool)>> {
     let json = &doc.json;
     let mesh = &json["meshes"][mi];
@@ -219,9 +244,7 @@ fn morph_mesh(
     let use_animation = match opts.source {
         KeySource::Targets => false,
         KeySource::Animation => true,
-        KeySource::Auto => channels
-            .iter()
-            .any(|&(a, _, _)| selected.is_none_or(|s| s == a)),
+        KeySource::Auto => animates_weights,
     };
     let (tracks, dropped) = if use_animation {
         let (tracks, dropped) = animation_tracks(doc, &channels, selected, target_count)?;

@@ -761,3 +761,18 @@ pub fn flag_in_two_groups(path: &Path) {
     json["meshes"][0]["primitives"] = serde_json::json!([a, b]);
     write_glb(path, &json, &doc.buffers[0]);
 }
+
+/// flag_wave with a second morph mesh no clip animates (a copy of the flag, `still_flag`, its
+/// default weights 1 on target 2, node `still` overriding them with 1 on target 3): a prop
+/// held in a pose by its blend shapes beside an animated one.
+pub fn flag_beside_a_posed_copy(out: &Path) {
+    edited_glb(&sample("flag_wave.glb"), out, |j| {
+        let mut copy = j["meshes"][0].clone();
+        copy["name"] = "still_flag".into();
+        copy["weights"] = serde_json::json!([0, 0, 1, 0]);
+        j["meshes"].as_array_mut().unwrap().push(copy);
+        j["nodes"].as_array_mut().unwrap().push(serde_json::json!(
+            {"name": "still", "mesh": 2, "translation": [0, 0, 3], "weights": [0, 0, 0, 1]}));
+        j["scenes"][0]["nodes"] = serde_json::json!([0, 1, 2]);
+    });
+}
