@@ -1119,3 +1119,40 @@ fn material_groups_of_one_vertex_buffer_are_subsets_of_one_mesh() {
         assert_eq!(faces, 768, "{fmt}: the subsets cover the mesh's faces");
     }
 }
+
+/// A morph mesh written still shows the pose the glTF shows: its targets blended by its node's
+/// weights (else the mesh's). The posed copy beside flag_wave was written at its base before.
+#[test]
+fn a_still_morph_mesh_is_written_in_its_pose() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("posed.glb");
+    flag_beside_a_posed_copy(&input);
+    let (base, targets) = read_targets(&input, 2, 0);
+    let want: Vec<[f32; 3]> = (base.iter().zip(&targets[3]))
+        .map(|(b, d)| [b[0] + d[0], b[1] + d[1], b[2] + d[2]])
+        .collect();
+    for fmt in ["usda", "usdc"] {
+        let usd = dir.path().join(format!("out.{fmt}"));
+        tween_quietly(&input, &usd, &[]);
+        let r = clean_usd_report(&python, &usd, fmt);
+        let still = (r["meshes"].as_array().unwrap().iter())
+            .find(|m| m["path"] == "/samples/still/still_flag")
+            .unwrap_or_else(|| panic!("{fmt}: {}", r["meshes"]));
+        assert_eq!(still["static"], true, "{fmt}");
+        let text = run_tool(
+            &python,
+            "usd_points.py",
+            &[usd.as_os_str(), "/samples/still/still_flag".as_ref()],
+            fmt,
+        );
+        let points: Vec<[f32; 3]> = serde_json::from_slice(&text).unwrap();
+        let most = (points.iter().zip(&want))
+            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+            .fold(0.0f32, f32::max);
+        assert!(
+            most < 1e-6,
+            "{fmt}: the copy's points within {most} of base + target 3"
+        );
+    }
+}

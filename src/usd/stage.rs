@@ -20,7 +20,8 @@
 //! * a node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`, as gltfpack `-mi`
 //!   writes it) is a PointInstancer (positions, orientations, scales, the mesh as its one
 //!   prototype in a `Prototypes` scope);
-//! * meshes that are not animated are written once, without time samples;
+//! * meshes that are not animated are written once, without time samples, in the pose the
+//!   glTF shows (morph targets blended by the node's or the mesh's default weights);
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
 
@@ -494,6 +495,55 @@ impl Ctx<'_> {
         })
     }
 
+    /// The points and normals of primitive `p` of mesh `mi` as node `node` shows it when no
+    /// clip plays: its targets blended by the node's `weights`, else the mesh's (a face held
+    /// in an expression, a prop squashed by a blend shape); normals renormalised.
+    fn posed(
+        &self,
+        node: usize,
+        mi: usize,
+        p: &Value,
+        mut points: Vec<DVec3>,
+        mut normals: Option<Vec<DVec3>>,
+        what: &str,
+    ) -> Result<(Vec<DVec3>, Option<Vec<DVec3>>)> {
+        let json = &self.doc.json;
+        let weights = match json["nodes"][node]["weights"].as_array() {
+            Some(w) => w,
+            None => arr(&json["meshes"][mi], "weights"),
+        };
+        let targets = arr(p, "targets");
+        let mut moved = false;
+        for (i, w) in weights.iter().enumerate() {
+            let (Some(w), Some(t)) = (w.as_f64(), targets.get(i)) else {
+                continue;
+            };
+            if w == 0.0 {
+                continue;
+            }
+            if let Some(acc) = t["POSITION"].as_u64() {
+                let d = read_vec3(
+                    self.doc,
+                    acc as usize,
+                    &format!("{what} target {i} POSITION"),
+                )?;
+                points.iter_mut().zip(&d).for_each(|(p, d)| *p += w * *d);
+            }
+            if let (Some(n), Some(acc)) = (normals.as_mut(), t["NORMAL"].as_u64()) {
+                let d = read_vec3(self.doc, acc as usize, &format!("{what} target {i} NORMAL"))?;
+                n.iter_mut().zip(&d).for_each(|(n, d)| *n += w * *d);
+                moved = true;
+            }
+        }
+        if moved {
+            normals
+                .iter_mut()
+                .flatten()
+                .for_each(|n| *n = n.normalize_or_zero());
+        }
+        Ok((points, normals))
+    }
+
     /// The instances of a node with a mesh and `EXT_mesh_gpu_instancing` (TRANSLATION,
     /// ROTATION, SCALE; float or, for rotations, normalized integers; one missing is the
     /// identity), or `None`.
@@ -663,6 +713,11 @@ impl Ctx<'_> {
                 identifier(&mesh_name)
             } else {
                 identifier(&format!("{mesh_name}_{pi}"))
+            };
+            // Written still: the pose the glTF shows, its default weights applied.
+            let (points, normals) = match animation {
+                Some(_) => (points, normals),
+                None => self.posed(node, mi, p, points, normals, &what)?,
             };
             let f32s = |v: Vec<DVec3>| -> Vec<[f32; 3]> {
                 v.into_iter().map(|p| p.as_vec3().to_array()).collect()
