@@ -921,3 +921,30 @@ fn weight_lists_make_a_blend_space() {
         assert_eq!(back.rig.len(), blend::load_bvh(&walk).unwrap().rig.len());
     }
 }
+
+/// Clips keyed through `KHR_animation_pointer` (`/nodes/N/translation|rotation|scale`) are read
+/// as the plain channels they stand for: Fox with every channel so aimed blends to the same
+/// report as Fox itself (it was refused: "animates no joint of a skin").
+#[test]
+fn clips_keyed_through_animation_pointers_blend_as_plain_ones() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let fox = fx.join("skinned/Fox.glb");
+    let pointers = dir.path().join("fox_pointers.glb");
+    edited_glb(&fox, &pointers, |j| {
+        for a in j["animations"].as_array_mut().unwrap() {
+            for c in a["channels"].as_array_mut().unwrap() {
+                let t = &c["target"];
+                let pointer = format!("/nodes/{}/{}", t["node"], t["path"].as_str().unwrap());
+                c["target"] = serde_json::json!({"path": "pointer",
+                    "extensions": {"KHR_animation_pointer": {"pointer": pointer}}});
+            }
+        }
+        j["extensionsUsed"] = serde_json::json!(["KHR_animation_pointer"]);
+    });
+    let plain = blend_report(&fox, "Walk", "Run", 0.5, &dir.path().join("a.glb"), &[]);
+    let out = dir.path().join("b.glb");
+    let aimed = blend_report(&pointers, "Walk", "Run", 0.5, &out, &[]);
+    assert_eq!(plain, aimed);
+    assert_no_new_issues(&pointers, &out);
+}
