@@ -632,6 +632,51 @@ fn summary_unless_quiet() {
 }
 
 #[test]
+fn a_looped_clip_closes_its_other_channels_too() {
+    // `--loop` appends the weights' first key one spacing (0.5 s) after the last (2 s): the
+    // pole moved by the same clip gets its first key again at 2.5 s too (it held its last key
+    // there, then jumped back), shared time accessor or not; another clip is left as it was.
+    let dir = tempfile::tempdir().unwrap();
+    let input = out_in(&dir, "pole.glb");
+    flag_with_moving_pole(&sample("flag_wave.glb"), &input, 0.0);
+    let out = out_in(&dir, "out.glb");
+    tween_quietly(&input, &out, &["--loop"]);
+    assert_no_new_issues(&input, &out);
+    let (a, b) = (
+        Document::open(&input).unwrap(),
+        Document::open(&out).unwrap(),
+    );
+    let keys = |doc: &Document, anim: usize, channel: usize| -> (Vec<f64>, Vec<f64>) {
+        let clip = &doc.json["animations"][anim];
+        let s = &clip["samplers"][clip["channels"][channel]["sampler"].as_u64().unwrap() as usize];
+        let read = |k: &str| doc.read_f64(s[k].as_u64().unwrap() as usize).unwrap().0;
+        (read("input"), read("output"))
+    };
+    assert_eq!(played(&out, 0, 0, 0).times.last(), Some(&2.5));
+    for (channel, width) in [(1, 3), (2, 4)] {
+        let (t0, v0) = keys(&a, 0, channel);
+        let (t1, v1) = keys(&b, 0, channel);
+        assert_eq!(t1[..t0.len()], t0[..], "channel {channel}: its keys kept");
+        assert_eq!(
+            t1[t0.len()..],
+            [2.5],
+            "channel {channel}: closed at the clip's end"
+        );
+        assert_eq!(v1[..v0.len()], v0[..]);
+        assert_eq!(
+            v1[v0.len()..],
+            v0[..width],
+            "channel {channel}: its first key again"
+        );
+    }
+    assert_eq!(
+        keys(&b, 1, 0),
+        keys(&a, 1, 0),
+        "another clip is left as it was"
+    );
+}
+
+#[test]
 fn held_keys_are_tweened_and_said_so() {
     // A stepped clip (STEP: each key held until the next, a blocking pass as exporters write
     // it) is keys like any other: tweened, played LINEAR, and the summary says so.

@@ -231,6 +231,7 @@ impl Run<'_> {
             &self.meshes,
             self.opts.layout,
             self.opts.compact.as_ref(),
+            self.job.looping == Some(true),
         )?;
         for r in results {
             self.stats.push(r.stats);

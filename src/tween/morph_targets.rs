@@ -172,6 +172,7 @@ pub fn apply_frames(
     meshes: &[MorphMesh],
     layout: Layout,
     compact_opts: Option<&CompactOptions>,
+    loops: bool,
 ) -> Result<Applied> {
     let mut applied = Applied::default();
     if let (Layout::Frames, Some(_)) = (layout, compact_opts) {
@@ -187,7 +188,7 @@ pub fn apply_frames(
     }
     // Set first: the writers below decide sparse accessors by it, as the compaction did.
     out.meshopt = compact_opts.is_some_and(|o| o.meshopt);
-    let shifts = ClipShifts::of(frames);
+    let shifts = ClipShifts::of(frames, loops);
     let mut edits = Edits::default();
     let mut dropped: Vec<(usize, usize)> = Vec::new();
     for (m, mesh) in frames.iter().zip(meshes) {
@@ -255,26 +256,38 @@ pub fn apply_frames(
     Ok(applied)
 }
 
-/// Seconds each clip's written key times move later. glTF key times cannot be negative, so a
-/// clip whose frames would start before 0 s (motion extended before its first key, or a file
-/// whose keys start before 0) moves as a whole: its weights' frames and every other channel of
-/// it (a node's transforms, another mesh's weights) alike. Other clips keep their times.
+/// What a clip's other channels (a node's transforms, another mesh's weights) take from its
+/// weights' frames, so the clip plays as one:
+/// * the seconds its written key times move later: glTF key times cannot be negative, so a
+///   clip whose frames would start before 0 s (motion extended before its first key, or a file
+///   whose keys start before 0) moves as a whole; other clips keep their times;
+/// * with `--loop`, the end its weights' loop closes at: each other channel ending before it
+///   gets its first key again there, so the whole clip loops (a node moved by the clip held
+///   its last key over the appended spacing, then jumped).
 struct ClipShifts {
     /// By animation index; `None`: the new animation of keys made from targets.
     by_clip: BTreeMap<Option<usize>, f64>,
+    /// By animation index: the time (before the shift) of the clip's last frame, when `--loop`
+    /// closed its weights.
+    loop_ends: BTreeMap<usize, f64>,
 }
 
 impl ClipShifts {
-    fn of(frames: &[MeshFrames]) -> Self {
+    fn of(frames: &[MeshFrames], loops: bool) -> Self {
         let mut by_clip: BTreeMap<Option<usize>, f64> = BTreeMap::new();
+        let mut loop_ends: BTreeMap<usize, f64> = BTreeMap::new();
         for track in frames.iter().flat_map(|m| &m.tracks) {
-            let Some(first) = track.frames.first() else {
+            let (Some(first), Some(last)) = (track.frames.first(), track.frames.last()) else {
                 continue;
             };
             let shift = by_clip.entry(Self::clip(track)).or_insert(0.0);
             *shift = shift.max(-first.time);
+            if let (true, Some(a)) = (loops, Self::clip(track)) {
+                let end = loop_ends.entry(a).or_insert(f64::NEG_INFINITY);
+                *end = end.max(last.time);
+            }
         }
-        Self { by_clip }
+        Self { by_clip, loop_ends }
     }
 
     fn clip(track: &TrackFrames) -> Option<usize> {
@@ -288,8 +301,9 @@ impl ClipShifts {
         self.by_clip.get(&Self::clip(track)).copied().unwrap_or(0.0)
     }
 
-    /// The key times of the samplers of a moved clip that no track rewrote, moved with it
-    /// (into accessors of their own: a time accessor may be shared with other clips).
+    /// The samplers of a moved or looped clip that no track rewrote: their key times moved
+    /// with it, and a loop closed at its end (into accessors of their own: an accessor may be
+    /// shared with other clips).
     fn move_other_channels(
         &self,
         out: &mut Output,
@@ -298,19 +312,48 @@ impl ClipShifts {
     ) -> Result<()> {
         let file_accessors = arr(&doc.json, "accessors").len();
         for (&clip, &shift) in &self.by_clip {
-            let (Some(a), true) = (clip, shift > 0.0) else {
+            let Some(a) = clip else {
                 continue;
             };
+            let end = self.loop_ends.get(&a).copied();
+            if shift <= 0.0 && end.is_none() {
+                continue;
+            }
             for s in 0..arr(&out.json["animations"][a], "samplers").len() {
-                let Some(input) = out.json["animations"][a]["samplers"][s]["input"].as_u64() else {
+                let sampler = &out.json["animations"][a]["samplers"][s];
+                let (Some(input), Some(output)) =
+                    (sampler["input"].as_u64(), sampler["output"].as_u64())
+                else {
                     continue;
                 };
-                let input = input as usize;
+                let cubic = sampler["interpolation"].as_str() == Some("CUBICSPLINE");
+                let (input, output) = (input as usize, output as usize);
                 let written = edits.times.iter().any(|(_, acc)| *acc == input);
-                if written || input >= file_accessors {
+                if written || input >= file_accessors || output >= file_accessors {
                     continue;
                 }
-                let (times, _) = doc.read_f64(input)?;
+                let (mut times, _) = doc.read_f64(input)?;
+                // The loop closed: the first key again at the clip's end.
+                if let Some(end) = end.filter(|&e| times.last().is_some_and(|&t| t < e)) {
+                    let (mut values, width) = doc.read_f64(output)?;
+                    let per_key = values.len() / times.len();
+                    let mut first = values[..per_key].to_vec();
+                    if cubic {
+                        // The closing key's in- and out-tangents: none.
+                        let w = per_key / 3;
+                        first[..w].fill(0.0);
+                        first[2 * w..].fill(0.0);
+                    }
+                    values.extend(first);
+                    times.push(end);
+                    let values: Vec<f32> = values.iter().map(|&v| v as f32).collect();
+                    let ty = doc.json["accessors"][output]["type"]
+                        .as_str()
+                        .unwrap_or("SCALAR");
+                    let acc = out.push_f32(&values, ty, width, false, None);
+                    edits.replaced.insert(output);
+                    out.json["animations"][a]["samplers"][s]["output"] = json!(acc);
+                }
                 let moved: Vec<f32> = times.iter().map(|t| (t + shift) as f32).collect();
                 let moved = key_times(out, &moved, &mut edits.times);
                 edits.replaced.insert(input);
