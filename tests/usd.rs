@@ -868,15 +868,31 @@ fn nodes_the_tweened_clip_moves_move_in_the_point_cache() {
     // The file's keys: the pole rises 0.1 per key (0, 0.5, ... 2 s) and turns from none at
     // 0.25 s to (0, 0.6, 0, 0.8) at 1.75 s.
     let turn = glam::DQuat::from_xyzw(0.0, 0.6, 0.0, 0.8);
-    let expected = |t: f64| {
-        let u = ((t - 0.25) / 1.5).clamp(0.0, 1.0);
-        let r = glam::DQuat::IDENTITY.slerp(turn, u);
-        let y = 0.1 * (t / 0.5);
+    // With --loop the weights close at 2.5 s, and both channels return to their first key
+    // there (without, the rotation holds its last key from 1.75 s).
+    let expected = |t: f64, looped: bool| {
+        let r = match (t > 1.75, looped) {
+            (false, _) => glam::DQuat::IDENTITY.slerp(turn, ((t - 0.25) / 1.5).max(0.0)),
+            (true, true) => turn.slerp(glam::DQuat::IDENTITY, (t - 1.75) / 0.75),
+            (true, false) => turn,
+        };
+        let y = if t > 2.0 {
+            0.4 * (2.5 - t) / 0.5
+        } else {
+            0.2 * t
+        };
         glam::DMat4::from_rotation_translation(r, glam::DVec3::new(0.0, y, 0.0))
     };
-    for (input, fmt) in [(&plain, "usda"), (&plain, "usdc"), (&pointer, "usda")] {
+    for (input, fmt, args) in [
+        (&plain, "usda", &[][..]),
+        (&plain, "usdc", &[]),
+        (&pointer, "usda", &[]),
+        (&plain, "usdc", &["--loop"]),
+    ] {
         let usd = dir.path().join(format!("out.{fmt}"));
-        let r = run_ok(&["tween", s(input), "-o", s(&usd)]);
+        let mut all = vec!["tween", s(input), "-o", s(&usd)];
+        all.extend_from_slice(args);
+        let r = run_ok(&all);
         let err = String::from_utf8_lossy(&r.stderr);
         assert!(
             err.lines()
@@ -888,7 +904,9 @@ fn nodes_the_tweened_clip_moves_move_in_the_point_cache() {
         assert_eq!(xforms.len(), 1, "{fmt}: only the pole moves: {xforms:?}");
         assert_eq!(xforms[0]["path"], "/samples/pole", "{fmt}");
         let times = xforms[0]["times"].as_array().unwrap();
-        assert_eq!(times.len(), 61, "{fmt}: a sample per frame");
+        let looped = !args.is_empty();
+        let frames = if looped { 76 } else { 61 };
+        assert_eq!(times.len(), frames, "{fmt}: a sample per frame");
         let mut most = 0.0f64;
         for (code, local) in times.iter().zip(xforms[0]["local"].as_array().unwrap()) {
             let code = code.as_f64().unwrap();
@@ -899,7 +917,7 @@ fn nodes_the_tweened_clip_moves_move_in_the_point_cache() {
                 .map(|x| x.as_f64().unwrap())
                 .collect();
             // USD prints the matrix row by row, glam's columns.
-            let want = expected(code / 30.0).to_cols_array();
+            let want = expected(code / 30.0, looped).to_cols_array();
             for (a, b) in local.iter().zip(want) {
                 most = most.max((a - b).abs());
             }

@@ -57,6 +57,7 @@ fuzz_target!(|data: &[u8]| {
             animation,
             codes: vec![0.0, 1.0, 2.5, 30.0],
             offset: 0.0,
+            loop_end: Some(1.0),
         })
         .collect();
     if let Ok(stage) = build_stage(&doc, &[], clips, 30.0, "x_") {

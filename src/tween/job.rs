@@ -276,6 +276,7 @@ impl Run<'_> {
                     animation,
                     codes: codes.to_vec(),
                     offset: codes[0] - times[0] * rate,
+                    loop_end: (self.job.looping == Some(true)).then(|| times[times.len() - 1]),
                 });
             }
         }

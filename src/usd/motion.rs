@@ -4,10 +4,11 @@
 //! or a flag on a swaying pole moves in the point cache as in the glTF. A clip is sampled at
 //! every time code its frames have (the glTF sampler evaluated as glTF asks, rotations by
 //! slerp), so USD's linear interpolation of the matrices between two frames adds nothing a
-//! viewer could see; keys between two frames are not kept. Clips that move nodes but have no
-//! frames on the stage are named in a warning.
+//! viewer could see; keys between two frames are not kept. With `--loop` each node channel
+//! returns to its first key where the clip's weights close their loop, as in the glTF output.
+//! Clips that move nodes but have no frames on the stage are named in a warning.
 
-use crate::gltf::{arr, node_target, read_channels, Channel, Document, Path};
+use crate::gltf::{arr, node_target, read_channels, Channel, Document, Interp, Path};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
@@ -18,6 +19,9 @@ pub struct ClipOnStage {
     pub animation: usize,
     pub codes: Vec<f64>,
     pub offset: f64,
+    /// With `--loop`: the time (seconds) the clip's weights close their loop at; each node
+    /// channel ending before it returns to its first key there, as the glTF output's do.
+    pub loop_end: Option<f64>,
 }
 
 /// The keyed node transforms of the clips on the stage, by node.
@@ -51,7 +55,10 @@ impl NodeMotion {
                 }
             };
             let mut of_node: BTreeMap<usize, Vec<Channel>> = BTreeMap::new();
-            for c in channels.into_iter().filter(|c| c.path != Path::Weights) {
+            for mut c in channels.into_iter().filter(|c| c.path != Path::Weights) {
+                if let Some(end) = clip.loop_end {
+                    close_loop(&mut c, end);
+                }
                 of_node.entry(c.node).or_default().push(c);
             }
             for (node, channels) in of_node {
@@ -123,6 +130,22 @@ impl NodeMotion {
         out.dedup_by(|b, a| a.0 == b.0);
         out
     }
+}
+
+/// `c` with its first key again at `end`, when it ends before (flat tangents for a cubic).
+fn close_loop(c: &mut Channel, end: f64) {
+    if c.times.last().is_none_or(|&t| t >= end) {
+        return;
+    }
+    let per_key = c.values.len() / c.times.len();
+    let mut first = c.values[..per_key].to_vec();
+    if c.interp == Interp::Cubic {
+        let w = c.width;
+        first[..w].fill(0.0);
+        first[2 * w..].fill(0.0);
+    }
+    c.values.extend(first);
+    c.times.push(end);
 }
 
 /// An animation's name, or its index when it has none.
