@@ -130,7 +130,8 @@ impl From<LayoutArg> for Layout {
 /// `--keys`.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum KeysArg {
-    /// `animation` when the file animates the mesh's weights, else `targets`.
+    /// `animation` for meshes whose weights the file animates (a morph mesh beside them that no
+    /// clip animates keeps its pose); `targets` when the file animates no mesh's weights.
     Auto,
     /// Key 0 = base mesh, key k = base + target k at weight 1; key times 0, 1, 2, ... s.
     Targets,

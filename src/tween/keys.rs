@@ -17,7 +17,8 @@ use std::collections::HashMap;
 /// Where the keys come from (`--keys`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum KeySource {
-    /// `animation` when the file animates the mesh's weights, else `targets`.
+    /// `animation` for meshes whose weights the file animates (a morph mesh beside them that no
+    /// clip animates keeps its pose); `targets` when the file animates no mesh's weights.
     #[default]
     Auto,
     /// Key 0 = base mesh, key k = base + target k at weight 1; key times 0, 1, 2, ... s.
