@@ -5,7 +5,7 @@
 //! mix, and the required extensions with whether they are decoded. Text, or JSON
 //! (`schemas/inspect.schema.json`).
 
-use crate::gltf::{arr, listed, weights_target, Access, Document, PASSED_THROUGH};
+use crate::gltf::{arr, listed, quoted_name, weights_target, Access, Document, PASSED_THROUGH};
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, KeyOptions, KeySource, MorphMesh,
     TrackOrigin, TweenOptions,
@@ -293,11 +293,7 @@ fn blend_clips(json: &Value) -> Vec<String> {
                     && c["target"]["path"] != "weights"
             })
         })
-        .map(|(i, a)| {
-            a["name"]
-                .as_str()
-                .map_or_else(|| i.to_string(), |n| format!("{n:?}"))
-        })
+        .map(|(i, a)| quoted_name(a, || i.to_string()))
         .filter(|n| moving.contains(n))
         .collect()
 }

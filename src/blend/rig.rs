@@ -1,7 +1,7 @@
 //! The character and its clips: every node of the scene as a joint (so any node a clip animates
 //! has a place), the skin in use marking the skeleton, and clips evaluated as local poses.
 
-use crate::gltf::{arr, read_channels, Document};
+use crate::gltf::{arr, clip_name, read_channels, Document};
 pub use crate::gltf::{slerp, Channel, Interp, Path};
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
@@ -289,11 +289,7 @@ pub fn load_gltf(doc: &Document) -> Result<(Rig, Vec<Clip>)> {
 }
 
 fn read_clip(doc: &Document, rig: &Rig, index: usize, anim: &Value) -> Result<Clip> {
-    let name = anim
-        .get("name")
-        .and_then(Value::as_str)
-        .map(str::to_owned)
-        .unwrap_or_else(|| format!("animation {index}"));
+    let name = clip_name(anim, index);
     let channels = read_channels(doc, &name, anim, rig.len())?;
     Ok(clip_from_channels(name, index, channels))
 }

@@ -10,7 +10,32 @@ use serde_json::Value;
 
 /// A rotation key shorter than this (unitless) is no rotation at all (a zero-filled accessor):
 /// refused rather than normalised into NaN.
-const MIN_QUATERNION: f64 = 1e-6;
+pub const MIN_QUATERNION: f64 = 1e-6;
+
+/// An animation's name, or `animation <index>` when it has none.
+pub fn clip_name(anim: &Value, index: usize) -> String {
+    anim["name"]
+        .as_str()
+        .map_or_else(|| format!("animation {index}"), str::to_owned)
+}
+
+/// A sampler's keys (`times`, and `values` with the same count per key) closed into a loop at
+/// `end` (`--loop`): the first key again there, its tangents flat for a CUBICSPLINE sampler;
+/// nothing when the keys already reach `end`.
+pub fn close_keys(times: &mut Vec<f64>, values: &mut Vec<f64>, cubic: bool, end: f64) {
+    if times.last().is_none_or(|&t| t >= end) {
+        return;
+    }
+    let per_key = values.len() / times.len();
+    let mut first = values[..per_key].to_vec();
+    if cubic {
+        let w = per_key / 3;
+        first[..w].fill(0.0);
+        first[2 * w..].fill(0.0);
+    }
+    values.extend(first);
+    times.push(end);
+}
 
 /// What a channel animates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]

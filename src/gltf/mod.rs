@@ -23,12 +23,16 @@ mod write;
 
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{set_bounds, BinBuilder, Output, Storage};
-pub use channel::{read_channels, slerp, Channel, Interp, Path};
+pub use channel::{
+    clip_name, close_keys, read_channels, slerp, Channel, Interp, Path, MIN_QUATERNION,
+};
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
 pub use encode::{
     exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,
 };
-pub use read::{arr, at, listed, node_target, weights_target, Document, WeightsTarget};
+pub use read::{
+    arr, at, listed, node_target, quoted_name, weights_target, Document, WeightsTarget,
+};
 pub use reorder::reorder;
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

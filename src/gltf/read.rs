@@ -47,6 +47,13 @@ pub fn listed(names: &[String]) -> String {
     }
 }
 
+/// A part's `name` quoted for a message, or `fallback()` when it has none (`mesh 3`).
+pub fn quoted_name(part: &Value, fallback: impl FnOnce() -> String) -> String {
+    part["name"]
+        .as_str()
+        .map_or_else(fallback, |n| format!("{n:?}"))
+}
+
 /// How many names [`listed`] shows.
 const LISTED: usize = 8;
 

@@ -557,10 +557,7 @@ fn left_as_authored(doc: &Document, meshes: &[MorphMesh], keys: KeySource) -> Ve
     }
     let names: Vec<String> = meshes_without_weights_animation(doc)
         .into_iter()
-        .map(|mi| match doc.json["meshes"][mi]["name"].as_str() {
-            Some(n) => format!("{n:?}"),
-            None => format!("mesh {mi}"),
-        })
+        .map(|mi| gltf::quoted_name(&doc.json["meshes"][mi], || format!("mesh {mi}")))
         .collect();
     if names.is_empty() {
         return Vec::new();
@@ -591,10 +588,7 @@ fn held_keys(doc: &Document, meshes: &[MorphMesh]) -> Vec<String> {
         .collect();
     held.into_iter()
         .map(|a| {
-            let name = match doc.json["animations"][a]["name"].as_str() {
-                Some(n) => format!("{n:?}"),
-                None => format!("{a}"),
-            };
+            let name = gltf::quoted_name(&doc.json["animations"][a], || a.to_string());
             format!(
                 "{}: animation {name} holds its weights from key to key (STEP interpolation); its keys are tweened as poses, so the output moves between them",
                 doc.path.display()

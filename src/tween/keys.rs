@@ -6,8 +6,8 @@
 
 use super::timegrid::snap;
 use crate::gltf::{
-    arr, listed, read_attribute, read_attribute3, read_triangles, read_vec3, weights_target,
-    Document, WeightsTarget,
+    arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3,
+    weights_target, Document, WeightsTarget,
 };
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -394,11 +394,7 @@ pub fn skeletal_clips(json: &Value) -> Vec<String> {
                 )
             })
         })
-        .map(|(i, a)| {
-            a["name"]
-                .as_str()
-                .map_or_else(|| i.to_string(), |n| format!("{n:?}"))
-        })
+        .map(|(i, a)| quoted_name(a, || i.to_string()))
         .collect()
 }
 
@@ -427,12 +423,7 @@ fn find_animation(doc: &Document, sel: &str) -> Result<usize> {
             let names: Vec<String> = anims
                 .iter()
                 .enumerate()
-                .map(|(i, a)| {
-                    a["name"]
-                        .as_str()
-                        .map(|s| format!("{s:?}"))
-                        .unwrap_or(i.to_string())
-                })
+                .map(|(i, a)| quoted_name(a, || i.to_string()))
                 .collect();
             bail!(doc.err(format!(
                 "no animation {sel:?} (the file has: {})",

@@ -23,7 +23,7 @@ use super::keys::{MorphMesh, OtherDeltas, Primitive, TrackOrigin};
 use super::options::Layout;
 use super::schedule::FrameAt;
 use crate::gltf::{
-    self, arr, compact as drop_unused, drop_channels, row_components, Document, Output,
+    self, arr, close_keys, compact as drop_unused, drop_channels, row_components, Document, Output,
     ELEMENT_MARK, FILTER_GROUP, FILTER_MARK,
 };
 use anyhow::{bail, Result};
@@ -336,16 +336,7 @@ impl ClipShifts {
                 // The loop closed: the first key again at the clip's end.
                 if let Some(end) = end.filter(|&e| times.last().is_some_and(|&t| t < e)) {
                     let (mut values, width) = doc.read_f64(output)?;
-                    let per_key = values.len() / times.len();
-                    let mut first = values[..per_key].to_vec();
-                    if cubic {
-                        // The closing key's in- and out-tangents: none.
-                        let w = per_key / 3;
-                        first[..w].fill(0.0);
-                        first[2 * w..].fill(0.0);
-                    }
-                    values.extend(first);
-                    times.push(end);
+                    close_keys(&mut times, &mut values, cubic, end);
                     let values: Vec<f32> = values.iter().map(|&v| v as f32).collect();
                     let ty = doc.json["accessors"][output]["type"]
                         .as_str()

@@ -8,7 +8,9 @@
 //! returns to its first key where the clip's weights close their loop, as in the glTF output.
 //! Clips that move nodes but have no frames on the stage are named in a warning.
 
-use crate::gltf::{arr, node_target, read_channels, Channel, Document, Interp, Path};
+use crate::gltf::{
+    arr, clip_name, close_keys, node_target, read_channels, Channel, Document, Interp, Path,
+};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
@@ -57,7 +59,8 @@ impl NodeMotion {
             let mut of_node: BTreeMap<usize, Vec<Channel>> = BTreeMap::new();
             for mut c in channels.into_iter().filter(|c| c.path != Path::Weights) {
                 if let Some(end) = clip.loop_end {
-                    close_loop(&mut c, end);
+                    let cubic = c.interp == Interp::Cubic;
+                    close_keys(&mut c.times, &mut c.values, cubic, end);
                 }
                 of_node.entry(c.node).or_default().push(c);
             }
@@ -130,29 +133,6 @@ impl NodeMotion {
         out.dedup_by(|b, a| a.0 == b.0);
         out
     }
-}
-
-/// `c` with its first key again at `end`, when it ends before (flat tangents for a cubic).
-fn close_loop(c: &mut Channel, end: f64) {
-    if c.times.last().is_none_or(|&t| t >= end) {
-        return;
-    }
-    let per_key = c.values.len() / c.times.len();
-    let mut first = c.values[..per_key].to_vec();
-    if c.interp == Interp::Cubic {
-        let w = c.width;
-        first[..w].fill(0.0);
-        first[2 * w..].fill(0.0);
-    }
-    c.values.extend(first);
-    c.times.push(end);
-}
-
-/// An animation's name, or its index when it has none.
-fn clip_name(anim: &Value, index: usize) -> String {
-    anim["name"]
-        .as_str()
-        .map_or_else(|| format!("animation {index}"), str::to_owned)
 }
 
 /// A node's rest translation, rotation and scale (its `matrix` decomposed when it has one).

@@ -28,7 +28,8 @@
 use super::material::{st_name, Look, LookBuilder};
 use super::motion::{rest_trs, ClipOnStage, NodeMotion};
 use crate::gltf::{
-    arr, listed, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
+    arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
+    MIN_QUATERNION,
 };
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
@@ -207,10 +208,6 @@ pub struct Instances {
     pub scales: Vec<[f32; 3]>,
 }
 
-/// An instance rotation shorter than this (unitless) is no rotation (a zero-filled accessor):
-/// refused rather than normalised into NaN.
-const MIN_QUATERNION: f64 = 1e-6;
-
 /// The name of the scope under a PointInstancer that holds its prototype.
 pub const PROTOTYPES: &str = "Prototypes";
 
@@ -347,10 +344,7 @@ pub fn build_stage(
     let shown = animated(&stage);
     let missing: Vec<String> = (meshes.iter().enumerate())
         .filter(|(k, _)| !shown.contains_key(k))
-        .map(|(_, m)| {
-            let name = json["meshes"][m.mesh]["name"].as_str();
-            name.map_or_else(|| format!("mesh {}", m.mesh), |n| format!("{n:?}"))
-        })
+        .map(|(_, m)| quoted_name(&json["meshes"][m.mesh], || format!("mesh {}", m.mesh)))
         .collect();
     if !missing.is_empty() {
         let scene = match scene {
@@ -381,11 +375,7 @@ pub fn build_stage(
 /// cameras and lights (`KHR_lights_punctual`).
 fn not_in_a_point_cache(doc: &Document) -> Vec<String> {
     let json = &doc.json;
-    let named = |kind: &str, i: usize, v: &Value| {
-        v["name"]
-            .as_str()
-            .map_or_else(|| format!("{kind} {i}"), |n| format!("{n:?}"))
-    };
+    let named = |kind: &str, i: usize, v: &Value| quoted_name(v, || format!("{kind} {i}"));
     let mut out = Vec::new();
     let skinned: Vec<String> = (arr(json, "nodes").iter())
         .filter(|n| n["skin"].is_u64())
