@@ -41,7 +41,7 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
         after_help = "Examples:\n  inbetween blend Fox.glb -o fox_trot.glb --clips Walk Run\n  \
 inbetween blend robot.glb -o jog.glb --clips Walking Running --weight 0.3 --name Jog --report jog.json\n  \
 inbetween blend Fox.glb -o fox_space.glb --clips Walk Run --weight 0,0.25,0.5,0.75,1\n  \
-inbetween blend walk.bvh run.bvh -o jog.bvh"
+inbetween blend walk.glb run.glb -o jog.glb\n  inbetween blend walk.bvh run.bvh -o jog.bvh"
     )]
     Blend(BlendArgs),
     /// Show what inbetween finds in a file: morph meshes and their targets, animations (keys,
@@ -482,14 +482,17 @@ impl PreviewArgs {
 #[derive(Args)]
 pub struct BlendArgs {
     /// Input: a .gltf or .glb with a skinned character and its animations (name two of them
-    /// with --clips), or two .bvh captures of one skeleton (a clip each).
+    /// with --clips); or two of them, a clip each (the character is the first file's; the
+    /// second may hold the animation alone, its nodes matched by name); or two .bvh captures
+    /// of one skeleton (a clip each).
     #[arg(required = true, num_args = 1..=2, value_name = "INPUT")]
     inputs: Vec<PathBuf>,
     /// Output .gltf or .glb (the blend added as a new animation); .bvh for .bvh inputs (the
     /// first capture's skeleton and channel order, at its frame time).
     #[arg(short, long)]
     output: PathBuf,
-    /// The two animations of a glTF input to blend (names or indices).
+    /// The two animations to blend (names or indices): of a glTF input, or one of each of two
+    /// glTF inputs (needed only where a file has several).
     #[arg(long, num_args = 2, value_names = ["A", "B"])]
     clips: Vec<String>,
     /// Weight of B: 0 gives A, 1 gives B. A list (0,0.25,0.5,0.75,1) writes one blend per

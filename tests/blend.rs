@@ -948,3 +948,153 @@ fn clips_keyed_through_animation_pointers_blend_as_plain_ones() {
     assert_eq!(plain, aimed);
     assert_no_new_issues(&pointers, &out);
 }
+
+/// `input` with only animation `keep`; with `bare`, as an animation exported on its own
+/// (Mixamo's "without skin"): no meshes, skins or morph channels, the nodes in reverse order.
+fn one_clip_file(input: &Path, out: &Path, keep: &str, bare: bool) {
+    edited_glb(input, out, |j| {
+        let anims = j["animations"].as_array_mut().unwrap();
+        anims.retain(|a| a["name"] == keep);
+        if !bare {
+            return;
+        }
+        let n = j["nodes"].as_array().unwrap().len();
+        let flip = |v: &mut Value| *v = (n - 1 - v.as_u64().unwrap() as usize).into();
+        for a in j["animations"].as_array_mut().unwrap() {
+            let ch = a["channels"].as_array_mut().unwrap();
+            ch.retain(|c| c["target"]["path"] != "weights");
+            ch.iter_mut().for_each(|c| flip(&mut c["target"]["node"]));
+        }
+        for key in [
+            "meshes",
+            "skins",
+            "materials",
+            "textures",
+            "images",
+            "samplers",
+        ] {
+            j.as_object_mut().unwrap().remove(key);
+        }
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        nodes.reverse();
+        for node in nodes.iter_mut() {
+            let node = node.as_object_mut().unwrap();
+            node.remove("mesh");
+            node.remove("skin");
+            if let Some(c) = node.get_mut("children") {
+                c.as_array_mut().unwrap().iter_mut().for_each(flip);
+            }
+        }
+        for s in j["scenes"].as_array_mut().unwrap() {
+            s["nodes"].as_array_mut().unwrap().iter_mut().for_each(flip);
+        }
+    });
+}
+
+/// Each clip in a file of its own, as character packs come (walk.glb, run.glb; the second
+/// without its mesh and skin, its nodes in another order): `blend walk.glb run.glb` matches
+/// the run's nodes by name (RobotExpressive names each limb's mesh node after its bone) and
+/// writes the walk's file plus the very blend of the one-file run, report and keys alike.
+/// A second file of another character, or of this one placed differently, is refused.
+#[test]
+fn clips_in_files_of_their_own_blend_as_in_one_file() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (file, walk, run) in [
+        ("Fox", "Walk", "Run"),
+        ("RobotExpressive", "Walking", "Running"),
+    ] {
+        let input = fx.join(format!("skinned/{file}.glb"));
+        let (a, b) = (
+            d.join(format!("{file}_walk.glb")),
+            d.join(format!("{file}_run.glb")),
+        );
+        one_clip_file(&input, &a, walk, false);
+        one_clip_file(&input, &b, run, true);
+        let one = d.join("one.glb");
+        let together = blend_report(&input, walk, run, 0.25, &one, &[]);
+        let two = d.join("two.glb");
+        let rep = d.join("two.json");
+        run_ok(&[
+            "blend",
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "-o",
+            two.to_str().unwrap(),
+            "--weight",
+            "0.25",
+            "--report",
+            rep.to_str().unwrap(),
+            "-q",
+        ]);
+        assert_eq!(read_json(&rep), together, "{file}");
+        let last = |p: &Path| {
+            let doc = Document::open(p).unwrap();
+            let (_, clips) = blend::load_gltf(&doc).unwrap();
+            let c = clips.last().unwrap().clone();
+            let keyed: Vec<(String, String, Vec<f64>, Vec<f64>)> = (c.channels.iter())
+                .map(|ch| {
+                    let node = doc.json["nodes"][ch.node]["name"]
+                        .as_str()
+                        .unwrap()
+                        .to_owned();
+                    (
+                        node,
+                        format!("{:?}", ch.path),
+                        ch.times.clone(),
+                        ch.values.clone(),
+                    )
+                })
+                .collect();
+            (c.name, keyed)
+        };
+        let (name, keyed) = last(&two);
+        assert_eq!(name, format!("{walk}+{run}"));
+        assert_eq!(
+            keyed,
+            last(&one).1,
+            "{file}: the same keys on the same nodes"
+        );
+        assert_no_new_issues(&a, &two);
+    }
+    let (walk, run) = (d.join("Fox_walk.glb"), d.join("Fox_run.glb"));
+    let out = d.join("refused.glb");
+    let (o, w) = (out.to_str().unwrap(), walk.to_str().unwrap());
+    let robot = d.join("RobotExpressive_run.glb");
+    assert_refused(
+        &["blend", w, robot.to_str().unwrap(), "-o", o],
+        "RobotExpressive_run.glb",
+        "animation \"Running\" moves nodes that",
+        &out,
+    );
+    let scaled = d.join("scaled.glb");
+    edited_glb(&run, &scaled, |j| {
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        let root = nodes.iter_mut().find(|n| n["name"] == "root").unwrap();
+        root["scale"] = serde_json::json!([0.01, 0.01, 0.01]);
+    });
+    assert_refused(
+        &["blend", w, scaled.to_str().unwrap(), "-o", o],
+        "scaled.glb",
+        "node \"root\" rests elsewhere than in",
+        &out,
+    );
+    // Clips of one name (Mixamo calls each "mixamo.com") are called by their files' stems.
+    let same = d.join("mixamo_run.glb");
+    edited_glb(&run, &same, |j| j["animations"][0]["name"] = "Walk".into());
+    run_ok(&["blend", w, same.to_str().unwrap(), "-o", o, "-q"]);
+    let names = Document::open(&out).unwrap().json["animations"].clone();
+    assert_eq!(
+        names.as_array().unwrap().last().unwrap()["name"],
+        "Fox_walk+mixamo_run"
+    );
+    std::fs::remove_file(&out).unwrap();
+    let all = fx.join("skinned/Fox.glb");
+    assert_refused(
+        &["blend", w, all.to_str().unwrap(), "-o", o],
+        "Fox.glb",
+        "has 3 animations (\"Survey\", \"Walk\", \"Run\"): name the one to blend with --clips",
+        &out,
+    );
+}

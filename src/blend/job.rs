@@ -2,6 +2,7 @@
 //! weight), append the new animations to the glTF document, or write BVH files with the first
 //! capture's skeleton; the files (and the report) are staged and appear together.
 
+use super::by_name;
 use super::cycles::CycleMethod;
 use super::plan::{blend, BlendOptions, Blended, Report};
 use super::rig::{self, Clip, Path, Rig};
@@ -157,16 +158,76 @@ pub fn blend_clips(
     clips: &[String; 2],
     opts: &BlendOptions,
 ) -> Result<BlendedClips> {
-    let (mut rig, all) = rig::load_gltf(doc)?;
+    let (rig, all) = rig::load_gltf(doc)?;
+    let skins = skins_of(doc)?;
+    let a = find_clip(doc, &all, &clips[0])?;
+    let b = find_clip(doc, &all, &clips[1])?;
+    blend_on(doc, rig, &skins, [(doc, a), (doc, b)], opts)
+}
+
+/// Clip `key` of `doc` (a name or an index), or its only animation when `key` is None.
+fn pick_clip<'a>(doc: &Document, clips: &'a [Clip], key: Option<&String>) -> Result<&'a Clip> {
+    match (key, clips) {
+        (Some(key), _) => find_clip(doc, clips, key),
+        (None, [one]) => Ok(one),
+        (None, _) => {
+            let names: Vec<String> = clips.iter().map(|c| format!("{:?}", c.name)).collect();
+            bail!(doc.err(match names.is_empty() {
+                true => "has no animation to blend".to_string(),
+                false => format!(
+                    "has {} animations ({}): name the one to blend with --clips A B",
+                    names.len(),
+                    listed(&names)
+                ),
+            }))
+        }
+    }
+}
+
+/// The animation of `doc_a` (its character) blended with that of `doc_b` (the same character's
+/// file, or an export of the animation alone), `clips` naming them where a file has several;
+/// `doc_b`'s clip carried onto `doc_a`'s nodes by name ([`by_name::carry`]). Clips of the
+/// same name (Mixamo calls every one "mixamo.com") are called by their files' stems.
+pub fn blend_files(
+    [doc_a, doc_b]: [&Document; 2],
+    clips: Option<&[String; 2]>,
+    opts: &BlendOptions,
+) -> Result<BlendedClips> {
+    let (rig, all_a) = rig::load_gltf(doc_a)?;
+    let skins = skins_of(doc_a)?;
+    let (rig_b, all_b) = rig::load_gltf(doc_b)?;
+    let mut a = pick_clip(doc_a, &all_a, clips.map(|c| &c[0]))?.clone();
+    let b = pick_clip(doc_b, &all_b, clips.map(|c| &c[1]))?;
+    let mut b = by_name::carry(doc_a, &rig, doc_b, &rig_b, b)?;
+    if a.name == b.name {
+        let stem = |d: &Document| d.path.file_stem().map(|s| s.to_string_lossy().into_owned());
+        if let (Some(sa), Some(sb)) = (stem(doc_a), stem(doc_b)) {
+            (a.name, b.name) = (sa, sb);
+        }
+    }
+    blend_on(doc_a, rig, &skins, [(doc_a, &a), (doc_b, &b)], opts)
+}
+
+/// The skins of `doc` (each a set of joints), refused when there is none.
+fn skins_of(doc: &Document) -> Result<Vec<BTreeSet<usize>>> {
     let skins = rig::skins(doc);
     if skins.is_empty() {
         bail!(doc.err("has no skin: blend needs a skinned character"));
     }
-    let a = find_clip(doc, &all, &clips[0])?;
-    let b = find_clip(doc, &all, &clips[1])?;
-    for clip in [a, b] {
-        check_size(doc, clip)?;
-    }
+    Ok(skins)
+}
+
+/// Clips `a` and `b` (each with the document it came from, for messages) blended on `doc`'s
+/// character `rig`, its skeleton the one of `skins` whose joints they animate.
+fn blend_on(
+    doc: &Document,
+    mut rig: Rig,
+    skins: &[BTreeSet<usize>],
+    [(doc_a, a), (doc_b, b)]: [(&Document, &Clip); 2],
+    opts: &BlendOptions,
+) -> Result<BlendedClips> {
+    check_size(doc_a, a)?;
+    check_size(doc_b, b)?;
     let (na, nb) = (skeleton_nodes(a), skeleton_nodes(b));
     let best = |nodes: &BTreeSet<usize>| {
         (0..skins.len())
@@ -241,9 +302,10 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
     }
     match &job.inputs[..] {
         [a, b] if is_bvh(a) && is_bvh(b) => run_bvh(job, [a, b]),
-        [input] if !is_bvh(input) => run_gltf(job, input),
+        [input] if !is_bvh(input) => run_gltf(job, &[input]),
+        [a, b] if !is_bvh(a) && !is_bvh(b) => run_gltf(job, &[a, b]),
         _ => bail!(
-            "{}: blend takes one .gltf or .glb with --clips A B, or two .bvh captures (got {} input{})",
+            "{}: blend takes one .gltf or .glb with --clips A B, two of them (a clip each), or two .bvh captures (got {} input{})",
             job.inputs[0].display(),
             job.inputs.len(),
             if job.inputs.len() == 1 { "" } else { "s" }
@@ -251,22 +313,25 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
     }
 }
 
-/// A glTF character's two clips blended at every weight, appended as new animations.
-fn run_gltf(job: &BlendJob, input: &std::path::Path) -> Result<BlendSummary> {
+/// A glTF character's two clips blended at every weight, appended as new animations: two
+/// clips of one file, or one clip of each of two files (the first file's character).
+fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
     let Some(container) = Container::of(Format::of(&job.output)?) else {
         bail!(
             "{}: blend writes .gltf or .glb (a skeletal clip has no USD point-cache form here)",
             job.output.display()
         );
     };
-    let Some(clips) = &job.clips else {
+    if inputs.len() == 1 && job.clips.is_none() {
         bail!(
             "{}: --clips A B names the two animations to blend",
-            input.display()
+            inputs[0].display()
         );
-    };
-    let doc = Document::open_with(input, &job.access)?;
-    let mut out = gltf::begin(&doc, container, &job.output)?;
+    }
+    let docs = (inputs.iter())
+        .map(|p| Document::open_with(p, &job.access))
+        .collect::<Result<Vec<_>>>()?;
+    let mut out = gltf::begin(&docs[0], container, &job.output)?;
     let mut blends = Vec::new();
     for &w in &job.weights {
         let opts = job.options(w);
@@ -275,7 +340,11 @@ fn run_gltf(job: &BlendJob, input: &std::path::Path) -> Result<BlendSummary> {
             blended,
             animated,
             names,
-        } = blend_clips(&doc, clips, &opts)?;
+        } = match (&docs[..], &job.clips) {
+            ([doc], Some(clips)) => blend_clips(doc, clips, &opts)?,
+            ([a, b], clips) => blend_files([a, b], clips.as_ref(), &opts)?,
+            _ => unreachable!("one input comes with --clips, checked above"),
+        };
         let name = job.name_at(w, [&names[0], &names[1]]);
         let channels = super::write::channels(&rig, &blended.poses, &animated);
         super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);

@@ -1,7 +1,7 @@
 //! `inbetween blend`: mix two skeletal clips of one character into a new clip.
 //!
 //! The pipeline, one module per stage: [`rig`] (read the character and its clips; [`bvh`] for
-//! capture files) -> [`track`] (sample for analysis) -> [`legs`] -> [`contacts`] -> [`cycles`]
+//! capture files; [`by_name`] for a clip in a second file) -> [`track`] (sample for analysis) -> [`legs`] -> [`contacts`] -> [`cycles`]
 //! ([`analyze`] runs these) -> [`timewarp`] -> [`align`] -> [`mix`] -> [`cleanup`] ->
 //! [`measure`] -> [`write`] (glTF) | [`write_bvh`] (BVH); [`plan`] runs the middle from clips
 //! to frames, [`job`] from file to file.
@@ -9,6 +9,7 @@
 mod align;
 mod analyze;
 mod bvh;
+mod by_name;
 mod cleanup;
 mod contacts;
 mod cycles;
@@ -26,7 +27,9 @@ mod write_bvh;
 pub use analyze::{analyze, Analysis, Character};
 pub use bvh::{load as load_bvh, parse as parse_bvh, read as read_bvh, Bvh};
 pub use cycles::{touchdowns, CycleMethod};
-pub use job::{blend_clips, run_blend, BlendDone, BlendJob, BlendSummary, BlendedClips};
+pub use job::{
+    blend_clips, blend_files, run_blend, BlendDone, BlendJob, BlendSummary, BlendedClips,
+};
 pub use plan::{blend, BlendOptions, Blended};
 pub use rig::{load_gltf, slerp, Clip, Path, Pose, Rig};
 pub use track::{pose_unwrapped, size, Track};
