@@ -522,6 +522,12 @@ fn walks(clip: &Clip, an: &Analysis, ch: &Character) -> anyhow::Result<()> {
 /// Refused (unless `--cycles none`) when either clip has no stride cycle.
 pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Result<Blended> {
     let w = opts.weight;
+    let size = super::track::size(rig, &rig.rest);
+    let closed = [a, b].map(|c| super::track::close_open_loop(rig, c, size));
+    let (a, b) = (
+        closed[0].as_ref().unwrap_or(a),
+        closed[1].as_ref().unwrap_or(b),
+    );
     let (ch, an) = analyze(rig, &[a, b], opts.cycles);
     let (an_a, an_b) = (&an[0], &an[1]);
     if opts.cycles != CycleMethod::None {
