@@ -1027,21 +1027,8 @@ fn clips_in_files_of_their_own_blend_as_in_one_file() {
         one_clip_file(&input, &b, run, true);
         let one = d.join("one.glb");
         let together = blend_report(&input, walk, run, 0.25, &one, &[]);
+        assert_eq!(blend_pair(&a, &b, d), together, "{file}");
         let two = d.join("two.glb");
-        let rep = d.join("two.json");
-        run_ok(&[
-            "blend",
-            a.to_str().unwrap(),
-            b.to_str().unwrap(),
-            "-o",
-            two.to_str().unwrap(),
-            "--weight",
-            "0.25",
-            "--report",
-            rep.to_str().unwrap(),
-            "-q",
-        ]);
-        assert_eq!(read_json(&rep), together, "{file}");
         let last = |p: &Path| {
             let doc = Document::open(p).unwrap();
             let (_, clips) = blend::load_gltf(&doc).unwrap();
@@ -1109,6 +1096,34 @@ fn clips_in_files_of_their_own_blend_as_in_one_file() {
         names.as_array().unwrap().last().unwrap()["name"],
         "Fox_walk+mixamo_run"
     );
+    // Names in another namespace (Mixamo's "mixamorig1:" on a rig uploaded again) match by
+    // the part after it: the same blend.
+    let spaced = d.join("spaced_run.glb");
+    edited_glb(&run, &spaced, |j| {
+        for n in j["nodes"].as_array_mut().unwrap() {
+            n["name"] = format!("mixamorig1:{}", n["name"].as_str().unwrap()).into();
+        }
+    });
+    let plain = blend_pair(&walk, &run, d);
+    assert_eq!(blend_pair(&walk, &spaced, d), plain);
+}
+
+/// The report of `blend a b --weight 0.25` (a clip each).
+fn blend_pair(a: &Path, b: &Path, dir: &Path) -> Value {
+    let (two, rep) = (dir.join("two.glb"), dir.join("two.json"));
+    run_ok(&[
+        "blend",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "-o",
+        two.to_str().unwrap(),
+        "--weight",
+        "0.25",
+        "--report",
+        rep.to_str().unwrap(),
+        "-q",
+    ]);
+    read_json(&rep)
 }
 
 /// `file` with one more animation, `name` resampled at `rate` keys a second from its start to

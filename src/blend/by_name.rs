@@ -32,6 +32,13 @@ fn names(doc: &Document) -> Vec<Option<&str>> {
         .collect()
 }
 
+/// A node's name without its namespace (`mixamorig1:Hips` -> `Hips`): exports of one
+/// character may differ in it (Mixamo numbers the prefix of a rig uploaded again; Maya
+/// references add one), so a name not found whole is looked for by this part.
+fn base(name: &str) -> &str {
+    name.rsplit(':').next().unwrap_or(name)
+}
+
 /// How a node is called in a message: its name quoted, else its index.
 fn called(names: &[Option<&str>], i: usize) -> String {
     names[i].map_or_else(|| format!("node {i}"), |n| format!("{n:?}"))
@@ -67,8 +74,9 @@ fn rest_differs(a: &Trs, b: &Trs, keyed: impl Fn(Path) -> bool, size: f64) -> Op
 }
 
 /// `clip` of `doc_b` (read into `rig_b`) carried onto `rig_a`, the character of `doc_a`:
-/// every node it moves, and every node above one, matched by name (where nodes of `doc_a`
-/// share a name, the one under the parent's match), with the same parent and, where the clip does not key
+/// every node it moves, and every node above one, matched by name (else by name without its
+/// namespace, [`base`]; where nodes of `doc_a` share a name, the one under the parent's
+/// match), with the same parent and, where the clip does not key
 /// it, the same rest transform; its morph weights channels kept where `doc_a` has a node of
 /// that name with as many weights, dropped otherwise. Errors name `doc_b` and what differs.
 pub fn carry(
@@ -79,17 +87,19 @@ pub fn carry(
     clip: &Clip,
 ) -> Result<Clip> {
     let (names_a, names_b) = (names(doc_a), names(doc_b));
-    let mut by_name: HashMap<&str, Vec<usize>> = HashMap::new();
+    let (mut by_name, mut by_base) = (HashMap::new(), HashMap::new());
     for (i, name) in names_a.iter().enumerate() {
         if let Some(name) = name {
-            by_name.entry(name).or_default().push(i);
+            by_name.entry(*name).or_insert_with(Vec::new).push(i);
+            by_base.entry(base(name)).or_insert_with(Vec::new).push(i);
         }
     }
+    let named = |n: &str| by_name.get(n).or_else(|| by_base.get(base(n)));
     // Parents first: of the nodes of the same name (Blender names a bone's mesh after it), the
     // one under the node matched to the parent, else the only one.
     let mut map: Vec<Option<usize>> = vec![None; rig_b.len()];
     for &b in &rig_b.order {
-        let found = names_b[b].and_then(|n| by_name.get(n));
+        let found = names_b[b].and_then(named);
         let Some(candidates) = found else {
             continue;
         };
@@ -114,7 +124,7 @@ pub fn carry(
     let other = doc_a.path.display();
     let missing: Vec<String> = (needed.iter())
         .filter(|&&b| map[b].is_none())
-        .map(|&b| match names_b[b].and_then(|n| by_name.get(n)) {
+        .map(|&b| match names_b[b].and_then(named) {
             Some(list) => format!(
                 "{} ({} nodes of that name there)",
                 called(&names_b, b),
