@@ -1087,6 +1087,19 @@ fn clips_in_files_of_their_own_blend_as_in_one_file() {
             &out,
         );
     }
+    // A glTF character's blend is glTF (it said "use .glb, .gltf, .usda, .usdc or .usdz").
+    for ext in ["bvh", "usda", "txt"] {
+        let bad = d.join(format!("refused.{ext}"));
+        let args = [
+            "blend",
+            w,
+            run.to_str().unwrap(),
+            "-o",
+            bad.to_str().unwrap(),
+        ];
+        let why = "blend writes a glTF character's clips to .gltf or .glb";
+        assert_refused(&args, &format!("refused.{ext}"), why, &bad);
+    }
     // Clips of one name (Mixamo calls each "mixamo.com") are called by their files' stems.
     let same = d.join("mixamo_run.glb");
     edited_glb(&run, &same, |j| j["animations"][0]["name"] = "Walk".into());

@@ -316,9 +316,9 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
 /// A glTF character's two clips blended at every weight, appended as new animations: two
 /// clips of one file, or one clip of each of two files (the first file's character).
 fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
-    let Some(container) = Container::of(Format::of(&job.output)?) else {
+    let Some(container) = Format::of(&job.output).ok().and_then(Container::of) else {
         bail!(
-            "{}: blend writes .gltf or .glb (a skeletal clip has no USD point-cache form here)",
+            "{}: blend writes a glTF character's clips to .gltf or .glb (.bvh from two .bvh captures; a skeletal clip has no USD point-cache form here)",
             job.output.display()
         );
     };
