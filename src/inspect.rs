@@ -360,7 +360,20 @@ pub fn text(i: &Inspection) -> String {
             }
         }
     }
-    if i.blend.clips.is_empty() {
+    let moving: Vec<&str> = (i.animations.iter())
+        .filter(|a| a.channels > a.weights_channels)
+        .map(|a| a.name.as_str())
+        .collect();
+    if i.blend.skins == 0 && i.morph_meshes.is_empty() && !moving.is_empty() {
+        let names: Vec<String> = moving.iter().map(|n| format!("{n:?}")).collect();
+        s += &format!(
+            "blend: no skin; its clips that move nodes ({}) can be the second file of `inbetween blend character.glb {}` (carried onto the character's nodes by name)\n",
+            crate::gltf::listed(&names),
+            std::path::Path::new(&i.file)
+                .file_name()
+                .map_or(i.file.clone(), |f| f.to_string_lossy().into_owned())
+        );
+    } else if i.blend.clips.is_empty() {
         s += "blend: no skinned clips\n";
     } else {
         s += &format!(

@@ -1117,6 +1117,11 @@ fn clips_in_files_of_their_own_blend_as_in_one_file() {
             n["name"] = format!("mixamorig1:{}", n["name"].as_str().unwrap()).into();
         }
     });
+    // inspect points a file of a clip alone at this use.
+    let told = run_ok(&["inspect", run.to_str().unwrap()]);
+    let told = String::from_utf8_lossy(&told.stdout);
+    let hint = "clips that move nodes (\"Run\") can be the second file of `inbetween blend character.glb Fox_run.glb`";
+    assert!(told.contains(hint), "{told}");
     let plain = blend_pair(&walk, &run, d);
     assert_eq!(blend_pair(&walk, &spaced, d), plain);
 }
