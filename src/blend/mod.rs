@@ -1,10 +1,10 @@
 //! `inbetween blend`: mix two skeletal clips of one character into a new clip.
 //!
 //! The pipeline, one module per stage: [`rig`] (read the character and its clips; [`bvh`] for
-//! capture files; [`by_name`] for a clip in a second file) -> [`track`] (sample for analysis) -> [`legs`] -> [`contacts`] -> [`cycles`]
-//! ([`analyze`] runs these) -> [`timewarp`] -> [`align`] -> [`mix`] -> [`cleanup`] ->
-//! [`measure`] -> [`write`] (glTF) | [`write_bvh`] (BVH); [`plan`] runs the middle from clips
-//! to frames, [`job`] from file to file.
+//! capture files; [`by_name`] for a clip in a second file) -> [`track`] (sample for analysis)
+//! -> [`legs`] -> [`contacts`] -> [`cycles`] ([`analyze`] runs these) -> [`timewarp`] ->
+//! [`align`] -> [`mix`] -> [`cleanup`] -> [`measure`] -> [`write`] (glTF) | [`write_bvh`]
+//! (BVH); [`plan`] runs the middle from clips to frames, [`job`] from file to file.
 
 mod align;
 mod analyze;
