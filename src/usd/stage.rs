@@ -68,14 +68,23 @@ pub struct Subset {
     pub material: Option<String>,
 }
 
+/// What a primitive drawing another's vertex buffer adds to it: its faces and its look.
+struct Faces {
+    name: String,
+    indices: Vec<u32>,
+    /// Its material's base colour (vertex colours are the buffer's, already read).
+    color: Option<DisplayColor>,
+    material: Option<String>,
+    double_sided: bool,
+}
+
 impl MeshPrim {
     /// Take in `other`, a primitive drawing the same vertex buffer (the same attributes and
     /// targets, so the same points and frames): its faces appended as a subset of their own
     /// with its material (this one's faces becoming the first subset), its base colour per
     /// face where the two differ, double-sided if either is.
-    fn absorb(&mut self, other: MeshPrim) {
-        let faces = |m: &MeshPrim| m.indices.len() / 3;
-        let start = faces(self);
+    fn absorb(&mut self, other: Faces) {
+        let start = self.indices.len() / 3;
         if self.subsets.is_empty() {
             self.subsets.push(Subset {
                 name: self.name.clone(),
@@ -83,7 +92,7 @@ impl MeshPrim {
                 material: self.material.take(),
             });
         }
-        let count = faces(&other);
+        let count = other.indices.len() / 3;
         self.subsets.push(Subset {
             name: other.name,
             faces: (start as i32..(start + count) as i32).collect(),
@@ -534,6 +543,28 @@ impl Ctx<'_> {
         Ok((points, normals))
     }
 
+    /// Primitive `p`'s look: its material's base colour (white for a material without one;
+    /// None without a material), whether it is double-sided, and the material's prim (made on
+    /// first use; `vertex_colors`: the primitive has COLOR_0, which the material multiplies).
+    fn look_of(
+        &self,
+        p: &Value,
+        vertex_colors: bool,
+    ) -> Result<(Option<[f32; 3]>, bool, Option<String>)> {
+        let index = p["material"].as_u64();
+        let material = index.map(|m| &self.doc.json["materials"][m as usize]);
+        let color = material.map(|m| {
+            let c = arr(&m["pbrMetallicRoughness"], "baseColorFactor");
+            [0, 1, 2].map(|i| c.get(i).and_then(Value::as_f64).unwrap_or(1.0) as f32)
+        });
+        let double_sided = material.is_some_and(|m| m["doubleSided"].as_bool() == Some(true));
+        let prim = match index {
+            Some(m) => (self.look.borrow_mut()).material(m as usize, vertex_colors)?,
+            None => None,
+        };
+        Ok((color, double_sided, prim))
+    }
+
     /// The instances of a node with a mesh and `EXT_mesh_gpu_instancing` (TRANSLATION,
     /// ROTATION, SCALE; float or, for rotations, normalized integers; one missing is the
     /// identity), or `None`.
@@ -627,6 +658,26 @@ impl Ctx<'_> {
             let Some(pos) = p["attributes"]["POSITION"].as_u64() else {
                 continue;
             };
+            let base_name = if prims.len() == 1 {
+                identifier(&mesh_name)
+            } else {
+                identifier(&format!("{mesh_name}_{pi}"))
+            };
+            let vertices = json!([p["attributes"], p["targets"]]);
+            if let Some((_, first)) = groups.iter_mut().find(|(v, _)| *v == vertices) {
+                // A material group of a vertex buffer already read: its faces and look only.
+                let indices = triangle_indices(doc, p, first.points.len(), &what)?;
+                let vertex_colors = p["attributes"]["COLOR_0"].is_u64();
+                let (color, double_sided, material) = self.look_of(p, vertex_colors)?;
+                first.absorb(Faces {
+                    name: base_name,
+                    indices,
+                    color: color.map(DisplayColor::Constant),
+                    material,
+                    double_sided,
+                });
+                continue;
+            }
             let points = read_vec3(doc, pos as usize, &format!("{what} POSITION"))?;
             let n = points.len();
             let normals = read_attribute3(doc, p, "NORMAL", n, &what)?;
@@ -639,18 +690,7 @@ impl Ctx<'_> {
                     st.push((st_name(set), v));
                 }
             }
-            let indices: Vec<u32> = read_triangles(doc, p, n, &what)?
-                .into_iter()
-                .flatten()
-                .collect();
-            let material = p["material"]
-                .as_u64()
-                .map(|m| &doc.json["materials"][m as usize]);
-            let color = material.and_then(|m| {
-                let c = m["pbrMetallicRoughness"]["baseColorFactor"].as_array()?;
-                Some([0, 1, 2].map(|i| c.get(i).and_then(Value::as_f64).unwrap_or(1.0) as f32))
-            });
-            let color = color.or(material.map(|_| [1.0, 1.0, 1.0]));
+            let indices = triangle_indices(doc, p, n, &what)?;
             // COLOR_0 (float or normalized, RGB or RGBA) wins over the material's constant.
             let rgba = match p["attributes"]["COLOR_0"].as_u64() {
                 Some(a) => {
@@ -663,7 +703,7 @@ impl Ctx<'_> {
                 }
                 None => None,
             };
-            let rgba_present = rgba.is_some();
+            let (color, double_sided, material) = self.look_of(p, rgba.is_some())?;
             let (color, opacity) = match rgba {
                 Some((v, comps)) => {
                     let c = |x: f64| x.clamp(0.0, 1.0) as f32;
@@ -675,11 +715,6 @@ impl Ctx<'_> {
                     (Some(DisplayColor::Vertex(rgb)), alpha)
                 }
                 None => (color.map(DisplayColor::Constant), None),
-            };
-            let double_sided = material.is_some_and(|m| m["doubleSided"].as_bool() == Some(true));
-            let material = match p["material"].as_u64() {
-                Some(m) => (self.look.borrow_mut()).material(m as usize, rgba_present)?,
-                None => None,
             };
             // Processed meshes keep every primitive (a non-triangle one is an error there).
             let played = processed.map(|k| {
@@ -699,11 +734,6 @@ impl Ctx<'_> {
                     normals: normals.is_some()
                         && prims.iter().all(|q| q["attributes"]["NORMAL"].is_u64()),
                 });
-            let base_name = if prims.len() == 1 {
-                identifier(&mesh_name)
-            } else {
-                identifier(&format!("{mesh_name}_{pi}"))
-            };
             // Written still: the pose the glTF shows, its default weights applied.
             let (points, normals) = match animation {
                 Some(_) => (points, normals),
@@ -725,11 +755,7 @@ impl Ctx<'_> {
                 animation,
                 subsets: Vec::new(),
             };
-            let vertices = json!([p["attributes"], p["targets"]]);
-            match groups.iter_mut().find(|(v, _)| *v == vertices) {
-                Some((_, first)) => first.absorb(prim),
-                None => groups.push((vertices, prim)),
-            }
+            groups.push((vertices, prim));
         }
         let whole = groups.len() == 1 && !groups[0].1.subsets.is_empty();
         Ok(groups
@@ -743,6 +769,14 @@ impl Ctx<'_> {
             })
             .collect())
     }
+}
+
+/// The triangles of primitive `p` (of `n` vertices) as a flat index list.
+fn triangle_indices(doc: &Document, p: &Value, n: usize, what: &str) -> Result<Vec<u32>> {
+    Ok(read_triangles(doc, p, n, what)?
+        .into_iter()
+        .flatten()
+        .collect())
 }
 
 /// Local transform of a glTF node as a column-major 4x4 (USD's row-vector matrix4d reads the
