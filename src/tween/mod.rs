@@ -4,12 +4,14 @@
 //! glTF) -> [`weld`] (seams merged for the solve) -> [`schedule`] (where frames lie in time) ->
 //! [`segment`] per pair of keys: [`seed`] or [`spline`] (with [`gradient`]: deformation
 //! gradients, polar decomposition, rotation logs; and [`solve`]: the sparse Poisson system,
-//! large meshes ordered by [`order`]) -> [`normals`] -> [`report`] (shape figures) ->
-//! [`frames`] (a mesh's frames, streamed) -> [`morph_targets`] (glTF morph animation; with
-//! `--compact`, [`compact`] and [`base`]) or the USD writer; [`job`] runs it from file to file,
-//! with [`options`] holding what the user asked for.
+//! large meshes ordered by [`order`], factored subtree by subtree by [`cholesky`]) ->
+//! [`normals`] -> [`report`] (shape figures) -> [`frames`] (a mesh's frames, streamed) ->
+//! [`morph_targets`] (glTF morph animation; with `--compact`, [`compact`] and [`base`]) or the
+//! USD writer; [`job`] runs it from file to file, with [`options`] holding what the user asked
+//! for.
 
 mod base;
+mod cholesky;
 mod clock;
 mod compact;
 mod frames;

@@ -42,6 +42,9 @@ pub struct Pattern {
     /// upper-triangular CSC arrays.
     slots: Vec<[u32; 6]>,
     symbolic: SymbolicCholesky<u32>,
+    /// The numeric factorization over the supernodes' tree, independent subtrees side by side
+    /// (`None`: a simplicial factor, small meshes; faer's own factorization then).
+    plan: Option<super::cholesky::Plan>,
     /// Triangles sharing an edge with each triangle (CSR: `neighbours[start[t]..start[t + 1]]`),
     /// found once per mesh for the spline's branch growth.
     neighbour_start: Vec<u32>,
@@ -102,12 +105,20 @@ impl Pattern {
             || edge_neighbours(triangles),
         );
         let symbolic = symbolic?;
+        let plan = match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let inv = symbolic.perm().map(|p| p.arrays().1);
+                super::cholesky::Plan::new(s, inv, &col_ptr, &row_idx)
+            }
+            SymbolicCholeskyRaw::Simplicial(_) => None,
+        };
         Ok(Pattern {
             n,
             col_ptr,
             row_idx,
             slots,
             symbolic,
+            plan,
             neighbour_start,
             neighbours,
             spare: Default::default(),
@@ -131,6 +142,37 @@ impl Pattern {
             )
         }
     }
+}
+
+/// A's upper-triangular values in the pattern's order, from per-triangle gradient operators
+/// (`None` for a triangle left out); a pinned vertex's row and column are those of a Dirichlet
+/// row (zero, 1 on the diagonal).
+fn assemble(
+    pattern: &Pattern,
+    grads: impl IntoIterator<Item = Option<[DVec3; 3]>>,
+    pinned: &[bool],
+) -> Vec<f64> {
+    let mut a = vec![0.0f64; pattern.row_idx.len()];
+    for (g, s) in grads.into_iter().zip(&pattern.slots) {
+        let Some(g) = g else { continue };
+        for k in 0..3 {
+            a[s[k] as usize] += g[k].length_squared();
+        }
+        for (k, (i, j)) in [(0usize, 1usize), (1, 2), (2, 0)].into_iter().enumerate() {
+            a[s[3 + k] as usize] += g[i].dot(g[j]);
+        }
+    }
+    // Dirichlet rows: zero the row and column of a pinned vertex, 1 on its diagonal.
+    for c in 0..pattern.n {
+        let range = pattern.col_ptr[c] as usize..pattern.col_ptr[c + 1] as usize;
+        for (value, &r) in a[range.clone()].iter_mut().zip(&pattern.row_idx[range]) {
+            let r = r as usize;
+            if pinned[r] || pinned[c] {
+                *value = if r == c { 1.0 } else { 0.0 };
+            }
+        }
+    }
+    a
 }
 
 /// Above this many entries stored below L's diagonal (the supernodes' explicit zeros included),
@@ -178,26 +220,7 @@ impl Factor {
         grads: impl IntoIterator<Item = Option<[DVec3; 3]>>,
         pinned: Vec<bool>,
     ) -> Result<Factor> {
-        let mut a = vec![0.0f64; pattern.row_idx.len()];
-        for (g, s) in grads.into_iter().zip(&pattern.slots) {
-            let Some(g) = g else { continue };
-            for k in 0..3 {
-                a[s[k] as usize] += g[k].length_squared();
-            }
-            for (k, (i, j)) in [(0usize, 1usize), (1, 2), (2, 0)].into_iter().enumerate() {
-                a[s[3 + k] as usize] += g[i].dot(g[j]);
-            }
-        }
-        // Dirichlet rows: zero the row and column of a pinned vertex, 1 on its diagonal.
-        for c in 0..pattern.n {
-            let range = pattern.col_ptr[c] as usize..pattern.col_ptr[c + 1] as usize;
-            for (value, &r) in a[range.clone()].iter_mut().zip(&pattern.row_idx[range]) {
-                let r = r as usize;
-                if pinned[r] || pinned[c] {
-                    *value = if r == c { 1.0 } else { 0.0 };
-                }
-            }
-        }
+        let a = assemble(pattern, grads, &pinned);
         let sym = pattern.symbolic_matrix();
         let mat = SparseColMatRef::new(sym, &a);
         let symbolic = &pattern.symbolic;
@@ -210,22 +233,26 @@ impl Factor {
             }
             _ => vec![0.0f64; symbolic.len_val()],
         };
-        let mut mem = MemBuffer::try_new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-        )
-        .map_err(|_| anyhow!("out of memory for the factorization"))?;
-        symbolic
-            .factorize_numeric_llt(
-                &mut values,
-                mat,
-                Side::Upper,
-                LltRegularization::default(),
-                Par::Seq,
-                MemStack::new(&mut mem),
-                Default::default(),
-            )
-            .map_err(|e| anyhow!("the system is not positive definite ({e:?})"))?;
-        drop(mem);
+        match (symbolic.raw(), &pattern.plan) {
+            (SymbolicCholeskyRaw::Supernodal(s), Some(plan)) => plan.factor(s, &a, &mut values)?,
+            _ => {
+                let mut mem = MemBuffer::try_new(
+                    symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+                )
+                .map_err(|_| anyhow!("out of memory for the factorization"))?;
+                symbolic
+                    .factorize_numeric_llt(
+                        &mut values,
+                        mat,
+                        Side::Upper,
+                        LltRegularization::default(),
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                        Default::default(),
+                    )
+                    .map_err(|e| anyhow!("the system is not positive definite ({e:?})"))?;
+            }
+        }
         let n = pattern.n;
         let perm: Vec<u32> = match symbolic.perm() {
             Some(p) => p.arrays().0.to_vec(),
@@ -1434,6 +1461,85 @@ mod tests {
         let mut pinned = vec![false; s.positions.len()];
         pinned[0] = true;
         (Factor::new(&pattern, grads, pinned).unwrap(), s)
+    }
+
+    /// The factorization over the assembly tree ([`super::super::cholesky`]) gives the same
+    /// bits on 1, 2, 3 or 8 threads, and the factor faer's own sequential factorization gives,
+    /// to rounding; a mesh of two pieces (two roots) too.
+    #[test]
+    fn the_tree_s_factorization_is_the_same_bits_on_any_threads_and_matches_faer_s() {
+        let mut s = crate::dev::synth::tube(300, 120, 3.0, 0.5, 0.4);
+        let mut other = crate::dev::synth::tube(40, 30, 1.0, 0.2, 0.2);
+        let base = s.positions.len() as u32;
+        s.positions.append(&mut other.positions);
+        s.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|v| v + base)));
+        let n = s.positions.len();
+        let mut pattern = Pattern::new(n, &s.triangles, &s.positions).unwrap();
+        assert!(pattern.plan.is_some());
+        let grads: Vec<Option<[DVec3; 3]>> = s
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| s.positions[v as usize]);
+                frame(a, b, c).map(|v| gradient_operator(&v.inverse()))
+            })
+            .collect();
+        let mut pinned = vec![false; n];
+        pinned[0] = true;
+        pinned[base as usize] = true;
+        let bits = |f: &Factor| -> Vec<u64> {
+            (f.columns.vals.iter().chain(&f.diag))
+                .map(|x| x.to_bits())
+                .collect()
+        };
+        let on = |threads: usize, pattern: &Pattern| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| Factor::new(pattern, grads.clone(), pinned.clone()).unwrap())
+        };
+        let one = on(1, &pattern);
+        for threads in [2, 3, 8] {
+            assert!(
+                bits(&one) == bits(&on(threads, &pattern)),
+                "{threads} threads"
+            );
+        }
+        // faer's dense kernels on every thread for every node and update: the same bits.
+        let symbolic = match pattern.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => s,
+            SymbolicCholeskyRaw::Simplicial(_) => panic!("a supernodal factor"),
+        };
+        let plan = pattern.plan.as_ref().unwrap();
+        let a = assemble(&pattern, grads.clone(), &pinned);
+        let values = |threads: usize, parallel| {
+            let mut v = vec![0.0; symbolic.len_val()];
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| plan.factor_with(symbolic, &a, &mut v, parallel))
+                .unwrap();
+            v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>()
+        };
+        let alone = values(1, None);
+        for threads in [2, 5, 8] {
+            assert!(alone == values(threads, Some((0, 0))), "{threads} threads");
+        }
+        pattern.plan = None;
+        let faer = on(1, &pattern);
+        let (ours, theirs) = (
+            one.columns.vals.iter().chain(&one.diag),
+            faer.columns.vals.iter().chain(&faer.diag),
+        );
+        let scale = faer.diag.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let worst = ours
+            .zip(theirs)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst <= 1e-12 * scale, "{worst} against {scale}");
+        assert!(one.diag.iter().all(|&d| d > 0.0));
     }
 
     /// A reused value buffer (left over from an earlier factor: any length, any contents)
