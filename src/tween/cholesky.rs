@@ -30,10 +30,13 @@ const DENSE_UPDATE_MIN: usize = 4096;
 /// From this many multiply-adds an update's dense product, and from this many columns a
 /// diagonal block's factorization and solve, use every thread (the assembly tree's top: the
 /// separators of a nested dissection, few and dense, factored after everything below them),
-/// where the pool has at least [`PARALLEL_THREADS_MIN`] threads: on two, the other thread is
-/// busy beside the factorization (16 cores, 1M triangles: numeric factorization 0.54-0.60 s
-/// against 0.65-0.67 s with one thread a node). faer's dense kernels give the same bits on
-/// any number of threads (checked by the tests), so this changes the time only.
+/// where the pool has at least [`PARALLEL_THREADS_MIN`] threads and the machine as many cores:
+/// on two, the other thread is busy beside the factorization, and with more threads than cores
+/// faer's kernels wait for threads that are not running (2 cores, `--threads 16`, 1M
+/// triangles: 3.9 s of numeric factorization against 1.2). 16 cores, 1M triangles: numeric
+/// factorization 0.54-0.60 s against 0.65-0.67 s with one thread a node. faer's dense kernels
+/// give the same bits on any number of threads (checked by the tests), so this changes the
+/// time only.
 const PARALLEL_UPDATE_MIN: usize = 1 << 20;
 const PARALLEL_COLUMNS_MIN: usize = 128;
 const PARALLEL_THREADS_MIN: usize = 4;
@@ -277,7 +280,8 @@ impl Plan {
         a: &[f64],
         values: &mut [f64],
     ) -> Result<()> {
-        let parallel = (rayon::current_num_threads() >= PARALLEL_THREADS_MIN)
+        let cores = std::thread::available_parallelism().map_or(1, usize::from);
+        let parallel = (rayon::current_num_threads().min(cores) >= PARALLEL_THREADS_MIN)
             .then_some((PARALLEL_COLUMNS_MIN, PARALLEL_UPDATE_MIN));
         self.factor_with(s, a, values, parallel)
     }
