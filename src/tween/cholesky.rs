@@ -12,6 +12,14 @@
 //! order, run for each supernode whatever the threads: the factor is the same bits on any
 //! number of threads.
 //!
+//! Measured on the bench's 1M-triangle tube: on 16 cores the two segments' factorizations take
+//! 0.54-0.73 s instead of 1.47-2.06 s (end to end 2.41-2.89 s instead of 3.18-3.73). On one
+//! thread a factorization costs about a quarter more than faer's (0.71-0.84 s against
+//! 0.55-0.66 s, assembly and packing included): an update goes through a product buffer and a
+//! scatter where faer's own kernel gathers as it multiplies, and that kernel is not exported.
+//! On 2 cores end to end is unchanged within the noise (the factorization runs beside the key
+//! gradients).
+//!
 //! [`Plan`] is made once per mesh from the symbolic factorization: where each entry of A goes
 //! in its supernode's block, which supernodes update which, and the tree with its work.
 
