@@ -595,6 +595,27 @@ fn output_is_deterministic_for_any_thread_count() {
     tween_quietly(&sample("tube_bend.glb"), &a, &["--threads", "1"]);
     tween_quietly(&sample("tube_bend.glb"), &b, &["--threads", "2"]);
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    // A mesh large enough for a supernodal factor, factored subtree by subtree on the threads
+    // there are (72,000 triangles, two keys).
+    use inbetween::synth::{bend, tube, KeyedMesh, KeyframeFile};
+    let s = tube(300, 120, 6.0, 1.0, 1.0);
+    let key = bend(&s.positions, 3.0, 120f64.to_radians(), 0.8);
+    let input = out_in(&dir, "large.glb");
+    KeyframeFile {
+        meshes: vec![KeyedMesh::new("tube", s, vec![key])],
+        key_times: None,
+        key_weights: None,
+    }
+    .write(&input)
+    .unwrap();
+    let outputs: Vec<Vec<u8>> = ["1", "2", "3", "5"]
+        .iter()
+        .map(|t| {
+            tween_quietly(&input, &a, &["--threads", t, "--tweens", "3"]);
+            std::fs::read(&a).unwrap()
+        })
+        .collect();
+    assert!(outputs.iter().all(|o| o == &outputs[0]));
 }
 
 #[test]
