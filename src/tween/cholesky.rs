@@ -14,11 +14,12 @@
 //!
 //! Measured on the bench's 1M-triangle tube: on 16 cores the two segments' factorizations take
 //! 0.54-0.73 s instead of 1.47-2.06 s (end to end 2.41-2.89 s instead of 3.18-3.73). On one
-//! thread a factorization costs about a quarter more than faer's (0.71-0.84 s against
-//! 0.55-0.66 s, assembly and packing included): an update goes through a product buffer and a
-//! scatter where faer's own kernel gathers as it multiplies, and that kernel is not exported.
-//! On 2 cores end to end is unchanged within the noise (the factorization runs beside the key
-//! gradients).
+//! thread it costs what faer's does (2 cores, `--threads 1`: 1.17-1.19 s against 1.18-1.19 s
+//! end to end; `Factor::new` alone 0.51-0.53 s against 0.55-0.64 s), though an update goes
+//! through a product buffer and a scatter where faer's own kernel, not exported, gathers as it
+//! multiplies: updates below [`DENSE_UPDATE_MIN`] are summed here, and faer's triangular
+//! product skips the upper half of an update's top block. On 2 cores end to end is unchanged
+//! within the noise (the factorization runs beside the key gradients).
 //!
 //! [`Plan`] is made once per mesh from the symbolic factorization: where each entry of A goes
 //! in its supernode's block, which supernodes update which, and the tree with its work.
