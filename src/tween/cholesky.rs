@@ -257,6 +257,18 @@ impl Plan {
                 stack.extend(kids.iter().rev().map(|&c| (c, false)));
             }
         }
+        // What the tasks' sharing of L rests on (see `Run::block`): every supernode that
+        // updates s lies in s's subtree, so its task has ended before s's starts.
+        let below = |d: usize, k: usize| {
+            let (pd, pk) = (at[d] as usize, at[k] as usize);
+            pd < pk && pd + size[k] as usize > pk
+        };
+        if (0..count).any(|k| {
+            let kids = &by[by_ptr[k]..by_ptr[k + 1]];
+            kids.iter().any(|&d| !below(d as usize, k))
+        }) {
+            return None;
+        }
         let total = roots.iter().map(|&r| work[r as usize]).sum();
         let widest = nodes.iter().map(|b| b.ncols).max().unwrap_or(0);
         Some(Plan {
