@@ -1438,6 +1438,16 @@ mod tests {
         assert!(seen.iter().all(|&x| x));
     }
 
+    /// Each triangle's gradient operator in the rest pose (`None` for a degenerate one).
+    fn rest_gradients(s: &crate::dev::synth::Surface) -> Vec<Option<[DVec3; 3]>> {
+        (s.triangles.iter())
+            .map(|t| {
+                let [a, b, c] = t.map(|v| s.positions[v as usize]);
+                frame(a, b, c).map(|v| gradient_operator(&v.inverse()))
+            })
+            .collect()
+    }
+
     /// The factor of a small tube's system (vertex 0 pinned), and the tube.
     fn tube_factor() -> (Factor, crate::dev::synth::Surface) {
         tube_factor_of(12, 9)
@@ -1446,18 +1456,7 @@ mod tests {
     fn tube_factor_of(rings: usize, segments: usize) -> (Factor, crate::dev::synth::Surface) {
         let s = crate::dev::synth::tube(rings, segments, 3.0, 0.5, 0.4);
         let pattern = Pattern::new(s.positions.len(), &s.triangles, &s.positions).unwrap();
-        let grads: Vec<Option<[DVec3; 3]>> = s
-            .triangles
-            .iter()
-            .map(|t| {
-                frame(
-                    s.positions[t[0] as usize],
-                    s.positions[t[1] as usize],
-                    s.positions[t[2] as usize],
-                )
-                .map(|v| gradient_operator(&v.inverse()))
-            })
-            .collect();
+        let grads = rest_gradients(&s);
         let mut pinned = vec![false; s.positions.len()];
         pinned[0] = true;
         (Factor::new(&pattern, grads, pinned).unwrap(), s)
@@ -1477,14 +1476,7 @@ mod tests {
         let n = s.positions.len();
         let mut pattern = Pattern::new(n, &s.triangles, &s.positions).unwrap();
         assert!(pattern.plan.is_some());
-        let grads: Vec<Option<[DVec3; 3]>> = s
-            .triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|v| s.positions[v as usize]);
-                frame(a, b, c).map(|v| gradient_operator(&v.inverse()))
-            })
-            .collect();
+        let grads = rest_gradients(&s);
         let mut pinned = vec![false; n];
         pinned[0] = true;
         pinned[base as usize] = true;
@@ -1552,14 +1544,7 @@ mod tests {
             let s = crate::dev::synth::tube(rings, segments, 3.0, 0.5, 0.4);
             let n = s.positions.len();
             let pattern = Pattern::new(n, &s.triangles, &s.positions).unwrap();
-            let grads: Vec<Option<[DVec3; 3]>> = s
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|v| s.positions[v as usize]);
-                    frame(a, b, c).map(|v| gradient_operator(&v.inverse()))
-                })
-                .collect();
+            let grads = rest_gradients(&s);
             let mut pinned = vec![false; n];
             pinned[0] = true;
             let fresh = Factor::new(&pattern, grads.clone(), pinned.clone()).unwrap();
