@@ -262,6 +262,40 @@ fn cesium_man_walks_with_itself_half_a_cycle_later() {
     }
 }
 
+/// RobotExpressive runs low: its hips stand 0.17-0.19 of its size above its feet in Running
+/// (0.2 in Walking). Its run with itself half a cycle later finds the same legs as its walk
+/// does (it was refused: "no legs were found in its skeleton"), and blends as a run.
+#[test]
+fn robot_s_run_alone_finds_its_legs() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = fx.join("skinned/RobotExpressive.glb");
+    let (shifted, later) = with_shifted_clip(&input, "Running", dir.path());
+    let out = dir.path().join("runs.glb");
+    let r = blend_report(&shifted, "Running", &later, 0.5, &out, &[]);
+    let feet: Vec<&str> = (r["legs"].as_array().unwrap().iter())
+        .map(|l| l["foot"].as_str().unwrap())
+        .collect();
+    assert_eq!(feet, ["LowerLeg.L_end", "LowerLeg.R_end"]);
+    let (before, after, naive) = (
+        sliding(&r["result"]["before_cleanup"]),
+        sliding(&r["result"]["after_cleanup"]),
+        sliding(&r["naive"]),
+    );
+    let jerk = r["result"]["jerk_ratio"].as_f64().unwrap();
+    eprintln!(
+        "Robot run + run half a cycle later: naive {naive:.4}, before clean-up {before:.4}, \
+         after {after:.1e}, jerk ratio {jerk:.2}"
+    );
+    assert!(
+        before < naive,
+        "before clean-up {before} against naive {naive}"
+    );
+    assert!(after <= 1e-5, "after clean-up {after}");
+    assert!(jerk <= 1.15, "jerk ratio {jerk}");
+    assert!(r["result"]["looping"].as_bool().unwrap());
+}
+
 /// Largest difference between the blended clip at its keys and `source` at the warped times.
 fn distance_to_source(out: &Path, input: &Path, source: &str, start: f64) -> f64 {
     let doc_in = Document::open(input).unwrap();
