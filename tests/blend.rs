@@ -100,6 +100,16 @@ fn blend_bvh_report(a: &Path, b: &Path, weights: &str, out: &Path) -> Value {
     read_json(&rep)
 }
 
+/// A blend report's sliding before and after clean-up, the naive blend's, and the jerk ratio.
+fn report_figures(r: &Value) -> (f64, f64, f64, f64) {
+    (
+        sliding(&r["result"]["before_cleanup"]),
+        sliding(&r["result"]["after_cleanup"]),
+        sliding(&r["naive"]),
+        r["result"]["jerk_ratio"].as_f64().unwrap(),
+    )
+}
+
 fn sliding(figures: &Value) -> f64 {
     figures["sliding"]["mean"].as_f64().unwrap()
 }
@@ -238,12 +248,7 @@ fn cesium_man_walks_with_itself_half_a_cycle_later() {
     for w in [0.25, 0.5, 0.75] {
         let out = dir.path().join(format!("cesium_{w}.glb"));
         let r = blend_report(&shifted, walk, &later, w, &out, &[]);
-        let (before, after, naive) = (
-            sliding(&r["result"]["before_cleanup"]),
-            sliding(&r["result"]["after_cleanup"]),
-            sliding(&r["naive"]),
-        );
-        let jerk = r["result"]["jerk_ratio"].as_f64().unwrap();
+        let (before, after, naive, jerk) = report_figures(&r);
         eprintln!(
             "CesiumMan walk + walk half a cycle later w={w}: naive {naive:.4}, before clean-up \
              {before:.4}, after {after:.1e}, jerk ratio {jerk:.2}"
@@ -277,12 +282,7 @@ fn robot_s_run_alone_finds_its_legs() {
         .map(|l| l["foot"].as_str().unwrap())
         .collect();
     assert_eq!(feet, ["LowerLeg.L_end", "LowerLeg.R_end"]);
-    let (before, after, naive) = (
-        sliding(&r["result"]["before_cleanup"]),
-        sliding(&r["result"]["after_cleanup"]),
-        sliding(&r["naive"]),
-    );
-    let jerk = r["result"]["jerk_ratio"].as_f64().unwrap();
+    let (before, after, naive, jerk) = report_figures(&r);
     eprintln!(
         "Robot run + run half a cycle later: naive {naive:.4}, before clean-up {before:.4}, \
          after {after:.1e}, jerk ratio {jerk:.2}"
