@@ -15,6 +15,12 @@ use glam::DVec3;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
+/// From this many welded vertices a segment's freed memory goes back to the system after its
+/// set-up and after its frames ([`crate::memory::release_freed_memory`]): there each frame's
+/// buffers are megabytes and a worker thread's arena can hold hundreds of them; below, a
+/// track of thousands of small segments would pay for a walk of the arenas twice a segment.
+const RELEASE_MIN_VERTICES: usize = 100_000;
+
 /// Output of one track: its frames are `first..first + frames.len()` of the mesh's frames.
 pub struct TrackFrames {
     pub origin: TrackOrigin,
@@ -312,6 +318,12 @@ impl<'a> MeshTween<'a> {
                 )?),
             };
             stats.setup += t0.elapsed();
+            // A large mesh's set-up temporaries, freed on the worker threads, back to the system
+            // before the frames allocate theirs (see `release_freed_memory`).
+            let large = (self.pattern.as_ref()).is_some_and(|p| p.n >= RELEASE_MIN_VERTICES);
+            if large && segment.is_some() {
+                crate::memory::release_freed_memory();
+            }
             let threads = rayon::current_num_threads().max(1);
             let block = segment.as_ref().map_or(1, |s| s.block(j - i, threads));
             // Two frames a thread at a time, or one block a thread.
@@ -371,6 +383,9 @@ impl<'a> MeshTween<'a> {
             }
             if let Some(segment) = segment {
                 segment.recycle(self.pattern.as_ref());
+                if large {
+                    crate::memory::release_freed_memory();
+                }
             }
             i = j;
         }
