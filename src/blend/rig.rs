@@ -2,7 +2,7 @@
 //! has a place), the skin in use marking the skeleton, and clips evaluated as local poses.
 
 use crate::gltf::{arr, clip_name, read_channels, Document};
-pub use crate::gltf::{slerp, Channel, Interp, Path};
+pub use crate::gltf::{push_key, slerp, Channel, Interp, Path};
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;

@@ -4,7 +4,7 @@
 //! without repeating its first frame, and frame indices wrap around; any other clip is sampled
 //! from its first to its last key.
 
-use super::rig::{flat, Clip, Interp, Path, Pose, Rig};
+use super::rig::{flat, push_key, Clip, Interp, Path, Pose, Rig};
 use glam::DVec3;
 
 /// Smallest size (scene units) a skeleton is given, so that a collapsed rest pose still scales
@@ -184,14 +184,8 @@ pub fn close_open_loop(rig: &Rig, clip: &Clip, size: f64) -> Option<Clip> {
             |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(x, y)| (x - y).powi(2)).sum::<f64>();
         let moves_on = c.path == Path::Translation && dist(&next, &a) > dist(&next, &b);
         let value = if moves_on { next } else { a };
-        if c.interp == Interp::Cubic {
-            c.values.extend(std::iter::repeat_n(0.0, w));
-            c.values.extend(value);
-            c.values.extend(std::iter::repeat_n(0.0, w));
-        } else {
-            c.values.extend(value);
-        }
-        c.times.push(end + f * step);
+        let cubic = c.interp == Interp::Cubic;
+        push_key(&mut c.times, &mut c.values, cubic, end + f * step, &value);
     }
     closed.end = end + f * step;
     Some(closed)

@@ -27,14 +27,26 @@ pub fn close_keys(times: &mut Vec<f64>, values: &mut Vec<f64>, cubic: bool, end:
         return;
     }
     let per_key = values.len() / times.len();
-    let mut first = values[..per_key].to_vec();
+    // A CUBICSPLINE key is in-tangent, value, out-tangent.
+    let (from, width) = match cubic {
+        true => (per_key / 3, per_key / 3),
+        false => (0, per_key),
+    };
+    let first = values[from..from + width].to_vec();
+    push_key(times, values, cubic, end, &first);
+}
+
+/// A key at `t` holding `value` appended to a sampler's keys; a CUBICSPLINE key gets flat
+/// tangents.
+pub fn push_key(times: &mut Vec<f64>, values: &mut Vec<f64>, cubic: bool, t: f64, value: &[f64]) {
     if cubic {
-        let w = per_key / 3;
-        first[..w].fill(0.0);
-        first[2 * w..].fill(0.0);
+        values.extend(std::iter::repeat_n(0.0, value.len()));
+        values.extend_from_slice(value);
+        values.extend(std::iter::repeat_n(0.0, value.len()));
+    } else {
+        values.extend_from_slice(value);
     }
-    values.extend(first);
-    times.push(end);
+    times.push(t);
 }
 
 /// What a channel animates.

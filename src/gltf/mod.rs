@@ -24,7 +24,7 @@ mod write;
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{set_bounds, BinBuilder, Output, Storage};
 pub use channel::{
-    clip_name, close_keys, read_channels, slerp, Channel, Interp, Path, MIN_QUATERNION,
+    clip_name, close_keys, push_key, read_channels, slerp, Channel, Interp, Path, MIN_QUATERNION,
 };
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
 pub use encode::{
