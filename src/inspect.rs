@@ -368,7 +368,7 @@ pub fn text(i: &Inspection) -> String {
         let names: Vec<String> = moving.iter().map(|n| format!("{n:?}")).collect();
         s += &format!(
             "blend: no skin; its clips that move nodes ({}) can be the second file of `inbetween blend character.glb {}` (carried onto the character's nodes by name)\n",
-            crate::gltf::listed(&names),
+            listed(&names),
             std::path::Path::new(&i.file)
                 .file_name()
                 .map_or(i.file.clone(), |f| f.to_string_lossy().into_owned())
