@@ -296,6 +296,32 @@ fn robot_s_run_alone_finds_its_legs() {
     assert!(r["result"]["looping"].as_bool().unwrap());
 }
 
+/// Fox's run blended with itself: the blend is the clip, whose front feet slide a quarter leg
+/// within a contact and whose front legs stand straight, so pinning them asks the body to dip.
+/// The root dipped half a leg for four frames (jerk ratio 2.09, the clean-up's rate carried a
+/// front foot 0.7 leg off): now at most a tenth of a leg, the feet left a little short of
+/// their pins instead (still a tenth of the clip's own sliding).
+#[test]
+fn fox_run_with_itself_does_not_dip() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("runs.glb");
+    let r = blend_report(&fx.join("skinned/Fox.glb"), "Run", "Run", 0.5, &out, &[]);
+    let (before, after, _, jerk) = report_figures(&r);
+    let drop = r["result"]["max_root_drop"].as_f64().unwrap();
+    let own = sliding(&r["clips"][0]["figures"]);
+    eprintln!(
+        "Fox run + run: root drop {drop:.3} leg, jerk ratio {jerk:.2}, sliding {own:.4} in the \
+         clip, {before:.4} before clean-up, {after:.4} after"
+    );
+    assert!(drop <= 0.12, "the root dips {drop} leg");
+    assert!(jerk <= 1.15, "jerk ratio {jerk}");
+    assert!(
+        after <= 0.1 * own,
+        "after clean-up {after} against the clip's {own}"
+    );
+}
+
 /// Largest difference between the blended clip at its keys and `source` at the warped times.
 fn distance_to_source(out: &Path, input: &Path, source: &str, start: f64) -> f64 {
     let doc_in = Document::open(input).unwrap();

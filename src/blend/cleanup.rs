@@ -2,15 +2,15 @@
 //! (the spot where the sources' feet, blended, are on average during that contact; on an
 //! in-place clip the ground moves under it at the blend's treadmill speed) by analytic two-bone
 //! IK on the leg, the knee bending to the side it bends to over the clip. Around each contact
-//! the correction (pin minus the foot's own position) is carried on at the rate it was changing
-//! and faded out over [`EASE_SECONDS`] (a swing shorter than two eases gets one cubic from one
+//! the correction (pin minus the foot's own position) is carried on at the rate it was changing,
+//! rate and weight faded out over [`EASE_SECONDS`] (a swing shorter than two eases gets one cubic from one
 //! contact's correction to the next), so the foot keeps its position and velocity where a pin
 //! starts or ends: no pop. Before the IK the root takes up what the legs share, as smooth
 //! curves over the clip: a horizontal shift toward the planted feet's corrections
 //! ([`root_shift`]) and a rise or fall that keeps each stance leg as long as it was
 //! ([`root_rise`]), so that a nearly straight knee, where a small change of the hip-foot
 //! distance turns the knee a lot, is left as the blend had it. Where a leg still cannot reach,
-//! the root is lowered just enough, eased the same way. Joints outside the legs keep their
+//! the root is lowered just enough (at most [`MAX_DROP`]), eased the same way. Joints outside the legs keep their
 //! rotations.
 
 use super::legs::Leg;
@@ -157,6 +157,13 @@ pub fn pin(
     out
 }
 
+/// The root is lowered at most this fraction of a leg's length (its chain's) for the leg to
+/// reach its target; a target farther off is left short, the foot sliding rather than the body
+/// dipping (Fox's run blended with itself asked for half a leg: its front feet slide a quarter
+/// leg within a contact in the clip itself, and its front legs stand straight). The fixtures'
+/// other blends ask for at most 0.06.
+pub const MAX_DROP: f64 = 0.1;
+
 /// How long (seconds) a contact's correction takes to fade out into the swing before and after
 /// it; a swing shorter than two of these gets one cubic from one contact's correction to the
 /// next instead.
@@ -199,8 +206,8 @@ impl Correction {
 
 /// The correction (target minus the foot's own position `ends`) per frame: in contact, what
 /// moves the foot onto its target; in the swing around it, the contact's first or last correction
-/// carried on at the rate it was changing, its weight faded out with a smoothstep over the ease
-/// window, so the foot's path keeps its position and velocity where a pin starts or ends (no
+/// carried on at the rate it was changing, that rate fading linearly and the weight with a
+/// smoothstep over the ease window, so the foot's path keeps its position and velocity where a pin starts or ends (no
 /// pop); between two contacts nearer than two ease windows, one cubic at full weight.
 /// `None` where no correction applies. On a looping clip (last frame = first) gaps wrap.
 pub fn corrections(
@@ -258,8 +265,12 @@ pub fn corrections(
                 .filter_map(|(found, inward)| {
                     let (i, d) = found?;
                     let x = d as f64 / ease;
+                    // The rate fades with the weight: the foot keeps its position and
+                    // velocity where the pin ends, but a source whose planted foot slides fast
+                    // is not carried far off (Fox's run, its front feet sliding a quarter leg
+                    // a frame, was carried 0.7 leg).
                     (x < 1.0).then(|| Correction {
-                        offset: off(i) + rate(i, inward) * d as f64,
+                        offset: off(i) + rate(i, inward) * d as f64 * (1.0 - x),
                         weight: 1.0 - smoothstep(x),
                     })
                 })
@@ -345,7 +356,7 @@ pub fn clean(
             let h = d.dot(UP);
             let disc = h * h - d.length_squared() + reach * reach;
             let drop = if disc >= 0.0 { h - disc.sqrt() } else { h };
-            need[j] = need[j].max(drop.max(0.0));
+            need[j] = need[j].max(drop.clamp(0.0, MAX_DROP * leg.length));
         }
     }
     // Spread over the ease window with the same smoothstep, so the root sinks and rises without
@@ -716,8 +727,9 @@ mod tests {
 
     #[test]
     fn corrections_carry_on_and_fade_without_a_jump() {
-        // A long swing after frames 0-4: the correction goes on rising by 1 a frame, faded by a
-        // smoothstep over 3 frames (0.125 s at 24 fps), and is gone after it.
+        // A long swing after frames 0-4: the correction goes on rising at 1 a frame, that rate
+        // fading linearly and the weight by a smoothstep over 3 frames (0.125 s at 24 fps),
+        // and is gone after it.
         let mut planted = vec![false; 12];
         planted[..5].fill(true);
         let c: Vec<f64> = ramp(&planted)
@@ -726,8 +738,9 @@ mod tests {
             .collect();
         assert_eq!(&c[..5], &[0.0, 1.0, 2.0, 3.0, 4.0]);
         for d in 1..3 {
-            let fade = 1.0 - smoothstep(d as f64 / 3.0);
-            assert!((c[4 + d] - (4.0 + d as f64) * fade).abs() < 1e-12);
+            let x = d as f64 / 3.0;
+            let fade = 1.0 - smoothstep(x);
+            assert!((c[4 + d] - (4.0 + d as f64 * (1.0 - x)) * fade).abs() < 1e-12);
         }
         assert!(c[7..].iter().all(|&x| x == 0.0));
         // The fade is in the weight (applied to the leg's joint rotations); the offset is the
@@ -736,7 +749,7 @@ mod tests {
         let full = corrections(&planted, &target, &[DVec3::ZERO; 12], 1.0 / 24.0, false);
         assert_eq!(full[4].unwrap().weight, 1.0);
         let c5 = full[5].unwrap();
-        assert!((c5.offset.x - 5.0).abs() < 1e-12);
+        assert!((c5.offset.x - (4.0 + 2.0 / 3.0)).abs() < 1e-12);
         assert!((c5.weight - (1.0 - smoothstep(1.0 / 3.0))).abs() < 1e-12);
         // A swing of one frame between two contacts: the cubic through both, matching rates.
         let planted = [true, true, true, false, true, true];
