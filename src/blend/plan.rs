@@ -9,7 +9,7 @@ use super::cycles::CycleMethod;
 use super::legs::Side;
 use super::measure::{self, Figures};
 use super::mix::mix;
-use super::rig::{flat, Clip, Pose, Rig};
+use super::rig::{flat, Clip, Pose, Rig, UP};
 use super::timewarp::{self, Warp};
 use super::track::{pose_unwrapped, Track};
 use glam::DVec3;
@@ -373,6 +373,14 @@ impl Cleanup<'_> {
                     .collect()
             })
             .collect();
+        // Where each leg can put its foot on each frame of the blend, at its target's height.
+        let reach: Vec<Vec<Option<cleanup::Reach>>> = (ch.legs.iter().zip(&raw))
+            .map(|(leg, t)| {
+                (before.pos.iter().zip(t))
+                    .map(|(p, t)| cleanup::Reach::of(leg, p, t.dot(UP)))
+                    .collect()
+            })
+            .collect();
         let unclean = frames.clone();
         let mut max_drop: f64 = 0.0;
         for pass in 0..CLEANUP_PASSES {
@@ -386,11 +394,10 @@ impl Cleanup<'_> {
                 .collect();
             let ground =
                 measure::ground_under(root_speed, cleanup::ground_velocity(&goals, &times));
-            let goals: Vec<LegGoal> = goals
-                .into_iter()
-                .map(|g| {
+            let goals: Vec<LegGoal> = (goals.into_iter().zip(&reach))
+                .map(|(g, reach)| {
                     let pinned =
-                        cleanup::pin(&g.planted, &g.target, &times, looping, ground, shift);
+                        cleanup::pin(&g.planted, &g.target, reach, &times, looping, ground, shift);
                     let target = g
                         .target
                         .iter()
