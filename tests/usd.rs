@@ -1023,24 +1023,14 @@ fn gpu_instances_become_a_point_instancer() {
     }
 }
 
-/// What a point cache cannot carry is named in a warning line, not dropped without a word:
-/// cameras, lights, and skins (RobotExpressive's hands, when the fixtures are here).
+/// What a point cache cannot carry is named in a warning line, not dropped without a word: a
+/// light's range, and skins (RobotExpressive's hands, when the fixtures are here). Cameras and
+/// lights travel (`usd_camera_and_light_prims_read_back`).
 #[test]
 fn what_a_point_cache_does_not_carry_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("lit.glb");
-    edited_glb(&sample("flag_wave.glb"), &input, |j| {
-        j["cameras"] = serde_json::json!([{"name": "shot", "type": "perspective",
-            "perspective": {"yfov": 0.7, "znear": 0.1}}]);
-        j["extensions"] = serde_json::json!({"KHR_lights_punctual": {"lights": [
-            {"name": "key", "type": "point"}, {"type": "spot"}]}});
-        j["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
-        let nodes = j["nodes"].as_array_mut().unwrap();
-        nodes.push(serde_json::json!({"name": "camera", "camera": 0}));
-        nodes.push(serde_json::json!({"name": "lamp",
-            "extensions": {"KHR_lights_punctual": {"light": 0}}}));
-        j["scenes"][0]["nodes"] = serde_json::json!([0, 1, 2, 3]);
-    });
+    lit_flag(&input);
     let warnings = |input: &Path, args: &[&str]| -> Vec<String> {
         let usd = dir.path().join("out.usda");
         let mut all = vec!["tween", s(input), "-o", s(&usd)];
@@ -1052,13 +1042,9 @@ fn what_a_point_cache_does_not_carry_is_named() {
             .collect()
     };
     let w = warnings(&input, &[]);
-    assert_eq!(w.len(), 2, "{w:?}");
+    assert_eq!(w.len(), 1, "{w:?}");
     assert!(
-        w[0].ends_with("camera \"shot\" is not written to the USD stage (a glTF output keeps it)"),
-        "{w:?}"
-    );
-    assert!(
-        w[1].contains("lights \"key\", light 1 are not written"),
+        w[0].ends_with("light \"key\"'s range (8) is not carried: UsdLux lights have none"),
         "{w:?}"
     );
     let Some(fx) = fixtures() else { return };
@@ -1075,6 +1061,98 @@ fn what_a_point_cache_does_not_carry_is_named() {
             .any(|l| l.contains("animations \"Dance\", \"Death\"")),
         "{w:?}"
     );
+}
+
+/// flag_wave with two cameras (a perspective one at (0, 1, 5), an orthographic one looking down
+/// from (0, 10, 0)) and three lights (a point light of range 8 at (1, 2, 3), a spot, a sun).
+fn lit_flag(out: &Path) {
+    edited_glb(&sample("flag_wave.glb"), out, |j| {
+        j["cameras"] = serde_json::json!([
+            {"name": "shot", "type": "perspective",
+             "perspective": {"yfov": 0.7, "aspectRatio": 1.5, "znear": 0.1}},
+            {"name": "plan", "type": "orthographic",
+             "orthographic": {"xmag": 2.0, "ymag": 1.0, "znear": 0.0, "zfar": 100.0}}]);
+        j["extensions"] = serde_json::json!({"KHR_lights_punctual": {"lights": [
+            {"name": "key", "type": "point", "intensity": 20.0, "range": 8.0},
+            {"type": "spot", "intensity": 5.0, "color": [1.0, 0.5, 0.25],
+             "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}},
+            {"name": "sun", "type": "directional", "intensity": 2.0}]}});
+        j["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        let first = nodes.len();
+        let light = |l: usize| serde_json::json!({"KHR_lights_punctual": {"light": l}});
+        nodes.extend([
+            serde_json::json!({"name": "camera", "camera": 0, "translation": [0.0, 1.0, 5.0]}),
+            serde_json::json!({"name": "top", "camera": 1, "translation": [0.0, 10.0, 0.0],
+                "rotation": [-std::f64::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f64::consts::FRAC_1_SQRT_2]}),
+            serde_json::json!({"name": "lamp", "extensions": light(0), "translation": [1.0, 2.0, 3.0]}),
+            serde_json::json!({"name": "spot", "extensions": light(1)}),
+            serde_json::json!({"name": "sky", "extensions": light(2)}),
+        ]);
+        let roots = j["scenes"][0]["nodes"].as_array_mut().unwrap();
+        roots.extend((first..first + 5).map(|n| serde_json::json!(n)));
+    });
+}
+
+/// glTF cameras and KHR_lights_punctual lights become UsdGeom cameras and UsdLux lights under
+/// their nodes' Xforms, read back by usd-core as glTF has them: the perspective camera's field
+/// of view (Gf.Camera's, from the apertures) and aspect ratio, the orthographic camera's
+/// extents, each light's type, colour, cone and intensity (candela = a quarter of a normalized
+/// sphere light's intensity), the nodes' transforms; usd-core's validators find nothing.
+#[test]
+fn usd_camera_and_light_prims_read_back() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("lit.glb");
+    lit_flag(&input);
+    for fmt in ["usda", "usdc", "usdz"] {
+        let usd = dir.path().join(format!("lit.{fmt}"));
+        tween_quietly(&input, &usd, &[]);
+        clean_usd_report(&python, &usd, fmt);
+        let r: serde_json::Value =
+            serde_json::from_slice(&run_tool(&python, "usd_scene.py", &[usd.as_os_str()], fmt))
+                .unwrap();
+        let prim = |path: &str| &r[format!("/samples/{path}")];
+        let attr = |path: &str, name: &str| prim(path)["attrs"][name].clone();
+        let shot = prim("camera/shot");
+        assert_eq!(shot["type"], "Camera", "{fmt}: {r}");
+        let fov = shot["vertical_fov_degrees"].as_f64().unwrap();
+        assert!((fov - 0.7f64.to_degrees()).abs() < 1e-4, "{fmt}: {fov}");
+        assert!((shot["aspect"].as_f64().unwrap() - 1.5).abs() < 1e-5);
+        assert!(close(&shot["world"][3], &[0.0, 1.0, 5.0, 1.0]));
+        assert_eq!(attr("top/plan", "projection"), "orthographic");
+        assert!(close(&attr("top/plan", "horizontalAperture"), &[40.0]));
+        assert!(close(&attr("top/plan", "clippingRange"), &[0.0, 100.0]));
+        // The top camera looks down: its -Z is the world's -Y.
+        assert!(close(&prim("top/plan")["world"][2], &[0.0, 1.0, 0.0, 0.0]));
+        assert_eq!(prim("lamp/key")["type"], "SphereLight");
+        assert!(close(&attr("lamp/key", "inputs:intensity"), &[80.0]));
+        assert_eq!(attr("lamp/key", "treatAsPoint"), true);
+        assert!(close(&prim("lamp/key")["world"][3], &[1.0, 2.0, 3.0, 1.0]));
+        let spot = prim("spot/light");
+        assert!(
+            spot["api_schemas"]
+                .as_array()
+                .unwrap()
+                .contains(&"ShapingAPI".into()),
+            "{fmt}: {spot}"
+        );
+        assert!(close(
+            &attr("spot/light", "inputs:color"),
+            &[1.0, 0.5, 0.25]
+        ));
+        assert!(close(
+            &attr("spot/light", "inputs:shaping:cone:angle"),
+            &[0.6f64.to_degrees()]
+        ));
+        assert!(close(
+            &attr("spot/light", "inputs:shaping:cone:softness"),
+            &[0.5]
+        ));
+        assert_eq!(prim("sky/sun")["type"], "DistantLight");
+        assert!(close(&attr("sky/sun", "inputs:intensity"), &[2.0]));
+        assert_eq!(attr("sky/sun", "inputs:normalize"), true);
+    }
 }
 
 /// Primitives drawing one vertex buffer (three.js' and Babylon.js' material groups) are one

@@ -72,6 +72,7 @@ pub struct Input {
 /// What an input holds.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Value {
+    Bool(bool),
     Float(f32),
     Vec2([f32; 2]),
     Vec3([f32; 3]),

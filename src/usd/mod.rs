@@ -3,10 +3,11 @@
 //! The pipeline, one module per stage: [`stage`] (the glTF scene as a USD stage model: Xforms,
 //! Meshes, which of them are animated and at which time codes; [`material`]: the glTF
 //! materials as UsdShade materials and the texture files they read; [`motion`]: the node
-//! transforms the clips on the timeline key) -> the frames, streamed in as
+//! transforms the clips on the timeline key; [`camera_light`]: cameras and lights) -> the frames, streamed in as
 //! they are computed -> [`usda`] (text, samples spooled) | [`usdc`] (crate file) -> [`usdz`]
 //! (package); [`write`] picks the format and stages the file.
 
+mod camera_light;
 mod material;
 mod motion;
 mod stage;

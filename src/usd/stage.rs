@@ -17,6 +17,8 @@
 //!   `doubleSided` from the material;
 //! * primitives with the same attributes and targets (material groups drawing one vertex
 //!   buffer) are one Mesh with a `GeomSubset` per primitive bound to its material;
+//! * a node's camera or `KHR_lights_punctual` light is a `Camera` or UsdLux light prim below
+//!   its Xform ([`super::camera_light`]);
 //! * a node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`, as gltfpack `-mi`
 //!   writes it) is a PointInstancer (positions, orientations, scales, the mesh as its one
 //!   prototype in a `Prototypes` scope);
@@ -25,6 +27,7 @@
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
 
+use super::camera_light::{self, Plain};
 use super::material::{st_name, Look, LookBuilder};
 use super::motion::{rest_trs, ClipOnStage, NodeMotion};
 use crate::gltf::{
@@ -193,6 +196,8 @@ pub enum Prim {
         children: Vec<Prim>,
     },
     Mesh(Box<MeshPrim>),
+    /// A node's camera or light ([`super::camera_light`]).
+    Plain(Box<Plain>),
     /// A node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`): a
     /// PointInstancer whose one prototype (`prototype`, an Xform holding the mesh's primitives,
     /// under a `Prototypes` scope) is placed by each instance's transform.
@@ -250,7 +255,7 @@ pub fn identifier(s: &str) -> String {
 }
 
 /// Unique names among siblings: the first keeps its name, later ones get `_1`, `_2`, ...
-fn unique(name: String, taken: &mut HashMap<String, usize>) -> String {
+pub(super) fn unique(name: String, taken: &mut HashMap<String, usize>) -> String {
     let mut candidate = name.clone();
     while let Some(n) = taken.get_mut(&candidate) {
         *n += 1;
@@ -320,6 +325,7 @@ pub fn build_stage(
         codes: &codes,
         motion: &motion,
         look: RefCell::new(LookBuilder::new(doc, texture_prefix)),
+        left_out: RefCell::new(Vec::new()),
     };
     let mut taken = HashMap::new();
     let mut children = Vec::new();
@@ -330,6 +336,7 @@ pub fn build_stage(
         .look
         .into_inner()
         .finish(unique("Materials".into(), &mut taken))?;
+    let ctx_left_out = ctx.left_out.into_inner();
     let all: Vec<f64> = codes.iter().flatten().copied().collect();
     let start = all.iter().copied().fold(f64::INFINITY, f64::min);
     let end = all.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -346,6 +353,7 @@ pub fn build_stage(
         children,
         look,
     };
+    stage.look.left_out.extend(ctx_left_out);
     stage.look.left_out.extend(not_carried);
     stage.look.left_out.extend(not_in_a_point_cache(doc));
     // The stage is the file's scene: a processed mesh no node of it carries has no frames
@@ -380,8 +388,7 @@ pub fn build_stage(
 }
 
 /// A line for each kind of thing in the file that a point cache does not carry, naming them:
-/// skins (no skeleton: a skinned mesh is written as its vertices are stored, the bind pose),
-/// cameras and lights (`KHR_lights_punctual`).
+/// skins (no skeleton: a skinned mesh is written as its vertices are stored, the bind pose).
 fn not_in_a_point_cache(doc: &Document) -> Vec<String> {
     let json = &doc.json;
     let named = |kind: &str, i: usize, v: &Value| quoted_name(v, || format!("{kind} {i}"));
@@ -403,21 +410,6 @@ fn not_in_a_point_cache(doc: &Document) -> Vec<String> {
             listed(&skinned),
         ));
     }
-    let lights = arr(&json["extensions"]["KHR_lights_punctual"], "lights");
-    for (kind, list) in [("camera", arr(json, "cameras")), ("light", lights)] {
-        let names: Vec<String> = (list.iter().enumerate())
-            .map(|(i, v)| named(kind, i, v))
-            .collect();
-        let (s, are, them) = match names.len() {
-            0 => continue,
-            1 => ("", "is", "it"),
-            _ => ("s", "are", "them"),
-        };
-        out.push(format!(
-            "{kind}{s} {} {are} not written to the USD stage (a glTF output keeps {them})",
-            listed(&names)
-        ));
-    }
     out
 }
 
@@ -427,6 +419,8 @@ struct Ctx<'a> {
     codes: &'a [Vec<f64>],
     motion: &'a NodeMotion,
     look: RefCell<LookBuilder<'a>>,
+    /// What the nodes' cameras and lights do not carry.
+    left_out: RefCell<Vec<String>>,
 }
 
 impl Ctx<'_> {
@@ -457,6 +451,8 @@ impl Ctx<'_> {
             };
             mesh = self.mesh(index, mi as usize, names)?;
         }
+        let plain = camera_light::of_node(json, index, &mut kids, &mut self.left_out.borrow_mut());
+        children.extend(plain.into_iter().map(|p| Prim::Plain(Box::new(p))));
         if instances.is_none() {
             children.append(&mut mesh);
         } else {
@@ -836,6 +832,7 @@ pub fn animated(stage: &Stage) -> HashMap<usize, Vec<&MeshPrim>> {
                     }
                 }
             }
+            Prim::Plain(_) => {}
         }
     }
     let (mut seen, mut out) = (HashSet::new(), HashMap::new());

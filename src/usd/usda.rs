@@ -2,6 +2,7 @@
 //! scratch files beside the output as frames arrive, then copied into the layer, so no frame
 //! is held in memory.
 
+use super::camera_light::Plain;
 use super::material::{Material, Value, SURFACE};
 use super::stage::{
     animated, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
@@ -89,6 +90,7 @@ fn value_text(v: &Value) -> String {
         format!("({})", items.join(", "))
     };
     match v {
+        Value::Bool(b) => u8::from(*b).to_string(),
         Value::Float(x) => F(*x).to_string(),
         Value::Vec2(x) => list(x),
         Value::Vec3(x) => list(x),
@@ -126,6 +128,7 @@ fn write_prim(
             writeln!(out, "{pad}}}")?;
         }
         Prim::Mesh(m) => write_mesh(m, out, &pad, scope, spool)?,
+        Prim::Plain(p) => write_plain(p, out, &pad)?,
         Prim::Instancer(i) => {
             writeln!(out, "{pad}def PointInstancer \"{}\"", i.name)?;
             writeln!(out, "{pad}{{")?;
@@ -164,6 +167,28 @@ fn write_prim(
             writeln!(out, "{pad}}}")?;
         }
     }
+    Ok(())
+}
+
+/// A camera or light: its type, API schemas and attributes.
+fn write_plain(p: &Plain, out: &mut dyn Write, pad: &str) -> Result<()> {
+    if p.api_schemas.is_empty() {
+        writeln!(out, "{pad}def {} \"{}\"", p.type_name, p.name)?;
+    } else {
+        let schemas: Vec<String> = p.api_schemas.iter().map(|s| format!("{s:?}")).collect();
+        writeln!(out, "{pad}def {} \"{}\" (", p.type_name, p.name)?;
+        writeln!(
+            out,
+            "{pad}    prepend apiSchemas = [{}]",
+            schemas.join(", ")
+        )?;
+        writeln!(out, "{pad})")?;
+    }
+    writeln!(out, "{pad}{{")?;
+    for (name, ty, v) in &p.attrs {
+        writeln!(out, "{pad}    {ty} {name} = {}", value_text(v))?;
+    }
+    writeln!(out, "{pad}}}")?;
     Ok(())
 }
 

@@ -11,6 +11,7 @@
 //! laid out as `[offset to times][times][times rep][offset to reps][sample arrays][count][reps]`
 //! with every size known beforehand, so nothing is patched but the bootstrap.
 
+use super::camera_light::Plain;
 use super::material::{Look, Shader, Value, SURFACE};
 use super::stage::{
     animated, extent, for_each_sample, DisplayColor, FrameSource, MeshPrim, Prim, Stage, PROTOTYPES,
@@ -378,6 +379,7 @@ impl<W: Write + Seek> Writer<W> {
                 self.prim_spec(me, "Xform", props, children.iter().map(prim_name).collect())
             }
             Prim::Mesh(m) => self.mesh(m, parent, frames),
+            Prim::Plain(p) => self.plain(p, parent),
             Prim::Instancer(i) => {
                 let me = self.path(Some(parent), &i.name, false);
                 let mut props = self.transform(me, &i.matrix, &i.motion)?;
@@ -638,6 +640,39 @@ impl<W: Write + Seek> Writer<W> {
         self.prim_spec(scope, "Scope", vec![], names)
     }
 
+    /// The `default` field of an attribute holding `v` (not a connection).
+    fn default_field(&mut self, v: &Value) -> Result<u32> {
+        let v = match v {
+            Value::Bool(b) => Val::Bool(*b),
+            Value::Float(x) => Val::Float(*x),
+            Value::Vec2(x) => Val::Vec2(x),
+            Value::Vec3(x) => Val::Vec3(x),
+            Value::Vec4(x) => Val::Vec4(x),
+            Value::Token(t) => Val::Token(t),
+            Value::Text(t) => Val::String(t),
+            Value::Asset(a) => Val::Asset(a),
+            Value::Connect { .. } => unreachable!("connections are written as connectionPaths"),
+        };
+        self.field("default", v)
+    }
+
+    /// A camera or light: its type, API schemas and attributes.
+    fn plain(&mut self, p: &Plain, parent: usize) -> Result<()> {
+        let me = self.path(Some(parent), &p.name, false);
+        let mut props = Vec::new();
+        for (name, ty, v) in &p.attrs {
+            let f = self.default_field(v)?;
+            self.attribute(me, name, ty, vec![f])?;
+            props.push(name.to_string());
+        }
+        let mut extra = Vec::new();
+        if !p.api_schemas.is_empty() {
+            let schemas = Val::PrependTokens(p.api_schemas.clone());
+            extra.push(self.field("apiSchemas", schemas)?);
+        }
+        self.prim_spec_with(me, p.type_name, props, vec![], extra)
+    }
+
     /// One shader of the material at path `material`.
     fn shader(&mut self, s: &Shader, material: usize) -> Result<()> {
         let me = self.path(Some(material), &s.name, false);
@@ -653,13 +688,7 @@ impl<W: Write + Seek> Writer<W> {
                     let out = self.path(Some(from), &format!("outputs:{output}"), true);
                     self.field("connectionPaths", Val::Paths(vec![out]))?
                 }
-                Value::Float(x) => self.field("default", Val::Float(*x))?,
-                Value::Vec2(x) => self.field("default", Val::Vec2(x))?,
-                Value::Vec3(x) => self.field("default", Val::Vec3(x))?,
-                Value::Vec4(x) => self.field("default", Val::Vec4(x))?,
-                Value::Token(t) => self.field("default", Val::Token(t))?,
-                Value::Text(t) => self.field("default", Val::String(t))?,
-                Value::Asset(a) => self.field("default", Val::Asset(a))?,
+                v => self.default_field(v)?,
             };
             self.attribute(me, &name, i.type_name, vec![v])?;
             props.push(name);
@@ -799,6 +828,7 @@ fn prim_name(p: &Prim) -> String {
         Prim::Xform { name, .. } => name.clone(),
         Prim::Instancer(i) => i.name.clone(),
         Prim::Mesh(m) => m.name.clone(),
+        Prim::Plain(p) => p.name.clone(),
     }
 }
 
