@@ -125,6 +125,17 @@ fn float(x: f64) -> Value {
     Value::Float(x as f32)
 }
 
+/// Whether every number of `attrs` is finite as written (f32): an aperture or intensity of
+/// 1e38 in the glTF overflows.
+fn finite(attrs: &[Attr]) -> bool {
+    attrs.iter().all(|(_, _, v)| match v {
+        Value::Float(x) => x.is_finite(),
+        Value::Vec2(x) => x.iter().all(|x| x.is_finite()),
+        Value::Vec3(x) => x.iter().all(|x| x.is_finite()),
+        _ => true,
+    })
+}
+
 /// A glTF camera's type name and attributes (see the module's notes); `None` for one that
 /// breaks glTF's rules (no positive field of view or extents, a far plane before the near one).
 fn camera(cam: &Json) -> Option<(&'static str, Vec<Attr>)> {
@@ -154,20 +165,18 @@ fn camera(cam: &Json) -> Option<(&'static str, Vec<Attr>)> {
         }
         _ => return None,
     };
-    Some((
-        "Camera",
-        vec![
-            ("projection", "token", Value::Token(projection)),
-            ("focalLength", "float", float(FOCAL_LENGTH)),
-            ("horizontalAperture", "float", float(apertures[0])),
-            ("verticalAperture", "float", float(apertures[1])),
-            (
-                "clippingRange",
-                "float2",
-                Value::Vec2(clipping.map(|x| x as f32)),
-            ),
-        ],
-    ))
+    let attrs = vec![
+        ("projection", "token", Value::Token(projection)),
+        ("focalLength", "float", float(FOCAL_LENGTH)),
+        ("horizontalAperture", "float", float(apertures[0])),
+        ("verticalAperture", "float", float(apertures[1])),
+        (
+            "clippingRange",
+            "float2",
+            Value::Vec2(clipping.map(|x| x as f32)),
+        ),
+    ];
+    finite(&attrs).then_some(("Camera", attrs))
 }
 
 /// A `KHR_lights_punctual` light as a UsdLux prim (unnamed; see the module's notes); `None`
@@ -217,7 +226,7 @@ fn light(l: &Json) -> Option<Plain> {
         }
         _ => return None,
     };
-    Some(Plain {
+    finite(&attrs).then_some(Plain {
         name: String::new(),
         type_name,
         api_schemas,
@@ -263,9 +272,16 @@ mod tests {
         assert_eq!(*attr(&o, "verticalAperture"), Value::Float(20.0));
         // Two cameras of one name under one parent get distinct names.
         assert_ne!(p.name, o.name);
-        // A far plane before the near one breaks glTF's rules: said, not written.
+        // A far plane before the near one breaks glTF's rules, extents of 1e38 overflow the
+        // apertures: said, not written.
         assert!(of_node(&doc, 2, &mut taken, &mut left).is_empty());
-        assert_eq!(left.len(), 1, "{left:?}");
+        let huge = json!({
+            "cameras": [{"type": "orthographic",
+                "orthographic": {"xmag": 1e38, "ymag": 1.0, "znear": 0.0, "zfar": 1.0}}],
+            "nodes": [{"camera": 0}]
+        });
+        assert!(of_node(&huge, 0, &mut taken, &mut left).is_empty());
+        assert_eq!(left.len(), 2, "{left:?}");
     }
 
     #[test]
