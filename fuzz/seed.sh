@@ -13,6 +13,18 @@ for t in gltf_read keyframes usd_stage; do
 done
 [ -d $F ] && cp $F/skinned/*.glb corpus/blend/ && cp $F/skinned/*.glb corpus/gltf_read/ && cp $F/skinned/*.glb corpus/usd_stage/ || true
 [ -d $F ] && cp $F/bvh/*.bvh corpus/bvh/ || true
+# Cameras and lights (the USD stage writes them as Camera and UsdLux prims).
+cat > corpus/usd_stage/lit.gltf <<'GLTF'
+{"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1, 2, 3]}],
+ "cameras": [{"type": "perspective", "perspective": {"yfov": 0.7, "aspectRatio": 1.5, "znear": 0.1}},
+  {"type": "orthographic", "orthographic": {"xmag": 2, "ymag": 1, "znear": 0, "zfar": 100}}],
+ "extensionsUsed": ["KHR_lights_punctual"],
+ "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 20, "range": 8},
+  {"type": "spot", "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}}, {"type": "directional"}]}},
+ "nodes": [{"camera": 0}, {"camera": 1, "translation": [0, 10, 0]},
+  {"extensions": {"KHR_lights_punctual": {"light": 0}}, "children": [3]},
+  {"extensions": {"KHR_lights_punctual": {"light": 1}}}]}
+GLTF
 echo "corpora: $(for t in corpus/*; do echo -n "$(basename $t)=$(ls $t | wc -l) "; done)"
 # The decoders: streams cut from compressed variants made by the real tools (when installed).
 B=../tools/node/node_modules/.bin

@@ -1,7 +1,8 @@
 //! The USD stage model of any glTF the reader accepts: nodes, meshes, materials, instancing
-//! (`EXT_mesh_gpu_instancing`) and the node motion of every clip, each clip placed on the
-//! timeline at four time codes. What the stage holds is written as text that usd-core must
-//! read, so every transform, instance and point must be finite.
+//! (`EXT_mesh_gpu_instancing`), cameras and lights, and the node motion of every clip, each
+//! clip placed on the timeline at four time codes. What the stage holds is written as text that
+//! usd-core must read, so every transform, instance, point and camera or light number must be
+//! finite.
 #![no_main]
 
 use inbetween::gltf::{Access, Document};
@@ -31,6 +32,11 @@ fn finite(p: &Prim) {
             children.iter().for_each(finite);
         }
         Prim::Mesh(m) => assert!(all(m.points.as_flattened()), "points"),
+        Prim::Plain(p) => {
+            // Cameras and lights: every number written finite (Debug prints inf and NaN).
+            let text = format!("{:?}", p.attrs);
+            assert!(!text.contains("inf") && !text.contains("NaN"), "{text}");
+        }
         Prim::Instancer(i) => {
             let n = &i.instances;
             assert!(

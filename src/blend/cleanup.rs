@@ -1,17 +1,18 @@
 //! Foot clean-up: while a foot is planted in the blend, it is pinned to one spot of the ground
 //! (the spot where the sources' feet, blended, are on average during that contact; on an
 //! in-place clip the ground moves under it at the blend's treadmill speed) by analytic two-bone
-//! IK on the leg, the knee bending to the side it bends to over the clip. Around each contact
-//! the correction (pin minus the foot's own position) is carried on at the rate it was changing,
-//! rate and weight faded out over [`EASE_SECONDS`] (a swing shorter than two eases gets one cubic from one
-//! contact's correction to the next), so the foot keeps its position and velocity where a pin
-//! starts or ends: no pop. Before the IK the root takes up what the legs share, as smooth
-//! curves over the clip: a horizontal shift toward the planted feet's corrections
-//! ([`root_shift`]) and a rise or fall that keeps each stance leg as long as it was
-//! ([`root_rise`]), so that a nearly straight knee, where a small change of the hip-foot
+//! IK on the leg, the knee bending to the side it bends to over the clip; the spot moved, where
+//! the leg cannot reach it on every frame of the contact, to the nearest one it can ([`pin`]).
+//! Around each contact the correction (pin minus the foot's own position) is carried on at the
+//! rate it was changing, rate and weight faded out over [`EASE_SECONDS`] (a swing shorter than
+//! two eases gets one cubic from one contact's correction to the next), so the foot keeps its
+//! position and velocity where a pin starts or ends: no pop. Before the IK the root takes up
+//! what the legs share, as smooth curves over the clip: a horizontal shift toward the planted
+//! feet's corrections ([`root_shift`]) and a rise or fall that keeps each stance leg as long as
+//! it was ([`root_rise`]), so that a nearly straight knee, where a small change of the hip-foot
 //! distance turns the knee a lot, is left as the blend had it. Where a leg still cannot reach,
-//! the root is lowered just enough (at most [`MAX_DROP`]), eased the same way. Joints outside the legs keep their
-//! rotations.
+//! the root is lowered just enough (at most [`MAX_DROP`]), eased the same way. Joints outside
+//! the legs keep their rotations.
 
 use super::legs::Leg;
 use super::rig::{flat, Pose, Rig, UP};
@@ -322,8 +323,9 @@ impl Correction {
 /// The correction (target minus the foot's own position `ends`) per frame: in contact, what
 /// moves the foot onto its target; in the swing around it, the contact's first or last correction
 /// carried on at the rate it was changing, that rate fading linearly and the weight with a
-/// smoothstep over the ease window, so the foot's path keeps its position and velocity where a pin starts or ends (no
-/// pop); between two contacts nearer than two ease windows, one cubic at full weight.
+/// smoothstep over the ease window, so the foot's path keeps its position and velocity where a
+/// pin starts or ends (no pop); between two contacts nearer than two ease windows, one cubic at
+/// full weight.
 /// `None` where no correction applies. On a looping clip (last frame = first) gaps wrap.
 pub fn corrections(
     planted: &[bool],

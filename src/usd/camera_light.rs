@@ -75,9 +75,10 @@ pub fn of_node(
                 api_schemas: Vec::new(),
                 attrs,
             }),
-            None => left_out.push(format!(
-                "{what} has no valid projection (glTF's camera rules): not written to the USD stage"
-            )),
+            None => say(
+                left_out,
+                format!("{what} has no valid projection (glTF's camera rules): not written to the USD stage"),
+            ),
         }
     }
     if let Some(l) = n["extensions"]["KHR_lights_punctual"]["light"].as_u64() {
@@ -87,21 +88,32 @@ pub fn of_node(
             Some(mut p) => {
                 let light = &lights[l as usize];
                 if let Some(range) = light["range"].as_f64() {
-                    left_out.push(format!(
+                    let line = format!(
                         "{}'s range ({range}) is not carried: UsdLux lights have none",
                         what()
-                    ));
+                    );
+                    say(left_out, line);
                 }
                 p.name = unique(light["name"].as_str().unwrap_or("light"), taken);
                 out.push(p);
             }
-            None => left_out.push(format!(
-                "{} is not a valid KHR_lights_punctual light: not written to the USD stage",
-                what()
-            )),
+            None => say(
+                left_out,
+                format!(
+                    "{} is not a valid KHR_lights_punctual light: not written to the USD stage",
+                    what()
+                ),
+            ),
         }
     }
     out
+}
+
+/// `line` added to `left_out` once (a camera or light several nodes carry is said once).
+fn say(left_out: &mut Vec<String>, line: String) {
+    if !left_out.contains(&line) {
+        left_out.push(line);
+    }
 }
 
 /// `camera "shot"`, or `camera 2` without a name.
