@@ -73,3 +73,24 @@ fn keyframes_inputs_give_finite_frames_or_a_refusal() {
         }
     }
 }
+
+/// usd_stage, light-index-past-the-list.gltf: a node naming light 0 of a file whose lights
+/// list the fuzzer had cut (its `extensions` key mangled), found within seconds of the cameras
+/// and lights reaching the USD stage: the stage indexed the missing light and panicked. Built
+/// as the harness builds it (every clip on the timeline), the stage now names the light in a
+/// line and goes on.
+#[test]
+fn usd_stage_inputs_build_or_are_refused() {
+    use inbetween::gltf::{Access, Document};
+    use inbetween::usd::build_stage;
+    let files = found("usd_stage");
+    assert!(!files.is_empty());
+    for f in files {
+        let data = std::fs::read(&f).unwrap();
+        let doc = Document::from_bytes(&f, &data, &Access::default()).expect("it reads");
+        let stage = build_stage(&doc, &[], Vec::new(), 30.0, "x_").expect("a stage");
+        let said = stage.look.left_out.join("\n");
+        eprintln!("{}: {said}", f.display());
+        assert!(said.contains("light 0 is not a valid"), "{said}");
+    }
+}

@@ -82,11 +82,12 @@ pub fn of_node(
         }
     }
     if let Some(l) = n["extensions"]["KHR_lights_punctual"]["light"].as_u64() {
-        let lights = arr(&json["extensions"]["KHR_lights_punctual"], "lights");
-        let what = || called("light", l, &lights[l as usize]);
-        match lights.get(l as usize).and_then(light) {
+        // A node may name a light the file does not have: said, like one of no known type.
+        let light_json = &json["extensions"]["KHR_lights_punctual"]["lights"][l as usize];
+        let what = || called("light", l, light_json);
+        match light(light_json) {
             Some(mut p) => {
-                let light = &lights[l as usize];
+                let light = light_json;
                 if let Some(range) = light["range"].as_f64() {
                     let line = format!(
                         "{}'s range ({range}) is not carried: UsdLux lights have none",
@@ -333,5 +334,9 @@ mod tests {
         assert!((soft - 0.6).abs() < 1e-6);
         assert_eq!(left.len(), 1, "the point light's range: {left:?}");
         assert!(left[0].contains("range (5)"), "{left:?}");
+        // A node naming a light the file does not have (the fuzzer's find: it panicked).
+        let missing = json!({"nodes": [{"extensions": {"KHR_lights_punctual": {"light": 7}}}]});
+        assert!(of_node(&missing, 0, &mut HashMap::new(), &mut left).is_empty());
+        assert!(left[1].starts_with("light 7 is not a valid"), "{left:?}");
     }
 }
