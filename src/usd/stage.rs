@@ -451,14 +451,14 @@ impl Ctx<'_> {
             };
             mesh = self.mesh(index, mi as usize, names)?;
         }
-        let plain = camera_light::of_node(json, index, &mut kids, &mut self.left_out.borrow_mut());
-        children.extend(plain.into_iter().map(|p| Prim::Plain(Box::new(p))));
         if instances.is_none() {
             children.append(&mut mesh);
         } else {
             // The prototype's name is unique among the node's prims too.
             kids.insert(PROTOTYPES.to_string(), 0);
         }
+        let plain = camera_light::of_node(json, index, &mut kids, &mut self.left_out.borrow_mut());
+        children.extend(plain.into_iter().map(|p| Prim::Plain(Box::new(p))));
         for c in arr(node, "children").iter().filter_map(Value::as_u64) {
             children.push(self.node(c as usize, &mut kids, depth + 1)?);
         }
