@@ -106,6 +106,25 @@ impl Node<'_> {
     }
 }
 
+/// `items` (group, value) laid out by group: group g's values, in their order in `items`, at
+/// `ptr[g]..ptr[g + 1]` of the values returned with `ptr`.
+fn grouped<T: Copy + Default>(groups: usize, items: &[(u32, T)]) -> (Vec<usize>, Vec<T>) {
+    let mut ptr = vec![0usize; groups + 1];
+    for &(g, _) in items {
+        ptr[g as usize + 1] += 1;
+    }
+    for g in 0..groups {
+        ptr[g + 1] += ptr[g];
+    }
+    let mut next = ptr.clone();
+    let mut values = vec![T::default(); items.len()];
+    for &(g, v) in items {
+        values[next[g as usize]] = v;
+        next[g as usize] += 1;
+    }
+    (ptr, values)
+}
+
 fn node(s: &SymbolicSupernodalCholesky<u32>, k: usize) -> Node<'_> {
     let start = s.supernode_begin()[k] as usize;
     let rs = s.col_ptr_for_row_idx()[k] as usize;
@@ -144,7 +163,6 @@ impl Plan {
         }
         // A's entries: (i, j) upper with i <= j lands at (max, min) of their positions.
         let at = |v: u32| inv.map_or(v, |p| p[v as usize]) as usize;
-        let mut a_ptr = vec![0usize; count + 1];
         let mut placed = Vec::with_capacity(row_idx.len());
         for c in 0..n {
             let entries = col_ptr[c] as usize..col_ptr[c + 1] as usize;
@@ -158,55 +176,35 @@ impl Plan {
                 } else {
                     b.ncols + b.rows.binary_search(&(row as u32)).ok()?
                 };
-                placed.push((k as u32, e as u32, ((col - b.start) * b.nrows() + r) as u32));
-                a_ptr[k + 1] += 1;
+                placed.push((
+                    k as u32,
+                    (e as u32, ((col - b.start) * b.nrows() + r) as u32),
+                ));
             }
         }
-        for k in 0..count {
-            a_ptr[k + 1] += a_ptr[k];
-        }
-        let mut next = a_ptr.clone();
-        let mut a_entries = vec![(0u32, 0u32); placed.len()];
-        for (k, e, off) in placed {
-            a_entries[next[k as usize]] = (e, off);
-            next[k as usize] += 1;
-        }
-        let owner = &owner;
+        let (a_ptr, a_entries) = grouped(count, &placed);
+        drop(placed);
         // Which supernodes each supernode updates: those owning its rows below (ascending d
         // for each s, as the loop over d is ascending).
-        let mut by_ptr = vec![0usize; count + 1];
-        let targets = |d: usize| {
-            let mut last = u32::MAX;
-            nodes[d].rows.iter().filter_map(move |&r| {
-                let k = owner[r as usize];
-                (k != last).then(|| {
-                    last = k;
-                    k
-                })
-            })
-        };
-        for d in 0..count {
-            for k in targets(d) {
-                by_ptr[k as usize + 1] += 1;
-            }
-        }
-        for k in 0..count {
-            by_ptr[k + 1] += by_ptr[k];
-        }
-        let mut next = by_ptr.clone();
-        let mut by = vec![0u32; by_ptr[count]];
+        let mut updates = Vec::new();
         let mut own = vec![0.0f64; count];
-        for d in 0..count {
-            let b = &nodes[d];
-            for k in targets(d) {
+        for (d, b) in nodes.iter().enumerate() {
+            let mut last = u32::MAX;
+            for &row in b.rows {
+                let k = owner[row as usize];
+                if k == last {
+                    continue;
+                }
+                last = k;
+                updates.push((k, d as u32));
                 let t = &nodes[k as usize];
-                by[next[k as usize]] = d as u32;
-                next[k as usize] += 1;
                 let r = b.rows_in(t.start..t.end());
                 let m = b.rows.len() - r.start;
                 own[k as usize] += (m * r.len() * b.ncols) as f64;
             }
         }
+        let (by_ptr, by) = grouped(count, &updates);
+        drop(updates);
         // The tree: a supernode's parent owns its first row below.
         let parent: Vec<Option<usize>> = nodes
             .iter()
@@ -218,30 +216,20 @@ impl Plan {
             let (c, h) = (b.ncols as f64, b.nrows() as f64);
             work[k] += c * c * c / 3.0 + (h - c) * c * c + h * c;
         }
-        let mut child_ptr = vec![0usize; count + 1];
+        let mut parent_of = Vec::with_capacity(count);
         let mut roots = Vec::new();
         for k in 0..count {
             match parent[k] {
                 Some(p) if p > k => {
                     size[p] += size[k];
                     work[p] += work[k];
-                    child_ptr[p + 1] += 1;
+                    parent_of.push((p as u32, k as u32));
                 }
                 Some(_) => return None,
                 None => roots.push(k as u32),
             }
         }
-        for k in 0..count {
-            child_ptr[k + 1] += child_ptr[k];
-        }
-        let mut next = child_ptr.clone();
-        let mut children = vec![0u32; child_ptr[count]];
-        for (k, &p) in parent.iter().enumerate() {
-            if let Some(p) = p {
-                children[next[p]] = k as u32;
-                next[p] += 1;
-            }
-        }
+        let (child_ptr, children) = grouped(count, &parent_of);
         // A postorder: each node after its subtree, the subtrees one after the other.
         let mut post = Vec::with_capacity(count);
         let mut at = vec![0u32; count];
