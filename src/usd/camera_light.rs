@@ -67,7 +67,6 @@ pub fn of_node(
     let mut out = Vec::new();
     if let Some(c) = n["camera"].as_u64() {
         let cam = &json["cameras"][c as usize];
-        let what = called("camera", c, cam);
         match camera(cam) {
             Some((type_name, attrs)) => out.push(Plain {
                 name: unique(cam["name"].as_str().unwrap_or("camera"), taken),
@@ -77,25 +76,27 @@ pub fn of_node(
             }),
             None => say(
                 left_out,
-                format!("{what} has no valid projection (glTF's camera rules): not written to the USD stage"),
+                format!(
+                    "{} has no valid projection (glTF's camera rules): not written to the USD stage",
+                    called("camera", c, cam)
+                ),
             ),
         }
     }
     if let Some(l) = n["extensions"]["KHR_lights_punctual"]["light"].as_u64() {
         // A node may name a light the file does not have: said, like one of no known type.
-        let light_json = &json["extensions"]["KHR_lights_punctual"]["lights"][l as usize];
-        let what = || called("light", l, light_json);
-        match light(light_json) {
+        let lit = &json["extensions"]["KHR_lights_punctual"]["lights"][l as usize];
+        let what = || called("light", l, lit);
+        match light(lit) {
             Some(mut p) => {
-                let light = light_json;
-                if let Some(range) = light["range"].as_f64() {
+                if let Some(range) = lit["range"].as_f64() {
                     let line = format!(
                         "{}'s range ({range}) is not carried: UsdLux lights have none",
                         what()
                     );
                     say(left_out, line);
                 }
-                p.name = unique(light["name"].as_str().unwrap_or("light"), taken);
+                p.name = unique(lit["name"].as_str().unwrap_or("light"), taken);
                 out.push(p);
             }
             None => say(
