@@ -1024,7 +1024,7 @@ fn gpu_instances_become_a_point_instancer() {
 }
 
 /// What a point cache cannot carry is named in a warning line, not dropped without a word: a
-/// light's range, and skins (RobotExpressive's hands, when the fixtures are here). Cameras and
+/// light's range, and clips that tween no mesh (RobotExpressive's, when the fixtures are here). Cameras and
 /// lights travel (`usd_camera_and_light_prims_read_back`).
 #[test]
 fn what_a_point_cache_does_not_carry_is_named() {
@@ -1051,16 +1051,46 @@ fn what_a_point_cache_does_not_carry_is_named() {
     let robot = fx.join("skinned/RobotExpressive.glb");
     let w = warnings(&robot, &["--keys", "targets"]);
     assert!(
-        w.iter().any(|l| l.contains(
-            "meshes \"Hand.R\", \"Hand.L\" are skinned; a USD point cache has no skeleton"
-        )),
-        "{w:?}"
-    );
-    assert!(
         w.iter()
             .any(|l| l.contains("animations \"Dance\", \"Death\"")),
         "{w:?}"
     );
+    // Its skinned hands are baked in the pose their joints rest in (`skin`): at the ends of
+    // its hanging arms, where they floated 0.34 beside them, in the bind pose, before.
+    assert!(w.iter().all(|l| !l.contains("bind pose")), "{w:?}");
+    let Some(python) = python() else { return };
+    let usd = dir.path().join("out.usda");
+    let arm = "RobotArmature/Bone/Body/Hips/Abdomen/Torso/Shoulder_R/UpperArm_R/Arm_R/Arm_R";
+    let boxes: Vec<(glam::DVec3, glam::DVec3)> = [arm, "Hand_R/Hand_R_0"]
+        .iter()
+        .map(|prim| {
+            let path = format!("/Root_Scene/RootNode/{prim}");
+            let r: serde_json::Value = serde_json::from_slice(&run_tool(
+                &python,
+                "usd_world_points.py",
+                &[usd.as_os_str(), path.as_ref()],
+                prim,
+            ))
+            .unwrap();
+            let points = r["points"][0].as_array().unwrap().iter().map(|p| {
+                glam::DVec3::new(
+                    p[0].as_f64().unwrap(),
+                    p[1].as_f64().unwrap(),
+                    p[2].as_f64().unwrap(),
+                )
+            });
+            points.fold(
+                (glam::DVec3::INFINITY, -glam::DVec3::INFINITY),
+                |(lo, hi), p| (lo.min(p), hi.max(p)),
+            )
+        })
+        .collect();
+    let ((a_lo, a_hi), (h_lo, h_hi)) = (boxes[0], boxes[1]);
+    let gap = (a_lo - h_hi)
+        .max(h_lo - a_hi)
+        .max(glam::DVec3::ZERO)
+        .length();
+    assert!(gap < 0.05, "the hand {gap} from the arm: {boxes:?}");
 }
 
 /// flag_wave with two cameras (a perspective one at (0, 1, 5), an orthographic one looking down
@@ -1251,4 +1281,208 @@ fn a_still_morph_mesh_is_written_in_its_pose() {
             "{fmt}: the copy's points within {most} of base + target 3"
         );
     }
+}
+
+/// flag_wave skinned: the flag (its node moved by 10 along x, which glTF ignores for a skinned
+/// mesh) and the pole hang from an armature lifted 0.5, with a `base` joint at its origin and a
+/// `tip` joint 1.5 along x that the flag's clip turns by a quarter turn about y over its two
+/// seconds. The flag's vertices left of x = 1.5 follow `base`, those right of it blend into
+/// `tip` over 0.75; the pole follows `tip` alone. Returns the tip's turn at time `t` (s).
+fn skinned_flag(out: &Path) -> impl Fn(f64) -> glam::DQuat {
+    let doc = inbetween::gltf::Document::open(&sample("flag_wave.glb")).unwrap();
+    let mut json = doc.json.clone();
+    let mut bin = doc.buffers[0].clone();
+    let quarter = glam::DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2);
+    let push_u16 = |json: &mut serde_json::Value, bin: &mut Vec<u8>, values: &[u16]| {
+        let views = json["bufferViews"].as_array_mut().unwrap();
+        views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 2 * values.len()}));
+        let view = views.len() - 1;
+        bin.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let accessors = json["accessors"].as_array_mut().unwrap();
+        accessors.push(
+            serde_json::json!({"bufferView": view, "componentType": 5123,
+            "count": values.len() / 4, "type": "VEC4"}),
+        );
+        accessors.len() - 1
+    };
+    let influences = |json: &mut serde_json::Value, bin: &mut Vec<u8>, mesh: usize| {
+        let pos = json["meshes"][mesh]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .unwrap() as usize;
+        let xs: Vec<f64> = (doc.read_f64(pos).unwrap().0.chunks(3))
+            .map(|p| p[0])
+            .collect();
+        let w: Vec<f32> = (xs.iter())
+            .map(|&x| {
+                if mesh == 1 {
+                    1.0
+                } else {
+                    ((x - 1.5) / 0.75).clamp(0.0, 1.0) as f32
+                }
+            })
+            .collect();
+        let joints: Vec<u16> = w.iter().flat_map(|_| [0, 1, 0, 0]).collect();
+        let weights: Vec<f32> = w.iter().flat_map(|&w| [1.0 - w, w, 0.0, 0.0]).collect();
+        let j = push_u16(json, bin, &joints);
+        let wt = push_f32_accessor(json, bin, &weights, "VEC4");
+        let attributes = &mut json["meshes"][mesh]["primitives"][0]["attributes"];
+        attributes["JOINTS_0"] = serde_json::json!(j);
+        attributes["WEIGHTS_0"] = serde_json::json!(wt);
+    };
+    influences(&mut json, &mut bin, 0);
+    influences(&mut json, &mut bin, 1);
+    let ibm: Vec<f32> = [[0.0, -0.5, 0.0], [-1.5, -0.5, 0.0]]
+        .iter()
+        .flat_map(|t| glam::Mat4::from_translation(glam::Vec3::from(*t)).to_cols_array())
+        .collect();
+    let mut push = |json: &mut serde_json::Value, values: &[f32], ty: &str| {
+        push_f32_accessor(json, &mut bin, values, ty)
+    };
+    let ibm = push(&mut json, &ibm, "MAT4");
+    json["accessors"][ibm]["count"] = serde_json::json!(2);
+    let times = push(&mut json, &[0.0, 2.0], "SCALAR");
+    let q = quarter.as_quat();
+    let turns = push(&mut json, &[0.0, 0.0, 0.0, 1.0, q.x, q.y, q.z, q.w], "VEC4");
+    json["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+    json["nodes"][0]["skin"] = serde_json::json!(0);
+    json["nodes"][0]["translation"] = serde_json::json!([10.0, 0.0, 0.0]);
+    json["nodes"][1]["skin"] = serde_json::json!(0);
+    json["nodes"].as_array_mut().unwrap().extend([
+        serde_json::json!({"name": "armature", "translation": [0.0, 0.5, 0.0], "children": [3]}),
+        serde_json::json!({"name": "base", "children": [4]}),
+        serde_json::json!({"name": "tip", "translation": [1.5, 0.0, 0.0]}),
+    ]);
+    json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(2.into());
+    json["skins"] = serde_json::json!([{"joints": [3, 4], "inverseBindMatrices": ibm}]);
+    let clip = &mut json["animations"][0];
+    clip["samplers"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"input": times, "output": turns}));
+    clip["channels"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"sampler": 1, "target": {"node": 4, "path": "rotation"}}));
+    write_glb(out, &json, &bin);
+    move |t: f64| glam::DQuat::IDENTITY.slerp(quarter, (t / 2.0).clamp(0.0, 1.0))
+}
+
+/// A skinned mesh is baked into the point cache: each sample's points are where the glTF's
+/// skin puts them at that time (every vertex within 1e-4 of linear blend skinning computed
+/// here from the unskinned file's frames), with the mesh node's own transform cancelled as
+/// glTF ignores it; a still mesh whose joints move (the pole) gets samples of its own, its
+/// normals turned with it. Both were written in the bind pose before, with a warning line.
+#[test]
+fn skinned_meshes_are_baked_into_the_point_cache() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("skinned.glb");
+    let turn = skinned_flag(&input);
+    let world = |python: &Path, usd: &Path, prim: &str, fmt: &str| -> serde_json::Value {
+        serde_json::from_slice(&run_tool(
+            python,
+            "usd_world_points.py",
+            &[usd.as_os_str(), prim.as_ref()],
+            fmt,
+        ))
+        .unwrap()
+    };
+    let plain = dir.path().join("plain.usda");
+    tween_quietly(&sample("flag_wave.glb"), &plain, &[]);
+    let unskinned = world(&python, &plain, "/samples/flag/flag", "plain");
+    let pole = world(&python, &plain, "/samples/pole/pole", "plain");
+    let to_vec = |v: &serde_json::Value| {
+        glam::DVec3::new(
+            v[0].as_f64().unwrap(),
+            v[1].as_f64().unwrap(),
+            v[2].as_f64().unwrap(),
+        )
+    };
+    // The skin's matrices at t: base at (0, 0.5, 0) as bound; tip turned about its origin.
+    let lift = glam::DMat4::from_translation(glam::DVec3::new(0.0, 0.5, 0.0));
+    // The flag's weights, from its stored (bind pose) x.
+    let doc = inbetween::gltf::Document::open(&sample("flag_wave.glb")).unwrap();
+    let weights: Vec<f64> = (doc.read_f64(0).unwrap().0.chunks(3))
+        .map(|p| ((p[0] - 1.5) / 0.75).clamp(0.0, 1.0))
+        .collect();
+    let skinned = |p: glam::DVec3, w: f64, t: f64| {
+        {
+            let tip = lift
+                * glam::DMat4::from_translation(glam::DVec3::new(1.5, 0.0, 0.0))
+                * glam::DMat4::from_quat(turn(t))
+                * glam::DMat4::from_translation(glam::DVec3::new(-1.5, -0.5, 0.0));
+            (lift * glam::DMat4::from_translation(-glam::DVec3::Y * 0.5)) * (1.0 - w) + tip * w
+        }
+        .transform_point3(p)
+    };
+    for fmt in ["usda", "usdc", "usdz"] {
+        let usd = dir.path().join(format!("skinned.{fmt}"));
+        let r = tween_quietly(&input, &usd, &[]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!err.contains("bind pose"), "{fmt}: {err}");
+        clean_usd_report(&python, &usd, fmt);
+        let flag = world(&python, &usd, "/samples/flag/flag", fmt);
+        let times = flag["times"].as_array().unwrap();
+        assert_eq!(times.len(), 61, "{fmt}: a sample per frame");
+        assert_eq!(flag["times"], unskinned["times"], "{fmt}");
+        let mut most = 0.0f64;
+        for (k, t) in times.iter().enumerate() {
+            let t = t.as_f64().unwrap() / 30.0;
+            let got = flag["points"][k].as_array().unwrap();
+            for (v, p) in unskinned["points"][k]
+                .as_array()
+                .unwrap()
+                .iter()
+                .enumerate()
+            {
+                let want = skinned(to_vec(p), weights[v], t);
+                most = most.max((to_vec(&got[v]) - want).length());
+            }
+        }
+        assert!(most < 1e-4, "{fmt}: the flag within {most} of its skinning");
+        // The pole: no frames of its own, but its joint turns over the clip's two seconds.
+        let moved = world(&python, &usd, "/samples/pole/pole", fmt);
+        let times = moved["times"].as_array().unwrap();
+        assert!(times.len() >= 2, "{fmt}: the pole is sampled: {times:?}");
+        let (mut most, mut most_normal) = (0.0f64, 0.0f64);
+        let rest = pole["points"][0].as_array().unwrap();
+        for (k, t) in times.iter().enumerate() {
+            let t = t.as_f64().unwrap() / 30.0;
+            for (v, p) in rest.iter().enumerate() {
+                let want = skinned(to_vec(p), 1.0, t);
+                most = most.max((to_vec(&moved["points"][k][v]) - want).length());
+                let n = to_vec(&pole["normals"][0][v]);
+                let want = turn(t) * n;
+                most_normal = most_normal.max((to_vec(&moved["normals"][k][v]) - want).length());
+            }
+        }
+        assert!(most < 1e-4, "{fmt}: the pole within {most} of its skinning");
+        assert!(
+            most_normal < 1e-4,
+            "{fmt}: the pole's normals within {most_normal}"
+        );
+        let last = times.last().unwrap().as_f64().unwrap();
+        assert!(last >= 60.0, "{fmt}: sampled to the clip's end: {times:?}");
+    }
+    // A mesh node scaled to nothing cannot hold the skinned points: said, written unskinned.
+    let flat = dir.path().join("flat.glb");
+    edited_glb(&input, &flat, |j| {
+        j["nodes"][0]["scale"] = serde_json::json!([0.0, 0.0, 0.0])
+    });
+    let usd = dir.path().join("flat.usda");
+    let r = run_ok(&["tween", s(&flat), "-o", s(&usd)]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains(
+            "node \"flag\" is scaled to nothing, so mesh \"flag\"'s skin cannot be placed in it"
+        ),
+        "{err}"
+    );
+    clean_usd_report(&python, &usd, "flat");
 }

@@ -1,12 +1,12 @@
 //! The USD stage model of any glTF the reader accepts: nodes, meshes, materials, instancing
 //! (`EXT_mesh_gpu_instancing`), cameras and lights, and the node motion of every clip, each
-//! clip placed on the timeline at four time codes. What the stage holds is written as text that
+//! clip placed on the timeline at four time codes, and the samples of skinned meshes baked. What the stage holds is written as text that
 //! usd-core must read, so every transform, instance, point and camera or light number must be
 //! finite.
 #![no_main]
 
 use inbetween::gltf::{Access, Document};
-use inbetween::usd::{build_stage, ClipOnStage, Prim};
+use inbetween::usd::{build_stage, for_each_skin_sample, ClipOnStage, Prim};
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
@@ -68,5 +68,12 @@ fuzz_target!(|data: &[u8]| {
         .collect();
     if let Ok(stage) = build_stage(&doc, &[], clips, 30.0, "x_") {
         stage.children.iter().for_each(finite);
+        // Still skinned meshes whose joints move: their samples, baked.
+        let all = |v: &[f32]| v.iter().all(|x| x.is_finite());
+        let _ = for_each_skin_sample(&stage, &mut |_, _, s| {
+            assert!(all(s.points.as_flattened()), "skinned points");
+            assert!(all(s.extent.as_flattened()), "skinned extent");
+            Ok(())
+        });
     }
 });

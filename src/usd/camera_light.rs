@@ -112,7 +112,7 @@ pub fn of_node(
 }
 
 /// `line` added to `left_out` once (a camera or light several nodes carry is said once).
-fn say(left_out: &mut Vec<String>, line: String) {
+pub(super) fn say(left_out: &mut Vec<String>, line: String) {
     if !left_out.contains(&line) {
         left_out.push(line);
     }

@@ -135,6 +135,20 @@ impl NodeMotion {
     }
 }
 
+/// A node's rest transform: its `matrix`, else its translation, rotation and scale.
+pub(super) fn rest_matrix(node: &Value) -> DMat4 {
+    let nums = node["matrix"]
+        .as_array()
+        .map(|a| a.iter().filter_map(Value::as_f64).collect::<Vec<f64>>());
+    match nums.filter(|m| m.len() == 16) {
+        Some(m) => DMat4::from_cols_slice(&m),
+        None => {
+            let (t, r, s) = rest_trs(node);
+            DMat4::from_scale_rotation_translation(s, r, t)
+        }
+    }
+}
+
 /// A node's rest translation, rotation and scale (its `matrix` decomposed when it has one).
 pub(super) fn rest_trs(node: &Value) -> (DVec3, DQuat, DVec3) {
     let nums = |k: &str| -> Option<Vec<f64>> {

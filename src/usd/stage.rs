@@ -24,12 +24,15 @@
 //!   prototype in a `Prototypes` scope);
 //! * meshes that are not animated are written once, without time samples, in the pose the
 //!   glTF shows (morph targets blended by the node's or the mesh's default weights);
+//! * a skinned mesh's points are baked at each of its samples ([`super::skin`]); one that is
+//!   not animated but whose joints a clip on the stage moves is sampled at that clip's codes;
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
 
-use super::camera_light::{self, Plain};
+use super::camera_light::{self, say, Plain};
 use super::material::{st_name, Look, LookBuilder};
-use super::motion::{rest_trs, ClipOnStage, NodeMotion};
+use super::motion::{rest_matrix, ClipOnStage, NodeMotion};
+use super::skin::Skinning;
 use crate::gltf::{
     arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
     MIN_QUATERNION,
@@ -58,6 +61,8 @@ pub struct MeshPrim {
     pub material: Option<String>,
     /// For an animated primitive: where its frames come from and their time codes.
     pub animation: Option<Animation>,
+    /// For a skinned primitive: its skin, which each sample's points are baked with.
+    pub skin: Option<Skinning>,
     /// The faces of each primitive drawing this one's vertex buffer (a material group), bound
     /// to its own material; empty for a Mesh of one primitive.
     pub subsets: Vec<Subset>,
@@ -147,9 +152,20 @@ pub struct Animation {
     pub played: Option<Vec<usize>>,
     /// Whether the frames carry normals.
     pub normals: bool,
+    /// 0, or for a skinned primitive its node + 1: a mesh skinned on two nodes has samples of
+    /// its own under each.
+    pub instance: usize,
+    /// The samples are the skin's alone (a still mesh whose joints move): at `times`, from
+    /// the prim's points, not from any processed mesh's frames (`mesh` is then unused).
+    pub skin_only: bool,
 }
 
 impl Animation {
+    /// Which samples these are.
+    pub fn key(&self) -> SampleKey {
+        (self.mesh, self.primitive, self.instance)
+    }
+
     /// The frames this prim plays, in order.
     pub fn frames(&self) -> Vec<usize> {
         self.played
@@ -165,6 +181,10 @@ impl Animation {
             .collect()
     }
 }
+
+/// The samples of one animated prim: (processed mesh, primitive, instance), see
+/// [`Animation`]'s fields.
+pub type SampleKey = (usize, usize, usize);
 
 /// One frame of one primitive: deltas from its base points (and normals), in f32.
 pub struct Delta<'a> {
@@ -355,7 +375,6 @@ pub fn build_stage(
     };
     stage.look.left_out.extend(ctx_left_out);
     stage.look.left_out.extend(not_carried);
-    stage.look.left_out.extend(not_in_a_point_cache(doc));
     // The stage is the file's scene: a processed mesh no node of it carries has no frames
     // there, which is said (and with none shown, refused) rather than passed over.
     let shown = animated(&stage);
@@ -385,32 +404,6 @@ pub fn build_stage(
         ));
     }
     Ok(stage)
-}
-
-/// A line for each kind of thing in the file that a point cache does not carry, naming them:
-/// skins (no skeleton: a skinned mesh is written as its vertices are stored, the bind pose).
-fn not_in_a_point_cache(doc: &Document) -> Vec<String> {
-    let json = &doc.json;
-    let named = |kind: &str, i: usize, v: &Value| quoted_name(v, || format!("{kind} {i}"));
-    let mut out = Vec::new();
-    let skinned: Vec<String> = (arr(json, "nodes").iter())
-        .filter(|n| n["skin"].is_u64())
-        .filter_map(|n| n["mesh"].as_u64())
-        .collect::<std::collections::BTreeSet<u64>>()
-        .into_iter()
-        .map(|m| named("mesh", m as usize, &json["meshes"][m as usize]))
-        .collect();
-    if !skinned.is_empty() {
-        let (what, are) = match skinned.len() {
-            1 => ("mesh", "is"),
-            _ => ("meshes", "are"),
-        };
-        out.push(format!(
-            "{what} {} {are} skinned; a USD point cache has no skeleton, so they are written in the bind pose (a glTF output keeps the skin)",
-            listed(&skinned),
-        ));
-    }
-    out
 }
 
 struct Ctx<'a> {
@@ -449,7 +442,13 @@ impl Ctx<'_> {
             } else {
                 &mut kids
             };
-            mesh = self.mesh(index, mi as usize, names)?;
+            if instances.is_some() && node["skin"].is_u64() {
+                self.left_out.borrow_mut().push(format!(
+                    "node {} draws a skinned mesh once per instance (EXT_mesh_gpu_instancing), which glTF does not skin: its instances are written unskinned",
+                    quoted_name(node, || index.to_string())
+                ));
+            }
+            mesh = self.mesh(index, mi as usize, names, instances.is_none())?;
         }
         if instances.is_none() {
             children.append(&mut mesh);
@@ -537,6 +536,50 @@ impl Ctx<'_> {
                 .for_each(|n| *n = n.normalize_or_zero());
         }
         Ok((points, normals))
+    }
+
+    /// The skinning of primitive `p` (`n` vertices, of mesh `mesh_name`) drawn by skinned
+    /// node `node`, whose frames are `animation` when it has any; `None` (and a line saying
+    /// so) where the node's world transform cannot be inverted at one of its time codes.
+    fn skinning(
+        &self,
+        node: usize,
+        p: &Value,
+        n: usize,
+        what: &str,
+        mesh_name: &str,
+        animation: Option<&Animation>,
+    ) -> Result<Option<Skinning>> {
+        let json = &self.doc.json;
+        let samples_of = |x: usize| self.motion.samples(x, &json["nodes"][x]);
+        let Some(skin) = Skinning::read(self.doc, node, p, n, what, &samples_of)? else {
+            return Ok(None);
+        };
+        let node_name = format!(
+            "node {}",
+            quoted_name(&json["nodes"][node], || node.to_string())
+        );
+        let mut codes = skin.codes();
+        if let Some(a) = animation {
+            // Joints moving between the mesh's frames (a clip that plays another mesh's
+            // frames): the prim's samples are its frames' only.
+            if codes.iter().any(|c| !a.times.contains(c)) {
+                say(&mut self.left_out.borrow_mut(), format!(
+                    "mesh {mesh_name:?} on {node_name} is skinned to joints that also move where it has no frames (a clip tweening another mesh): there it holds its nearest frame"
+                ));
+            }
+            codes = a.times.clone();
+        }
+        if codes.is_empty() {
+            codes.push(0.0);
+        }
+        if !skin.works_at(&codes) {
+            say(&mut self.left_out.borrow_mut(), format!(
+                "{node_name} is scaled to nothing, so mesh {mesh_name:?}'s skin cannot be placed in it: written unskinned"
+            ));
+            return Ok(None);
+        }
+        Ok(Some(skin))
     }
 
     /// Primitive `p`'s look: its material's base colour (white for a material without one;
@@ -629,11 +672,14 @@ impl Ctx<'_> {
         }))
     }
 
+    /// The Mesh prims of mesh `mi` drawn by node `node`, skinned by the node's skin when
+    /// `skinned` (a node drawing instances is not).
     fn mesh(
         &self,
         node: usize,
         mi: usize,
         taken: &mut HashMap<String, usize>,
+        skinned: bool,
     ) -> Result<Vec<Prim>> {
         let doc = self.doc;
         let mesh = &doc.json["meshes"][mi];
@@ -729,16 +775,40 @@ impl Ctx<'_> {
                     played: played.clone().flatten(),
                     normals: normals.is_some()
                         && prims.iter().all(|q| q["attributes"]["NORMAL"].is_u64()),
+                    instance: 0,
+                    skin_only: false,
                 });
+            let skin = match skinned {
+                true => self.skinning(node, p, n, &what, &mesh_name, animation.as_ref())?,
+                false => None,
+            };
             // Written still: the pose the glTF shows, its default weights applied.
             let (points, normals) = match animation {
                 Some(_) => (points, normals),
                 None => self.posed(node, mi, p, points, normals, &what)?,
             };
+            // A skinned prim has samples of its own (see [`Animation::instance`]); a still one
+            // whose joints move is animated by its skin alone.
+            let animation = match (animation, &skin) {
+                (Some(a), Some(_)) => Some(Animation {
+                    instance: node + 1,
+                    ..a
+                }),
+                (None, Some(skin)) if !skin.codes().is_empty() => Some(Animation {
+                    mesh: usize::MAX,
+                    primitive: pi,
+                    times: skin.codes(),
+                    played: None,
+                    normals: normals.is_some(),
+                    instance: node + 1,
+                    skin_only: true,
+                }),
+                (a, _) => a,
+            };
             let f32s = |v: Vec<DVec3>| -> Vec<[f32; 3]> {
                 v.into_iter().map(|p| p.as_vec3().to_array()).collect()
             };
-            let prim = MeshPrim {
+            let mut prim = MeshPrim {
                 name: base_name,
                 points: f32s(points),
                 normals: normals.map(f32s),
@@ -749,8 +819,20 @@ impl Ctx<'_> {
                 double_sided,
                 material,
                 animation,
+                skin,
                 subsets: Vec::new(),
             };
+            // Frames without normals (another primitive of the mesh has none): a skinned
+            // prim's stored normals would not turn with it, so USD computes them.
+            if prim.skin.is_some() && prim.animation.as_ref().is_some_and(|a| !a.normals) {
+                prim.normals = None;
+            }
+            // Skinned and still: baked once, in the pose its joints rest in.
+            if prim.animation.is_none() {
+                if let Some(skin) = prim.skin.take() {
+                    skin.apply(0.0, &mut prim.points, prim.normals.as_deref_mut());
+                }
+            }
             groups.push((vertices, prim));
         }
         let whole = groups.len() == 1 && !groups[0].1.subsets.is_empty();
@@ -778,18 +860,7 @@ fn triangle_indices(doc: &Document, p: &Value, n: usize, what: &str) -> Result<V
 /// Local transform of a glTF node as a column-major 4x4 (USD's row-vector matrix4d reads the
 /// same 16 numbers row by row); `None` for the identity.
 fn node_matrix(node: &Value) -> Option<[f64; 16]> {
-    let nums = |k: &str| -> Option<Vec<f64>> {
-        node[k]
-            .as_array()
-            .map(|a| a.iter().filter_map(Value::as_f64).collect())
-    };
-    let m = match nums("matrix").filter(|m| m.len() == 16) {
-        Some(m) => DMat4::from_cols_slice(&m),
-        None => {
-            let (t, r, s) = rest_trs(node);
-            DMat4::from_scale_rotation_translation(s, r, t)
-        }
-    };
+    let m = rest_matrix(node);
     (m != DMat4::IDENTITY).then(|| m.to_cols_array())
 }
 
@@ -814,32 +885,32 @@ pub fn extent(points: &[[f32; 3]]) -> [[f32; 3]; 2] {
 /// to (instances share the entry). Grouped so that a frame finds its own mesh's primitives
 /// (scanning all of them for each frame, 8,000 animated meshes took 13.5 s to write).
 pub fn animated(stage: &Stage) -> HashMap<usize, Vec<&MeshPrim>> {
-    fn walk<'a>(
-        p: &'a Prim,
-        seen: &mut HashSet<(usize, usize)>,
-        out: &mut HashMap<usize, Vec<&'a MeshPrim>>,
-    ) {
+    let (mut seen, mut out) = (HashSet::new(), HashMap::<usize, Vec<&MeshPrim>>::new());
+    for m in prims_of(stage) {
+        if let Some(a) = m.animation.as_ref().filter(|a| !a.skin_only) {
+            if seen.insert(a.key()) {
+                out.entry(a.mesh).or_default().push(m);
+            }
+        }
+    }
+    out
+}
+
+/// Every Mesh prim of the stage, in stage order (a prototype's once).
+fn prims_of(stage: &Stage) -> Vec<&MeshPrim> {
+    fn walk<'a>(p: &'a Prim, out: &mut Vec<&'a MeshPrim>) {
         match p {
-            Prim::Xform { children, .. } => children.iter().for_each(|c| walk(c, seen, out)),
+            Prim::Xform { children, .. } => children.iter().for_each(|c| walk(c, out)),
             Prim::Instancer(i) => {
-                walk(&i.prototype, seen, out);
-                i.children.iter().for_each(|c| walk(c, seen, out));
+                walk(&i.prototype, out);
+                i.children.iter().for_each(|c| walk(c, out));
             }
-            Prim::Mesh(m) => {
-                if let Some(a) = &m.animation {
-                    if seen.insert((a.mesh, a.primitive)) {
-                        out.entry(a.mesh).or_default().push(m);
-                    }
-                }
-            }
+            Prim::Mesh(m) => out.push(m),
             Prim::Plain(_) => {}
         }
     }
-    let (mut seen, mut out) = (HashSet::new(), HashMap::new());
-    stage
-        .children
-        .iter()
-        .for_each(|c| walk(c, &mut seen, &mut out));
+    let mut out = Vec::new();
+    stage.children.iter().for_each(|c| walk(c, &mut out));
     out
 }
 
@@ -856,6 +927,7 @@ pub struct Sample {
 pub fn for_each_sample(
     prims: &HashMap<usize, Vec<&MeshPrim>>,
     k: usize,
+    frame: usize,
     deltas: &[Delta],
     f: &mut dyn FnMut(&Animation, Sample) -> Result<()>,
 ) -> Result<()> {
@@ -869,14 +941,43 @@ pub fn for_each_sample(
             (true, Some(base), Some(n)) => Some(add(base, n)),
             _ => None,
         };
-        f(
-            a,
-            Sample {
-                extent: extent(&points),
-                points,
-                normals,
-            },
-        )?;
+        f(a, sample(m, a.times[frame], points, normals))?;
     }
     Ok(())
+}
+
+/// Call `f` with every sample (its index in the prim's times) of every prim of the stage
+/// whose samples are its skin's alone ([`Animation::skin_only`]).
+pub fn for_each_skin_sample(
+    stage: &Stage,
+    f: &mut dyn FnMut(&Animation, usize, Sample) -> Result<()>,
+) -> Result<()> {
+    for m in prims_of(stage) {
+        let Some(a) = m.animation.as_ref().filter(|a| a.skin_only) else {
+            continue;
+        };
+        for (k, &code) in a.times.iter().enumerate() {
+            let normals = m.normals.clone().filter(|_| a.normals);
+            f(a, k, sample(m, code, m.points.clone(), normals))?;
+        }
+    }
+    Ok(())
+}
+
+/// The sample of prim `m` at time code `code` from its points and normals there, skinned
+/// when it has a skin.
+fn sample(
+    m: &MeshPrim,
+    code: f64,
+    mut points: Vec<[f32; 3]>,
+    mut normals: Option<Vec<[f32; 3]>>,
+) -> Sample {
+    if let Some(skin) = &m.skin {
+        skin.apply(code, &mut points, normals.as_deref_mut());
+    }
+    Sample {
+        extent: extent(&points),
+        points,
+        normals,
+    }
 }

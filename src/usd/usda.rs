@@ -5,8 +5,8 @@
 use super::camera_light::Plain;
 use super::material::{Material, Value, SURFACE};
 use super::stage::{
-    animated, extent, for_each_sample, Animation, DisplayColor, FrameSource, MeshPrim, Prim, Stage,
-    PROTOTYPES,
+    animated, extent, for_each_sample, for_each_skin_sample, Animation, DisplayColor, FrameSource,
+    MeshPrim, Prim, Sample, SampleKey, Stage, PROTOTYPES,
 };
 use crate::output::{naming, Outputs};
 use anyhow::Result;
@@ -457,14 +457,14 @@ pub enum Attr {
 /// usual limit of 1,024.)
 pub struct Spool {
     file: Option<PathBuf>,
-    /// (mesh, primitive, attribute) -> its samples' (offset, length) in the file.
-    chunks: HashMap<(usize, usize, u8), Vec<(u64, u64)>>,
+    /// ((mesh, primitive, instance), attribute) -> its samples' (offset, length) in the file.
+    chunks: HashMap<(SampleKey, u8), Vec<(u64, u64)>>,
 }
 
 impl Spool {
     fn copy(&self, a: &Animation, attr: Attr, out: &mut dyn Write) -> Result<()> {
         use std::io::Read;
-        let key = (a.mesh, a.primitive, attr as u8);
+        let key = (a.key(), attr as u8);
         let (Some(file), Some(chunks)) = (&self.file, self.chunks.get(&key)) else {
             return Ok(());
         };
@@ -504,9 +504,6 @@ fn spool_frames(
         file: None,
         chunks: HashMap::new(),
     };
-    if prims.is_empty() {
-        return Ok(spool);
-    }
     let file = files.scratch(path, ".samples");
     let f = std::fs::File::create(&file)
         .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
@@ -515,33 +512,33 @@ fn spool_frames(
     let (mut at, mut line) = (0u64, Vec::new());
     let pad = "            ";
     let chunks = &mut spool.chunks;
-    source(&mut |k, f, deltas| {
-        for_each_sample(&prims, k, deltas, &mut |a, s| {
-            let t = a.times[f];
-            let arrays = [
-                (Attr::Extent, Some(&s.extent[..])),
-                (Attr::Normals, s.normals.as_deref()),
-                (Attr::Points, Some(&s.points[..])),
-            ];
-            for (attr, values) in arrays {
-                if let Some(values) = values {
-                    line.clear();
-                    write!(line, "{pad}{t}: ")?;
-                    write_vec3s(&mut line, values)?;
-                    writeln!(line, ",")?;
-                    w.write_all(&line)?;
-                    let len = line.len() as u64;
-                    chunks
-                        .entry((k, a.primitive, attr as u8))
-                        .or_default()
-                        .push((at, len));
-                    at += len;
-                }
+    let mut put = |a: &Animation, f: usize, s: Sample| -> Result<()> {
+        let t = a.times[f];
+        let arrays = [
+            (Attr::Extent, Some(&s.extent[..])),
+            (Attr::Normals, s.normals.as_deref()),
+            (Attr::Points, Some(&s.points[..])),
+        ];
+        for (attr, values) in arrays {
+            if let Some(values) = values {
+                line.clear();
+                write!(line, "{pad}{t}: ")?;
+                write_vec3s(&mut line, values)?;
+                writeln!(line, ",")?;
+                w.write_all(&line)?;
+                let len = line.len() as u64;
+                chunks
+                    .entry((a.key(), attr as u8))
+                    .or_default()
+                    .push((at, len));
+                at += len;
             }
-            Ok(())
-        })
-    })
-    .map_err(|e| naming(path, e))?;
+        }
+        Ok(())
+    };
+    source(&mut |k, f, deltas| for_each_sample(&prims, k, f, deltas, &mut |a, s| put(a, f, s)))
+        .map_err(|e| naming(path, e))?;
+    for_each_skin_sample(stage, &mut put).map_err(|e| naming(path, e))?;
     w.flush().map_err(|e| naming(path, e.into()))?;
     Ok(spool)
 }

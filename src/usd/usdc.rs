@@ -14,7 +14,8 @@
 use super::camera_light::Plain;
 use super::material::{Look, Shader, Value, SURFACE};
 use super::stage::{
-    animated, extent, for_each_sample, DisplayColor, FrameSource, MeshPrim, Prim, Stage, PROTOTYPES,
+    animated, extent, for_each_sample, for_each_skin_sample, Animation, DisplayColor, FrameSource,
+    MeshPrim, Prim, Sample, SampleKey, Stage, PROTOTYPES,
 };
 use anyhow::Result;
 use std::collections::HashMap;
@@ -489,10 +490,7 @@ impl<W: Write + Seek> Writer<W> {
     }
 
     fn mesh(&mut self, m: &MeshPrim, parent: usize, frames: &FrameReps) -> Result<()> {
-        let reps = m
-            .animation
-            .as_ref()
-            .and_then(|a| frames.get(&(a.mesh, a.primitive)));
+        let reps = m.animation.as_ref().and_then(|a| frames.get(&a.key()));
         let me = self.path(Some(parent), &m.name, false);
         let mut props: Vec<String> = Vec::new();
         let uniform = self.field("variability", Val::Uniform)?;
@@ -840,7 +838,7 @@ struct SampleReps {
     points: Vec<u64>,
 }
 
-type FrameReps = HashMap<(usize, usize), SampleReps>;
+type FrameReps = HashMap<SampleKey, SampleReps>;
 
 /// Write `stage` as a crate file to `out` (which must start empty, at position 0), taking the
 /// animated primitives' frames from `source`: each frame's arrays go to the file as it arrives.
@@ -861,22 +859,22 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     w.bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
     let prims = animated(stage);
     let mut frames: FrameReps = HashMap::new();
-    source(&mut |k, _f, deltas| {
-        for_each_sample(&prims, k, deltas, &mut |a, sample| {
-            let e = w.vec3f_array(&sample.extent)?;
-            let p = w.vec3f_array(&sample.points)?;
-            let n = sample
-                .normals
-                .as_ref()
-                .map(|n| w.vec3f_array(n))
-                .transpose()?;
-            let r = frames.entry((a.mesh, a.primitive)).or_default();
-            r.extent.push(e);
-            r.points.push(p);
-            r.normals.extend(n);
-            Ok(())
-        })
-    })?;
+    let mut put = |a: &Animation, _f: usize, sample: Sample| -> Result<()> {
+        let e = w.vec3f_array(&sample.extent)?;
+        let p = w.vec3f_array(&sample.points)?;
+        let n = sample
+            .normals
+            .as_ref()
+            .map(|n| w.vec3f_array(n))
+            .transpose()?;
+        let r = frames.entry(a.key()).or_default();
+        r.extent.push(e);
+        r.points.push(p);
+        r.normals.extend(n);
+        Ok(())
+    };
+    source(&mut |k, f, deltas| for_each_sample(&prims, k, f, deltas, &mut |a, s| put(a, f, s)))?;
+    for_each_skin_sample(stage, &mut put)?;
     // Token 0 is a prim name, so no property path ever needs the (unnegatable) index 0.
     w.token(&stage.root);
     let root = w.path(None, "", false);

@@ -1,0 +1,340 @@
+//! Skinned meshes in the point cache, baked: a point cache has no skeleton, so each sample of
+//! a skinned primitive holds its points as the glTF's skin places them at that time code
+//! (linear blend skinning, glTF 2.0 section 3.7.3), in the space of the mesh node's Xform that
+//! the Mesh prim sits under.
+//!
+//! For a vertex with joints `j` and weights `w` (every `JOINTS_n`/`WEIGHTS_n` set, weights
+//! scaled to sum to 1) at time code `c`:
+//!
+//! ```text
+//! p(c) = inverse(W_mesh(c)) * sum_k w_k * W_joint_k(c) * IBM_k * p
+//! ```
+//!
+//! where `W` is a node's world transform as the stage evaluates it: each node's local transform
+//! is its Xform's time samples where a clip on the stage moves it (held before the first and
+//! after the last, interpolated linearly between two, as USD reads a `matrix4d`), else its
+//! rest transform. So a skinned mesh follows the same joints and nodes as every Xform of the
+//! stage. Normals are turned by each vertex's blended matrix's cofactor (its inverse transpose
+//! up to scale, which keeps them normal under non-uniform scale) and renormalised.
+//!
+//! ```text
+//! let skin = Skinning::read(doc, node, primitive, n, what, &samples_of)?;  // None: not skinned
+//! skin.apply(code, &mut points, normals.as_deref_mut());
+//! ```
+
+use super::motion::rest_matrix;
+use crate::gltf::{arr, read_attribute, Document};
+use anyhow::{bail, Result};
+use glam::{DMat3, DMat4, DVec3};
+use rayon::prelude::*;
+use serde_json::Value;
+
+/// A node a skinned mesh depends on: its parent's place in [`Skinning::nodes`] (always
+/// before it), its rest transform, and its local transform's time samples (time order).
+struct NodeTrack {
+    parent: Option<usize>,
+    rest: DMat4,
+    samples: Vec<(f64, DMat4)>,
+}
+
+impl NodeTrack {
+    /// The local transform at time code `code`, as USD evaluates the Xform's samples.
+    fn at(&self, code: f64) -> DMat4 {
+        let s = &self.samples;
+        let (Some(first), Some(last)) = (s.first(), s.last()) else {
+            return self.rest;
+        };
+        if code <= first.0 {
+            return first.1;
+        }
+        if code >= last.0 {
+            return last.1;
+        }
+        // s[i].0 <= code < s[i + 1].0
+        let i = s.partition_point(|(c, _)| *c <= code) - 1;
+        let ((c0, m0), (c1, m1)) = (s[i], s[i + 1]);
+        if code == c0 {
+            return m0;
+        }
+        let u = (code - c0) / (c1 - c0);
+        m0 * (1.0 - u) + m1 * u
+    }
+}
+
+/// What skinning one primitive needs: the nodes its joints and its own node hang from, the
+/// joints' inverse bind matrices, and each vertex's influences.
+pub struct Skinning {
+    nodes: Vec<NodeTrack>,
+    /// The mesh node's place in `nodes`.
+    mesh_node: usize,
+    /// Each joint of the skin: its node's place in `nodes` and its inverse bind matrix.
+    joints: Vec<(usize, DMat4)>,
+    /// `per` (joint of the skin, weight) pairs a vertex, weights summing to 1 (a vertex whose
+    /// weights are all zero has none: it stays where the mesh node puts it).
+    influences: Vec<(u32, f32)>,
+    per: usize,
+}
+
+impl Skinning {
+    /// The skinning of primitive `p` (of `n` vertices) drawn by node `node` of `doc`, which
+    /// has a skin; `None` when the primitive has no `JOINTS_0`. `samples_of(node)` gives a
+    /// node's local transform at each time code a clip on the stage moves it (see
+    /// [`super::motion`]). An error names `what` (the primitive) when the skin's data breaks
+    /// glTF's rules.
+    pub fn read(
+        doc: &Document,
+        node: usize,
+        p: &Value,
+        n: usize,
+        what: &str,
+        samples_of: &dyn Fn(usize) -> Vec<(f64, [f64; 16])>,
+    ) -> Result<Option<Skinning>> {
+        let json = &doc.json;
+        let Some(skin) = json["nodes"][node]["skin"].as_u64() else {
+            return Ok(None);
+        };
+        let node_count = arr(json, "nodes").len();
+        let skin_json = &json["skins"][skin as usize];
+        if !skin_json.is_object() {
+            bail!(doc.err(format!(
+                "node {node} names skin {skin}, which the file does not have"
+            )));
+        }
+        let joint_nodes: Vec<usize> = (arr(skin_json, "joints").iter())
+            .map(|j| match j.as_u64() {
+                Some(j) if (j as usize) < node_count => Ok(j as usize),
+                _ => bail!(doc.err(format!("skin {skin} names a joint {j} that is not a node"))),
+            })
+            .collect::<Result<_>>()?;
+        let ibms: Vec<DMat4> = match skin_json["inverseBindMatrices"].as_u64() {
+            Some(acc) => {
+                let (v, c) = doc.read_f64(acc as usize)?;
+                if c != 16 || v.len() / 16 < joint_nodes.len() {
+                    bail!(doc.err(format!(
+                        "skin {skin}'s inverseBindMatrices (accessor {acc}) holds {} MAT4s for {} joints",
+                        if c == 16 { v.len() / 16 } else { 0 },
+                        joint_nodes.len()
+                    )));
+                }
+                v.chunks_exact(16).map(DMat4::from_cols_slice).collect()
+            }
+            None => vec![DMat4::IDENTITY; joint_nodes.len()],
+        };
+        // Every JOINTS_n / WEIGHTS_n set, four influences each.
+        let mut sets = Vec::new();
+        for set in 0.. {
+            let joints = read_attribute(doc, p, &format!("JOINTS_{set}"), 4, n, what)?;
+            let weights = read_attribute(doc, p, &format!("WEIGHTS_{set}"), 4, n, what)?;
+            match (joints, weights) {
+                (Some(j), Some(w)) => sets.push((j, w)),
+                (None, None) => break,
+                _ => bail!(doc.err(format!(
+                    "{what} has JOINTS_{set} or WEIGHTS_{set} without the other"
+                ))),
+            }
+        }
+        if sets.is_empty() {
+            return Ok(None);
+        }
+        let per = 4 * sets.len();
+        let mut influences = Vec::with_capacity(n * per);
+        for v in 0..n {
+            let start = influences.len();
+            let mut sum = 0.0;
+            for (j, w) in &sets {
+                for c in 0..4 {
+                    let (joint, weight) = (j[4 * v + c], w[4 * v + c]);
+                    if weight <= 0.0 {
+                        influences.push((0, 0.0));
+                        continue;
+                    }
+                    if joint as usize >= joint_nodes.len() {
+                        bail!(doc.err(format!(
+                            "{what} vertex {v} is weighted to joint {joint} of skin {skin}, which has {}",
+                            joint_nodes.len()
+                        )));
+                    }
+                    influences.push((joint as u32, weight as f32));
+                    sum += weight;
+                }
+            }
+            if sum > 0.0 {
+                for x in &mut influences[start..] {
+                    x.1 = (x.1 as f64 / sum) as f32;
+                }
+            }
+        }
+        // The nodes the joints and the mesh node hang from, each after its parent.
+        let mut parents = vec![None; node_count];
+        for (i, nd) in arr(json, "nodes").iter().enumerate() {
+            for c in arr(nd, "children").iter().filter_map(Value::as_u64) {
+                if let Some(x) = parents.get_mut(c as usize) {
+                    *x = Some(i);
+                }
+            }
+        }
+        let mut slot = vec![usize::MAX; node_count];
+        let mut nodes: Vec<NodeTrack> = Vec::new();
+        let mut place = |start: usize, nodes: &mut Vec<NodeTrack>| -> usize {
+            // The chain up to the first node already placed (or the root), then placed down.
+            let mut chain = vec![start];
+            while let Some(parent) = parents[*chain.last().expect("a node")] {
+                if slot[parent] != usize::MAX || chain.len() > node_count {
+                    break;
+                }
+                chain.push(parent);
+            }
+            for &x in chain.iter().rev() {
+                if slot[x] != usize::MAX {
+                    continue;
+                }
+                let parent = parents[x].map(|q| slot[q]).filter(|&s| s != usize::MAX);
+                let nd = &json["nodes"][x];
+                slot[x] = nodes.len();
+                nodes.push(NodeTrack {
+                    parent,
+                    rest: rest_matrix(nd),
+                    samples: (samples_of(x).into_iter())
+                        .map(|(c, m)| (c, DMat4::from_cols_array(&m)))
+                        .collect(),
+                });
+            }
+            slot[start]
+        };
+        let mesh_node = place(node, &mut nodes);
+        let joints = (joint_nodes.iter().zip(ibms))
+            .map(|(&j, ibm)| (place(j, &mut nodes), ibm))
+            .collect();
+        Ok(Some(Skinning {
+            nodes,
+            mesh_node,
+            joints,
+            influences,
+            per,
+        }))
+    }
+
+    /// The time codes at which a node the skin depends on has a sample (time order): where
+    /// the skinned points change without the mesh's own frames.
+    pub fn codes(&self) -> Vec<f64> {
+        let mut codes: Vec<f64> = (self.nodes.iter())
+            .flat_map(|n| n.samples.iter().map(|s| s.0))
+            .collect();
+        codes.sort_by(f64::total_cmp);
+        codes.dedup();
+        codes
+    }
+
+    /// Each joint's skin matrix at `code`, relative to the mesh node; `None` where the mesh
+    /// node's world transform has no inverse (scaled to nothing).
+    fn matrices(&self, code: f64) -> Option<Vec<DMat4>> {
+        let mut world: Vec<DMat4> = Vec::with_capacity(self.nodes.len());
+        for n in &self.nodes {
+            let local = n.at(code);
+            world.push(match n.parent {
+                Some(p) => world[p] * local,
+                None => local,
+            });
+        }
+        let mesh = world[self.mesh_node];
+        let det = mesh.determinant();
+        if !det.is_finite() || det.abs() < f64::MIN_POSITIVE {
+            return None;
+        }
+        let to_mesh = mesh.inverse();
+        let m: Vec<DMat4> = (self.joints.iter())
+            .map(|&(slot, ibm)| to_mesh * world[slot] * ibm)
+            .collect();
+        m.iter().all(|m| m.is_finite()).then_some(m)
+    }
+
+    /// Whether the mesh node can be skinned at every code of `codes` (its world transform
+    /// invertible there).
+    pub fn works_at(&self, codes: &[f64]) -> bool {
+        codes.iter().all(|&c| self.matrices(c).is_some())
+    }
+
+    /// Skin `points` (and `normals`) at time code `code`, in place; left as they are where
+    /// the mesh node's world transform has no inverse (see [`Skinning::works_at`]).
+    pub fn apply(&self, code: f64, points: &mut [[f32; 3]], normals: Option<&mut [[f32; 3]]>) {
+        let Some(mats) = self.matrices(code) else {
+            return;
+        };
+        let blended = |v: usize| -> Option<DMat4> {
+            let inf = &self.influences[v * self.per..(v + 1) * self.per];
+            let mut m = DMat4::ZERO;
+            let mut any = false;
+            for &(j, w) in inf.iter().filter(|x| x.1 > 0.0) {
+                m += mats[j as usize] * w as f64;
+                any = true;
+            }
+            any.then_some(m)
+        };
+        let skin = |v: usize, p: &mut [f32; 3], n: Option<&mut [f32; 3]>| {
+            let Some(m) = blended(v) else { return };
+            let q = m.transform_point3(DVec3::from(p.map(f64::from))).as_vec3();
+            // A point the skin throws past f32 (a hostile file's matrices) stays as stored.
+            if !q.is_finite() {
+                return;
+            }
+            *p = q.to_array();
+            if let Some(n) = n {
+                // The cofactor matrix: the inverse transpose times the determinant.
+                let (x, y, z) = (
+                    m.x_axis.truncate(),
+                    m.y_axis.truncate(),
+                    m.z_axis.truncate(),
+                );
+                let cof = DMat3::from_cols(y.cross(z), z.cross(x), x.cross(y));
+                let turned = cof * DVec3::from(n.map(f64::from)) * x.dot(y.cross(z)).signum();
+                *n = turned.normalize_or_zero().as_vec3().to_array();
+            }
+        };
+        const CHUNK: usize = 4096;
+        match normals {
+            Some(ns) if ns.len() == points.len() => (points.par_chunks_mut(CHUNK))
+                .zip(ns.par_chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(|(k, (ps, ns))| {
+                    for (i, (p, n)) in ps.iter_mut().zip(ns).enumerate() {
+                        skin(k * CHUNK + i, p, Some(n));
+                    }
+                }),
+            _ => (points.par_chunks_mut(CHUNK).enumerate()).for_each(|(k, ps)| {
+                for (i, p) in ps.iter_mut().enumerate() {
+                    skin(k * CHUNK + i, p, None);
+                }
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_node_s_transform_is_held_outside_its_samples_and_lerped_between() {
+        let m = |x: f64| DMat4::from_translation(DVec3::new(x, 0.0, 0.0));
+        let track = NodeTrack {
+            parent: None,
+            rest: m(-1.0),
+            samples: vec![(2.0, m(1.0)), (4.0, m(3.0)), (5.0, m(4.0))],
+        };
+        for (code, x) in [
+            (0.0, 1.0),
+            (2.0, 1.0),
+            (3.0, 2.0),
+            (4.0, 3.0),
+            (4.5, 3.5),
+            (9.0, 4.0),
+        ] {
+            assert_eq!(track.at(code), m(x), "{code}");
+        }
+        let still = NodeTrack {
+            samples: Vec::new(),
+            ..track
+        };
+        assert_eq!(still.at(3.0), m(-1.0));
+    }
+}
