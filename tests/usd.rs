@@ -1470,6 +1470,54 @@ fn skinned_meshes_are_baked_into_the_point_cache() {
         let last = times.last().unwrap().as_f64().unwrap();
         assert!(last >= 60.0, "{fmt}: sampled to the clip's end: {times:?}");
     }
+    // A second clip tweens the flag on another node (a copy off to the side) and turns the
+    // tip again: the skinned flag plays none of its frames but follows its joint there, in
+    // its still pose (the base: the mesh's default weights are zero), one sample per frame.
+    let two = dir.path().join("two.glb");
+    edited_glb(&input, &two, |j| {
+        let clip = j["animations"][0].clone();
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        nodes.push(serde_json::json!({"name": "copy", "mesh": 0, "translation": [0.0, 0.0, -5.0]}));
+        let copy = nodes.len() - 1;
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(copy.into());
+        let mut second = clip;
+        second["name"] = "second".into();
+        second["channels"][0]["target"]["node"] = copy.into();
+        j["animations"].as_array_mut().unwrap().push(second);
+    });
+    let base: Vec<glam::DVec3> = (doc.read_f64(0).unwrap().0.chunks(3))
+        .map(|p| glam::DVec3::new(p[0], p[1], p[2]))
+        .collect();
+    for fmt in ["usda", "usdc"] {
+        let usd = dir.path().join(format!("two.{fmt}"));
+        tween_quietly(&two, &usd, &[]);
+        clean_usd_report(&python, &usd, fmt);
+        let flag = world(&python, &usd, "/samples/flag/flag", fmt);
+        let times: Vec<f64> = (flag["times"].as_array().unwrap().iter())
+            .map(|t| t.as_f64().unwrap())
+            .collect();
+        assert_eq!(times.len(), 122, "{fmt}: both clips' frames: {times:?}");
+        assert!(
+            times.windows(2).all(|w| w[0] < w[1]),
+            "{fmt}: in time order"
+        );
+        let start = times[61];
+        let mut most = 0.0f64;
+        for (k, &code) in times.iter().enumerate().skip(61) {
+            let t = (code - start) / 30.0;
+            for (v, p) in base.iter().enumerate() {
+                let want = skinned(*p, weights[v], t);
+                most = most.max((to_vec(&flag["points"][k][v]) - want).length());
+            }
+        }
+        assert!(
+            most < 1e-4,
+            "{fmt}: the flag in the second clip within {most}"
+        );
+    }
     // A mesh node scaled to nothing cannot hold the skinned points: said, written unskinned.
     let flat = dir.path().join("flat.glb");
     edited_glb(&input, &flat, |j| {

@@ -63,9 +63,18 @@ pub struct MeshPrim {
     pub animation: Option<Animation>,
     /// For a skinned primitive: its skin, which each sample's points are baked with.
     pub skin: Option<Skinning>,
+    /// For an animated skinned primitive with [`Animation::extra`] samples: its still pose
+    /// (targets at their default weights), which those samples skin.
+    pub still: Option<Still>,
     /// The faces of each primitive drawing this one's vertex buffer (a material group), bound
     /// to its own material; empty for a Mesh of one primitive.
     pub subsets: Vec<Subset>,
+}
+
+/// A primitive's points and normals in the pose the glTF shows when no clip plays it.
+pub struct Still {
+    pub points: Vec<[f32; 3]>,
+    pub normals: Option<Vec<[f32; 3]>>,
 }
 
 /// A `GeomSubset` of a Mesh (family `materialBind`): faces `faces` of the Mesh, bound to
@@ -158,6 +167,10 @@ pub struct Animation {
     /// The samples are the skin's alone (a still mesh whose joints move): at `times`, from
     /// the prim's points, not from any processed mesh's frames (`mesh` is then unused).
     pub skin_only: bool,
+    /// Time codes where a skinned prim's joints move but it plays no frame (a clip that
+    /// tweens another mesh): samples of its still pose ([`MeshPrim::still`]) skinned there,
+    /// after the frames' in the sample lists ([`Animation::ordered`]).
+    pub extra: Vec<f64>,
 }
 
 impl Animation {
@@ -171,6 +184,19 @@ impl Animation {
         self.played
             .clone()
             .unwrap_or_else(|| (0..self.times.len()).collect())
+    }
+
+    /// The prim's samples in time order, as (time code, value) from `per_sample` (one value
+    /// per frame of the mesh, then one per [`Animation::extra`] code): the frames it plays and
+    /// its extra samples.
+    pub fn ordered<T: Copy>(&self, per_sample: &[T]) -> Vec<(f64, T)> {
+        let frames = self.frames().into_iter().map(|f| (self.times[f], f));
+        let extra = (self.extra.iter().enumerate()).map(|(k, &c)| (c, self.times.len() + k));
+        let mut out: Vec<(f64, T)> = (frames.chain(extra))
+            .filter_map(|(c, i)| per_sample.get(i).map(|&v| (c, v)))
+            .collect();
+        out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        out
     }
 
     /// `per_frame` (one value per frame of the mesh) at the frames this prim plays.
@@ -561,14 +587,7 @@ impl Ctx<'_> {
         );
         let mut codes = skin.codes();
         if let Some(a) = animation {
-            // Joints moving between the mesh's frames (a clip that plays another mesh's
-            // frames): the prim's samples are its frames' only.
-            if codes.iter().any(|c| !a.times.contains(c)) {
-                say(&mut self.left_out.borrow_mut(), format!(
-                    "mesh {mesh_name:?} on {node_name} is skinned to joints that also move where it has no frames (a clip tweening another mesh): there it holds its nearest frame"
-                ));
-            }
-            codes = a.times.clone();
+            codes.extend_from_slice(&a.times);
         }
         if codes.is_empty() {
             codes.push(0.0);
@@ -777,10 +796,24 @@ impl Ctx<'_> {
                         && prims.iter().all(|q| q["attributes"]["NORMAL"].is_u64()),
                     instance: 0,
                     skin_only: false,
+                    extra: Vec::new(),
                 });
             let skin = match skinned {
                 true => self.skinning(node, p, n, &what, &mesh_name, animation.as_ref())?,
                 false => None,
+            };
+            // Where a skinned prim's joints move and it plays no frame, its still pose.
+            let extra: Vec<f64> = match (&animation, &skin) {
+                (Some(a), Some(skin)) => {
+                    let played: Vec<f64> = a.pick(&a.times);
+                    let codes = skin.codes().into_iter();
+                    codes.filter(|c| !played.contains(c)).collect()
+                }
+                _ => Vec::new(),
+            };
+            let still = match extra.is_empty() {
+                true => None,
+                false => Some(self.posed(node, mi, p, points.clone(), normals.clone(), &what)?),
             };
             // Written still: the pose the glTF shows, its default weights applied.
             let (points, normals) = match animation {
@@ -792,6 +825,7 @@ impl Ctx<'_> {
             let animation = match (animation, &skin) {
                 (Some(a), Some(_)) => Some(Animation {
                     instance: node + 1,
+                    extra,
                     ..a
                 }),
                 (None, Some(skin)) if !skin.codes().is_empty() => Some(Animation {
@@ -802,14 +836,20 @@ impl Ctx<'_> {
                     normals: normals.is_some(),
                     instance: node + 1,
                     skin_only: true,
+                    extra: Vec::new(),
                 }),
                 (a, _) => a,
             };
             let f32s = |v: Vec<DVec3>| -> Vec<[f32; 3]> {
                 v.into_iter().map(|p| p.as_vec3().to_array()).collect()
             };
+            let still = still.map(|(p, n)| Still {
+                points: f32s(p),
+                normals: n.map(f32s),
+            });
             let mut prim = MeshPrim {
                 name: base_name,
+                still,
                 points: f32s(points),
                 normals: normals.map(f32s),
                 st,
@@ -946,19 +986,25 @@ pub fn for_each_sample(
     Ok(())
 }
 
-/// Call `f` with every sample (its index in the prim's times) of every prim of the stage
-/// whose samples are its skin's alone ([`Animation::skin_only`]).
+/// Call `f` with every sample (and its time code) that a prim's skin alone makes: every
+/// sample of a prim whose samples are all its skin's ([`Animation::skin_only`]), and the
+/// [`Animation::extra`] samples of the others, in that order for each prim.
 pub fn for_each_skin_sample(
     stage: &Stage,
-    f: &mut dyn FnMut(&Animation, usize, Sample) -> Result<()>,
+    f: &mut dyn FnMut(&Animation, f64, Sample) -> Result<()>,
 ) -> Result<()> {
     for m in prims_of(stage) {
-        let Some(a) = m.animation.as_ref().filter(|a| a.skin_only) else {
+        let Some(a) = m.animation.as_ref() else {
             continue;
         };
-        for (k, &code) in a.times.iter().enumerate() {
-            let normals = m.normals.clone().filter(|_| a.normals);
-            f(a, k, sample(m, code, m.points.clone(), normals))?;
+        let (codes, points, normals) = match (a.skin_only, &m.still) {
+            (true, _) => (&a.times, &m.points, &m.normals),
+            (false, Some(still)) => (&a.extra, &still.points, &still.normals),
+            (false, None) => continue,
+        };
+        for &code in codes {
+            let normals = normals.clone().filter(|_| a.normals);
+            f(a, code, sample(m, code, points.clone(), normals))?;
         }
     }
     Ok(())

@@ -470,7 +470,7 @@ impl Spool {
         };
         let mut f = std::io::BufReader::with_capacity(1 << 16, std::fs::File::open(file)?);
         let (mut at, mut buf) = (0u64, Vec::new());
-        for (offset, len) in a.pick(chunks) {
+        for (_, (offset, len)) in a.ordered(chunks) {
             f.seek_relative(offset as i64 - at as i64)?;
             buf.resize(len as usize, 0);
             f.read_exact(&mut buf)?;
@@ -512,8 +512,7 @@ fn spool_frames(
     let (mut at, mut line) = (0u64, Vec::new());
     let pad = "            ";
     let chunks = &mut spool.chunks;
-    let mut put = |a: &Animation, f: usize, s: Sample| -> Result<()> {
-        let t = a.times[f];
+    let mut put = |a: &Animation, t: f64, s: Sample| -> Result<()> {
         let arrays = [
             (Attr::Extent, Some(&s.extent[..])),
             (Attr::Normals, s.normals.as_deref()),
@@ -536,8 +535,10 @@ fn spool_frames(
         }
         Ok(())
     };
-    source(&mut |k, f, deltas| for_each_sample(&prims, k, f, deltas, &mut |a, s| put(a, f, s)))
-        .map_err(|e| naming(path, e))?;
+    source(&mut |k, f, deltas| {
+        for_each_sample(&prims, k, f, deltas, &mut |a, s| put(a, a.times[f], s))
+    })
+    .map_err(|e| naming(path, e))?;
     for_each_skin_sample(stage, &mut put).map_err(|e| naming(path, e))?;
     w.flush().map_err(|e| naming(path, e.into()))?;
     Ok(spool)

@@ -284,6 +284,13 @@ impl<W: Write + Seek> Writer<W> {
 
     /// A TimeSamples value over arrays already in the file (`reps[f]` at `times[f]`):
     /// `[i64 to times rep][times: u64 count + doubles][times rep][i64 to values][count][reps]`.
+    /// The time samples of an animated prim's attribute, `reps` its samples' values (see
+    /// [`Animation::ordered`]), in time order.
+    fn sampled(&mut self, a: &Animation, reps: &[u64]) -> Result<u64> {
+        let (times, reps): (Vec<f64>, Vec<u64>) = a.ordered(reps).into_iter().unzip();
+        self.time_samples(&times, &reps)
+    }
+
     fn time_samples(&mut self, times: &[f64], reps: &[u64]) -> Result<u64> {
         anyhow::ensure!(
             times.len() == reps.len(),
@@ -502,7 +509,7 @@ impl<W: Write + Seek> Writer<W> {
         }
         match (&m.animation, reps) {
             (Some(a), Some(r)) => {
-                let rep = self.time_samples(&a.pick(&a.times), &a.pick(&r.extent))?;
+                let rep = self.sampled(a, &r.extent)?;
                 let v = self.raw_field("timeSamples", rep);
                 self.attribute(me, "extent", "float3[]", vec![v])?;
             }
@@ -524,7 +531,7 @@ impl<W: Write + Seek> Writer<W> {
         if let Some(normals) = &m.normals {
             let v = match (&m.animation, reps) {
                 (Some(a), Some(r)) if a.normals => {
-                    let rep = self.time_samples(&a.pick(&a.times), &a.pick(&r.normals))?;
+                    let rep = self.sampled(a, &r.normals)?;
                     self.raw_field("timeSamples", rep)
                 }
                 _ => self.field("default", Val::Vec3fs(normals))?,
@@ -534,7 +541,7 @@ impl<W: Write + Seek> Writer<W> {
         }
         let v = match (&m.animation, reps) {
             (Some(a), Some(r)) => {
-                let rep = self.time_samples(&a.pick(&a.times), &a.pick(&r.points))?;
+                let rep = self.sampled(a, &r.points)?;
                 self.raw_field("timeSamples", rep)
             }
             _ => self.field("default", Val::Vec3fs(&m.points))?,
@@ -859,7 +866,7 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     w.bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
     let prims = animated(stage);
     let mut frames: FrameReps = HashMap::new();
-    let mut put = |a: &Animation, _f: usize, sample: Sample| -> Result<()> {
+    let mut put = |a: &Animation, _code: f64, sample: Sample| -> Result<()> {
         let e = w.vec3f_array(&sample.extent)?;
         let p = w.vec3f_array(&sample.points)?;
         let n = sample
@@ -873,7 +880,9 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
         r.normals.extend(n);
         Ok(())
     };
-    source(&mut |k, f, deltas| for_each_sample(&prims, k, f, deltas, &mut |a, s| put(a, f, s)))?;
+    source(&mut |k, f, deltas| {
+        for_each_sample(&prims, k, f, deltas, &mut |a, s| put(a, a.times[f], s))
+    })?;
     for_each_skin_sample(stage, &mut put)?;
     // Token 0 is a prim name, so no property path ever needs the (unnegatable) index 0.
     w.token(&stage.root);
