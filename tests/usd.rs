@@ -13,6 +13,15 @@ fn s(p: &Path) -> &str {
 /// (mesh name, primitive index, primitive count, points of every frame)
 type GltfPrimitiveFrames = (String, usize, usize, Vec<Vec<[f32; 3]>>);
 
+/// Blender as a Python module (PyPI bpy, in .venv-bpy), or None (noted as a missing tool).
+fn bpy() -> Option<PathBuf> {
+    let bpy = root().join(".venv-bpy/bin/python");
+    if !bpy.exists() && missing_tool("Blender as a Python module (.venv-bpy with bpy 5.0.1)") {
+        return None;
+    }
+    Some(bpy)
+}
+
 /// Formats checked (each must open in usd-core).
 const FORMATS: &[&str] = &["usda", "usdc", "usdz"];
 
@@ -678,10 +687,7 @@ fn materials_and_textures_travel_to_usd() {
 #[test]
 fn blender_imports_materials_and_colours() {
     let Some(fx) = fixtures() else { return };
-    let bpy = root().join(".venv-bpy/bin/python");
-    if !bpy.exists() && missing_tool("Blender as a Python module (.venv-bpy with bpy 5.0.1)") {
-        return;
-    }
+    let Some(bpy) = bpy() else { return };
     let dir = tempfile::tempdir().unwrap();
     let import = |input: &Path, fmt: &str| -> serde_json::Value {
         let out = dir.path().join(format!("blender.{fmt}"));
@@ -1543,10 +1549,7 @@ fn skinned_meshes_are_baked_into_the_point_cache() {
 #[test]
 fn a_skinned_walk_with_a_morph_matches_blender_s_import() {
     let Some(fx) = fixtures() else { return };
-    let bpy = root().join(".venv-bpy/bin/python");
-    if !bpy.exists() && missing_tool("Blender as a Python module (.venv-bpy with bpy 5.0.1)") {
-        return;
-    }
+    let Some(bpy) = bpy() else { return };
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("cesium_morph.glb");
