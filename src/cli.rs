@@ -487,8 +487,9 @@ pub struct BlendArgs {
     /// of one skeleton (a clip each).
     #[arg(required = true, num_args = 1..=2, value_name = "INPUT")]
     inputs: Vec<PathBuf>,
-    /// Output .gltf or .glb (the blend added as a new animation); .bvh for .bvh inputs (the
-    /// first capture's skeleton and channel order, at its frame time).
+    /// Output .gltf or .glb (the blend added as a new animation), or .usda, .usdc or .usdz (a
+    /// USD point cache of the blend: skinned meshes baked at each frame); .bvh for .bvh inputs
+    /// (the first capture's skeleton and channel order, at its frame time).
     #[arg(short, long)]
     output: PathBuf,
     /// The two animations to blend (names or indices): of a glTF input, or one of each of two

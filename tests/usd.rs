@@ -1625,3 +1625,92 @@ fn a_skinned_walk_with_a_morph_matches_blender_s_import() {
         assert!(most < 1e-5, "{t} s: within {most} of Blender's skinning");
     }
 }
+
+/// `blend` writes a USD point cache: Fox's Walk + Run at 0.5 as one Mesh sampled at each of the
+/// blend's 23 frames (its skin baked), validators clean, every vertex within 1e-3 (of a fox 168
+/// long) of Blender's import of the same blend written as .glb, playing it, at two frames. It
+/// was refused ("a skeletal clip has no USD point-cache form here").
+#[test]
+fn a_blend_is_written_as_a_usd_point_cache() {
+    let Some(fx) = fixtures() else { return };
+    let Some(bpy) = bpy() else { return };
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let fox = fx.join("skinned/Fox.glb");
+    let glb = dir.path().join("jog.glb");
+    let blend = |out: &Path| {
+        run_ok(&[
+            "blend",
+            s(&fox),
+            "--clips",
+            "Walk",
+            "Run",
+            "--weight",
+            "0.5",
+            "-o",
+            s(out),
+            "-q",
+        ])
+    };
+    blend(&glb);
+    let doc = inbetween::gltf::Document::open(&glb).unwrap();
+    let jog = doc.json["animations"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap()
+        .clone();
+    assert_eq!(jog["name"], "Walk+Run");
+    let input = jog["samplers"][0]["input"].as_u64().unwrap() as usize;
+    let frames = doc.read_f64(input).unwrap().0;
+    for fmt in ["usda", "usdc"] {
+        let usd = dir.path().join(format!("jog.{fmt}"));
+        blend(&usd);
+        let r = clean_usd_report(&python, &usd, fmt);
+        let rate = r["meta"]["timeCodesPerSecond"].as_f64().unwrap();
+        let ours: serde_json::Value = serde_json::from_slice(&run_tool(
+            &python,
+            "usd_world_points.py",
+            &[usd.as_os_str(), "/Fox/fox/fox1".as_ref()],
+            fmt,
+        ))
+        .unwrap();
+        let times = ours["times"].as_array().unwrap();
+        assert_eq!(
+            times.len(),
+            frames.len(),
+            "{fmt}: a sample per frame of the blend"
+        );
+        let picked = [6, 12];
+        let seconds: Vec<String> = (picked.iter())
+            .map(|&k| format!("{}", times[k].as_f64().unwrap() / rate))
+            .collect();
+        for (k, t) in picked.iter().zip(&seconds) {
+            assert!(
+                (t.parse::<f64>().unwrap() - frames[*k]).abs() < 1e-5,
+                "{fmt}: {t}"
+            );
+        }
+        let mut args = vec![glb.as_os_str(), "--action".as_ref(), "Walk+Run".as_ref()];
+        args.extend(seconds.iter().map(std::ffi::OsStr::new));
+        let stdout = run_tool(&bpy, "bpy_skinned_points.py", &args, "blender");
+        let stdout = String::from_utf8_lossy(&stdout);
+        let line = (stdout.lines())
+            .find_map(|l| l.strip_prefix("BPY_POINTS "))
+            .unwrap_or_else(|| panic!("no result from bpy: {stdout}"));
+        let theirs: serde_json::Value = serde_json::from_str(line).unwrap();
+        for (i, &k) in picked.iter().enumerate() {
+            let (a, b) = (
+                ours["points"][k].as_array().unwrap(),
+                theirs["points"][i].as_array().unwrap(),
+            );
+            assert_eq!(a.len(), b.len());
+            let most = (a.iter().zip(b))
+                .flat_map(|(p, q)| {
+                    (0..3).map(move |c| (p[c].as_f64().unwrap() - q[c].as_f64().unwrap()).abs())
+                })
+                .fold(0.0f64, f64::max);
+            assert!(most < 1e-3, "{fmt} frame {k}: within {most} of Blender's");
+        }
+    }
+}

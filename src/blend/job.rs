@@ -63,12 +63,15 @@ pub struct BlendDone {
 
 pub struct BlendSummary {
     pub blends: Vec<BlendDone>,
+    /// What the output does not carry (a USD point cache's), one line each.
+    pub warnings: Vec<String>,
 }
 
 impl BlendSummary {
-    /// One line per blend.
+    /// One line per blend, and a warning line for each thing the output does not carry.
     pub fn line(&self) -> String {
-        let lines: Vec<String> = self.blends.iter().map(BlendDone::line).collect();
+        let mut lines: Vec<String> = self.blends.iter().map(BlendDone::line).collect();
+        lines.extend(self.warnings.iter().map(|w| format!("warning: {w}")));
         lines.join("\n")
     }
 }
@@ -316,9 +319,15 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
 /// A glTF character's two clips blended at every weight, appended as new animations: two
 /// clips of one file, or one clip of each of two files (the first file's character).
 fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
-    let Some(container) = Format::of(&job.output).ok().and_then(Container::of) else {
+    let format = Format::of(&job.output).ok();
+    let usd = matches!(format, Some(Format::Usda | Format::Usdc | Format::Usdz));
+    // A USD output is staged from the glTF the blends make, held as a .glb.
+    let Some(container) = format
+        .and_then(Container::of)
+        .or(usd.then_some(Container::Glb))
+    else {
         bail!(
-            "{}: blend writes a glTF character's clips to .gltf or .glb (.bvh from two .bvh captures; a skeletal clip has no USD point-cache form here)",
+            "{}: blend writes a glTF character's clips to .gltf or .glb, or a USD point cache (.usda, .usdc, .usdz); .bvh from two .bvh captures",
             job.output.display()
         );
     };
@@ -333,6 +342,8 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
         .collect::<Result<Vec<_>>>()?;
     let mut out = gltf::begin(&docs[0], container, &job.output)?;
     let mut blends = Vec::new();
+    // (animation, times) of each blend.
+    let mut appended = Vec::new();
     for &w in &job.weights {
         let opts = job.options(w);
         let BlendedClips {
@@ -347,7 +358,14 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
         };
         let name = job.name_at(w, [&names[0], &names[1]]);
         let channels = super::write::channels(&rig, &blended.poses, &animated);
-        super::write::append_animation(&mut out, &name, &blended.times, &blended.poses, &channels);
+        let animation = super::write::append_animation(
+            &mut out,
+            &name,
+            &blended.times,
+            &blended.poses,
+            &channels,
+        );
+        appended.push((animation, blended.times.clone()));
         blends.push(BlendDone {
             name,
             file: job.output.clone(),
@@ -355,10 +373,28 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
         });
     }
     let mut files = Outputs::new();
-    gltf::stage(out, container, &job.output, &mut files)?;
+    let mut warnings = Vec::new();
+    match format {
+        Some(format) if usd => {
+            let left_out = super::write_usd::write(
+                out,
+                &appended,
+                inputs[0],
+                &job.output,
+                format,
+                &job.access,
+                &mut files,
+            )?;
+            let input = inputs[0].display();
+            warnings.extend(left_out.iter().map(|what| format!("{input}: {what}")));
+        }
+        _ => {
+            gltf::stage(out, container, &job.output, &mut files)?;
+        }
+    }
     stage_report(job, &blends, &mut files)?;
     files.commit()?;
-    Ok(BlendSummary { blends })
+    Ok(BlendSummary { blends, warnings })
 }
 
 /// Two captures of one skeleton blended at every weight, each written as BVH with the first
@@ -419,5 +455,8 @@ fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
     }
     stage_report(job, &blends, &mut files)?;
     files.commit()?;
-    Ok(BlendSummary { blends })
+    Ok(BlendSummary {
+        blends,
+        warnings: Vec::new(),
+    })
 }

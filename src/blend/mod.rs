@@ -4,7 +4,8 @@
 //! capture files; [`by_name`] for a clip in a second file) -> [`track`] (sample for analysis)
 //! -> [`legs`] -> [`contacts`] -> [`cycles`] ([`analyze`] runs these) -> [`timewarp`] ->
 //! [`align`] -> [`mix`] -> [`cleanup`] -> [`measure`] -> [`write`] (glTF) | [`write_bvh`]
-//! (BVH); [`plan`] runs the middle from clips to frames, [`job`] from file to file.
+//! (BVH) | [`write_usd`] (USD point cache, from the glTF); [`plan`] runs the middle from clips
+//! to frames, [`job`] from file to file.
 
 mod align;
 mod analyze;
@@ -23,6 +24,7 @@ mod timewarp;
 mod track;
 mod write;
 mod write_bvh;
+mod write_usd;
 
 pub use analyze::{analyze, Analysis, Character};
 pub use bvh::{load as load_bvh, parse as parse_bvh, read as read_bvh, Bvh};

@@ -332,6 +332,9 @@ pub fn build_stage(
     texture_prefix: &str,
 ) -> Result<Stage> {
     let json = &doc.json;
+    // The timeline: every processed mesh's frames and every clip's (a clip that plays no
+    // mesh's frames, as a blend's, moves nodes and skinned meshes).
+    let clip_codes: Vec<f64> = clips.iter().flat_map(|c| c.codes.iter().copied()).collect();
     let (motion, not_carried) = NodeMotion::new(doc, clips, rate);
     let codes: Vec<Vec<f64>> = meshes.iter().map(|m| m.codes.clone()).collect();
     let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
@@ -383,7 +386,7 @@ pub fn build_stage(
         .into_inner()
         .finish(unique("Materials".into(), &mut taken))?;
     let ctx_left_out = ctx.left_out.into_inner();
-    let all: Vec<f64> = codes.iter().flatten().copied().collect();
+    let all: Vec<f64> = codes.iter().flatten().copied().chain(clip_codes).collect();
     let start = all.iter().copied().fold(f64::INFINITY, f64::min);
     let end = all.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let (start, end) = if start.is_finite() {
