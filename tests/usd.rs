@@ -22,6 +22,50 @@ fn bpy() -> Option<PathBuf> {
     Some(bpy)
 }
 
+/// Mesh `prim` of `usd` in world space at each of its samples (tools/usd_world_points.py).
+fn world_points(python: &Path, usd: &Path, prim: &str, what: &str) -> serde_json::Value {
+    let out = run_tool(
+        python,
+        "usd_world_points.py",
+        &[usd.as_os_str(), prim.as_ref()],
+        what,
+    );
+    serde_json::from_slice(&out).unwrap()
+}
+
+/// Blender's import of glTF `glb`: its character's skinned points at each of `seconds`,
+/// playing `action` (tools/bpy_skinned_points.py).
+fn blender_points(
+    bpy: &Path,
+    glb: &Path,
+    action: Option<&str>,
+    seconds: &[String],
+) -> serde_json::Value {
+    let mut args = vec![glb.as_os_str()];
+    if let Some(a) = action {
+        args.extend([std::ffi::OsStr::new("--action"), std::ffi::OsStr::new(a)]);
+    }
+    args.extend(seconds.iter().map(std::ffi::OsStr::new));
+    let stdout = run_tool(bpy, "bpy_skinned_points.py", &args, "blender");
+    let stdout = String::from_utf8_lossy(&stdout);
+    let line = (stdout.lines())
+        .find_map(|l| l.strip_prefix("BPY_POINTS "))
+        .unwrap_or_else(|| panic!("no result from bpy: {stdout}"));
+    serde_json::from_str(line).unwrap()
+}
+
+/// The largest difference of any coordinate between two lists of points (JSON), which must
+/// be as long.
+fn farthest(a: &serde_json::Value, b: &serde_json::Value) -> f64 {
+    let (a, b) = (a.as_array().unwrap(), b.as_array().unwrap());
+    assert_eq!(a.len(), b.len(), "point counts");
+    (a.iter().zip(b))
+        .flat_map(|(p, q)| {
+            (0..3).map(move |c| (p[c].as_f64().unwrap() - q[c].as_f64().unwrap()).abs())
+        })
+        .fold(0.0f64, f64::max)
+}
+
 /// Formats checked (each must open in usd-core).
 const FORMATS: &[&str] = &["usda", "usdc", "usdz"];
 
@@ -1071,13 +1115,7 @@ fn what_a_point_cache_does_not_carry_is_named() {
         .iter()
         .map(|prim| {
             let path = format!("/Root_Scene/RootNode/{prim}");
-            let r: serde_json::Value = serde_json::from_slice(&run_tool(
-                &python,
-                "usd_world_points.py",
-                &[usd.as_os_str(), path.as_ref()],
-                prim,
-            ))
-            .unwrap();
+            let r = world_points(&python, &usd, &path, prim);
             let points = r["points"][0].as_array().unwrap().iter().map(|p| {
                 glam::DVec3::new(
                     p[0].as_f64().unwrap(),
@@ -1390,19 +1428,10 @@ fn skinned_meshes_are_baked_into_the_point_cache() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("skinned.glb");
     let turn = skinned_flag(&input);
-    let world = |python: &Path, usd: &Path, prim: &str, fmt: &str| -> serde_json::Value {
-        serde_json::from_slice(&run_tool(
-            python,
-            "usd_world_points.py",
-            &[usd.as_os_str(), prim.as_ref()],
-            fmt,
-        ))
-        .unwrap()
-    };
     let plain = dir.path().join("plain.usda");
     tween_quietly(&sample("flag_wave.glb"), &plain, &[]);
-    let unskinned = world(&python, &plain, "/samples/flag/flag", "plain");
-    let pole = world(&python, &plain, "/samples/pole/pole", "plain");
+    let unskinned = world_points(&python, &plain, "/samples/flag/flag", "plain");
+    let pole = world_points(&python, &plain, "/samples/pole/pole", "plain");
     let to_vec = |v: &serde_json::Value| {
         glam::DVec3::new(
             v[0].as_f64().unwrap(),
@@ -1433,7 +1462,7 @@ fn skinned_meshes_are_baked_into_the_point_cache() {
         let err = String::from_utf8_lossy(&r.stderr);
         assert!(!err.contains("bind pose"), "{fmt}: {err}");
         clean_usd_report(&python, &usd, fmt);
-        let flag = world(&python, &usd, "/samples/flag/flag", fmt);
+        let flag = world_points(&python, &usd, "/samples/flag/flag", fmt);
         let times = flag["times"].as_array().unwrap();
         assert_eq!(times.len(), 61, "{fmt}: a sample per frame");
         assert_eq!(flag["times"], unskinned["times"], "{fmt}");
@@ -1453,7 +1482,7 @@ fn skinned_meshes_are_baked_into_the_point_cache() {
         }
         assert!(most < 1e-4, "{fmt}: the flag within {most} of its skinning");
         // The pole: no frames of its own, but its joint turns over the clip's two seconds.
-        let moved = world(&python, &usd, "/samples/pole/pole", fmt);
+        let moved = world_points(&python, &usd, "/samples/pole/pole", fmt);
         let times = moved["times"].as_array().unwrap();
         assert!(times.len() >= 2, "{fmt}: the pole is sampled: {times:?}");
         let (mut most, mut most_normal) = (0.0f64, 0.0f64);
@@ -1501,7 +1530,7 @@ fn skinned_meshes_are_baked_into_the_point_cache() {
         let usd = dir.path().join(format!("two.{fmt}"));
         tween_quietly(&two, &usd, &[]);
         clean_usd_report(&python, &usd, fmt);
-        let flag = world(&python, &usd, "/samples/flag/flag", fmt);
+        let flag = world_points(&python, &usd, "/samples/flag/flag", fmt);
         let times: Vec<f64> = (flag["times"].as_array().unwrap().iter())
             .map(|t| t.as_f64().unwrap())
             .collect();
@@ -1591,37 +1620,15 @@ fn a_skinned_walk_with_a_morph_matches_blender_s_import() {
     tween_quietly(&input, &usd, &["--method", "linear"]);
     clean_usd_report(&python, &usd, "walk");
     let prim = "/cesium_morph/Z_UP/Armature/Cesium_Man/Cesium_Man";
-    let ours: serde_json::Value = serde_json::from_slice(&run_tool(
-        &python,
-        "usd_world_points.py",
-        &[usd.as_os_str(), prim.as_ref()],
-        "walk",
-    ))
-    .unwrap();
-    let seconds = ["0.5", "1", "1.5"];
-    let mut args = vec![input.as_os_str()];
-    args.extend(seconds.iter().map(|s| std::ffi::OsStr::new(*s)));
-    let stdout = run_tool(&bpy, "bpy_skinned_points.py", &args, "blender");
-    let stdout = String::from_utf8_lossy(&stdout);
-    let line = (stdout.lines())
-        .find_map(|l| l.strip_prefix("BPY_POINTS "))
-        .unwrap_or_else(|| panic!("no result from bpy: {stdout}"));
-    let theirs: serde_json::Value = serde_json::from_str(line).unwrap();
+    let ours = world_points(&python, &usd, prim, "walk");
+    let seconds = ["0.5", "1", "1.5"].map(String::from);
+    let theirs = blender_points(&bpy, &input, None, &seconds);
     for (k, t) in seconds.iter().enumerate() {
         let code = t.parse::<f64>().unwrap() * 30.0;
         let at = (ours["times"].as_array().unwrap().iter())
             .position(|c| c.as_f64() == Some(code))
             .unwrap_or_else(|| panic!("no sample at {code}"));
-        let (a, b) = (
-            ours["points"][at].as_array().unwrap(),
-            theirs["points"][k].as_array().unwrap(),
-        );
-        assert_eq!(a.len(), b.len(), "{t} s");
-        let most = (a.iter().zip(b))
-            .flat_map(|(p, q)| {
-                (0..3).map(move |c| (p[c].as_f64().unwrap() - q[c].as_f64().unwrap()).abs())
-            })
-            .fold(0.0f64, f64::max);
+        let most = farthest(&ours["points"][at], &theirs["points"][k]);
         assert!(most < 1e-5, "{t} s: within {most} of Blender's skinning");
     }
 }
@@ -1668,13 +1675,7 @@ fn a_blend_is_written_as_a_usd_point_cache() {
         blend(&usd);
         let r = clean_usd_report(&python, &usd, fmt);
         let rate = r["meta"]["timeCodesPerSecond"].as_f64().unwrap();
-        let ours: serde_json::Value = serde_json::from_slice(&run_tool(
-            &python,
-            "usd_world_points.py",
-            &[usd.as_os_str(), "/Fox/fox/fox1".as_ref()],
-            fmt,
-        ))
-        .unwrap();
+        let ours = world_points(&python, &usd, "/Fox/fox/fox1", fmt);
         let times = ours["times"].as_array().unwrap();
         assert_eq!(
             times.len(),
@@ -1691,25 +1692,9 @@ fn a_blend_is_written_as_a_usd_point_cache() {
                 "{fmt}: {t}"
             );
         }
-        let mut args = vec![glb.as_os_str(), "--action".as_ref(), "Walk+Run".as_ref()];
-        args.extend(seconds.iter().map(std::ffi::OsStr::new));
-        let stdout = run_tool(&bpy, "bpy_skinned_points.py", &args, "blender");
-        let stdout = String::from_utf8_lossy(&stdout);
-        let line = (stdout.lines())
-            .find_map(|l| l.strip_prefix("BPY_POINTS "))
-            .unwrap_or_else(|| panic!("no result from bpy: {stdout}"));
-        let theirs: serde_json::Value = serde_json::from_str(line).unwrap();
+        let theirs = blender_points(&bpy, &glb, Some("Walk+Run"), &seconds);
         for (i, &k) in picked.iter().enumerate() {
-            let (a, b) = (
-                ours["points"][k].as_array().unwrap(),
-                theirs["points"][i].as_array().unwrap(),
-            );
-            assert_eq!(a.len(), b.len());
-            let most = (a.iter().zip(b))
-                .flat_map(|(p, q)| {
-                    (0..3).map(move |c| (p[c].as_f64().unwrap() - q[c].as_f64().unwrap()).abs())
-                })
-                .fold(0.0f64, f64::max);
+            let most = farthest(&ours["points"][k], &theirs["points"][i]);
             assert!(most < 1e-3, "{fmt} frame {k}: within {most} of Blender's");
         }
     }
