@@ -584,10 +584,6 @@ impl Ctx<'_> {
         let Some(skin) = Skinning::read(self.doc, node, p, n, what, &samples_of)? else {
             return Ok(None);
         };
-        let node_name = format!(
-            "node {}",
-            quoted_name(&json["nodes"][node], || node.to_string())
-        );
         let mut codes = skin.codes();
         if let Some(a) = animation {
             codes.extend_from_slice(&a.times);
@@ -596,8 +592,9 @@ impl Ctx<'_> {
             codes.push(0.0);
         }
         if !skin.works_at(&codes) {
+            let node_name = quoted_name(&json["nodes"][node], || node.to_string());
             say(&mut self.left_out.borrow_mut(), format!(
-                "{node_name} is scaled to nothing, so mesh {mesh_name:?}'s skin cannot be placed in it: written unskinned"
+                "node {node_name} is scaled to nothing, so mesh {mesh_name:?}'s skin cannot be placed in it: written unskinned"
             ));
             return Ok(None);
         }
