@@ -1699,3 +1699,41 @@ fn a_blend_is_written_as_a_usd_point_cache() {
         }
     }
 }
+
+/// A blend that changes morph weights (RobotExpressive's Running with its face opening over
+/// the clip) says in a line that its point cache does not play them (the head is written with
+/// its default weights); the file as it is (its clips hold one face) says nothing of it.
+#[test]
+fn a_blend_s_changing_morph_weights_are_named() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let robot = fx.join("skinned/RobotExpressive.glb");
+    let talking = dir.path().join("talking.glb");
+    let doc = inbetween::gltf::Document::open(&robot).unwrap();
+    let mut json = doc.json.clone();
+    let mut bin = doc.buffers[0].clone();
+    let running = (json["animations"].as_array().unwrap().iter())
+        .position(|a| a["name"] == "Running")
+        .unwrap();
+    // 24 keys of 3 weights: the first target from 0 to 1.
+    let ramp: Vec<f32> = (0..24).flat_map(|k| [k as f32 / 23.0, 0.0, 0.0]).collect();
+    let opening = push_f32_accessor(&mut json, &mut bin, &ramp, "SCALAR");
+    json["animations"][running]["samplers"][0]["output"] = opening.into();
+    write_glb(&talking, &json, &bin);
+    let line = "the blend changes the morph weights of \"Head\", which a point cache of its skeletal motion does not play";
+    for (input, said) in [(&talking, true), (&robot, false)] {
+        let usd = dir.path().join("out.usda");
+        let r = run_ok(&[
+            "blend",
+            s(input),
+            "--clips",
+            "Walking",
+            "Running",
+            "-o",
+            s(&usd),
+        ]);
+        let err =
+            String::from_utf8_lossy(&r.stderr).to_string() + &String::from_utf8_lossy(&r.stdout);
+        assert_eq!(err.contains(line), said, "{}: {err}", input.display());
+    }
+}

@@ -7,7 +7,10 @@
 //! write_usd::write(out, &[(animation, times)], input, output, Format::Usdc, &access, &mut files)?;
 //! ```
 
-use crate::gltf::{self, Access, Container, Document, Output};
+use crate::gltf::{
+    self, arr, clip_name, listed, quoted_name, read_channels, Access, Container, Document, Output,
+    Path as Property,
+};
 use crate::output::{Format, Outputs};
 use crate::usd::{self, ClipOnStage};
 use anyhow::Result;
@@ -65,5 +68,40 @@ pub fn write(
         .unwrap_or("blend");
     let stage = usd::build_stage(&doc, &[], on_stage, rate, &format!("{stem}_"))?;
     usd::write_file(&stage, format, output, &mut |_| Ok(()), files)?;
-    Ok(stage.look.left_out.clone())
+    let mut left_out = stage.look.left_out.clone();
+    left_out.extend(moving_weights(&doc));
+    Ok(left_out)
+}
+
+/// A line naming the meshes whose morph weights a blend changes over its frames: the point
+/// cache has no frames of theirs (that is `tween`'s work), so they stand in their default pose.
+fn moving_weights(doc: &Document) -> Option<String> {
+    let nodes = arr(&doc.json, "nodes");
+    let mut meshes = std::collections::BTreeSet::new();
+    for (a, anim) in arr(&doc.json, "animations").iter().enumerate() {
+        let Ok(channels) = read_channels(doc, &clip_name(anim, a), anim, nodes.len()) else {
+            continue;
+        };
+        for c in channels.iter().filter(|c| c.path == Property::Weights) {
+            let w = c.width.max(1);
+            let moves = (c.values.chunks_exact(w).skip(1)).any(|v| {
+                v.iter()
+                    .zip(&c.values[..w])
+                    .any(|(x, y)| (x - y).abs() > 1e-6)
+            });
+            if let (true, Some(m)) = (moves, nodes[c.node]["mesh"].as_u64()) {
+                meshes.insert(quoted_name(&doc.json["meshes"][m as usize], || {
+                    format!("mesh {m}")
+                }));
+            }
+        }
+    }
+    if meshes.is_empty() {
+        return None;
+    }
+    let meshes: Vec<String> = meshes.into_iter().collect();
+    Some(format!(
+        "the blend changes the morph weights of {}, which a point cache of its skeletal motion does not play: written with their default weights (a glTF output keeps them; `inbetween tween` writes morph frames)",
+        listed(&meshes)
+    ))
 }
