@@ -201,16 +201,45 @@ fn a_tween_output_shows_its_own_frames() {
     assert!(ink(&rgb, w, 0, h) > 2000);
 }
 
+/// A skinned file without morph keys is drawn as a glTF viewer shows it with no clip playing:
+/// moved by its skin's joints in the pose they rest in, with a note. Fox stands on its four
+/// feet (its rest pose is its bind pose); with its root joint turned a quarter turn about x at
+/// rest it stands up on its hind legs, taller than long on the picture (the stored vertices,
+/// which the preview drew before, lie as the first).
 #[test]
-fn a_skinned_file_shows_its_bind_pose_with_a_note() {
+fn a_skinned_file_shows_its_rest_pose_with_a_note() {
     let Some(fx) = fixtures() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let sheet = dir.path().join("fox.png");
-    let r = run_ok(&["preview", s(&fx.join("skinned/Fox.glb")), "-o", s(&sheet)]);
-    let line = String::from_utf8_lossy(&r.stderr);
-    assert!(line.contains("note: no morph keys"), "{line}");
-    let (w, h, rgb) = decode_png(&sheet);
-    assert!(ink(&rgb, w, 0, h) > 1500, "{}", ink(&rgb, w, 0, h));
+    let fox = fx.join("skinned/Fox.glb");
+    let upright = dir.path().join("upright.glb");
+    edited_glb(&fox, &upright, |j| {
+        let half = std::f64::consts::FRAC_1_SQRT_2;
+        j["nodes"][2]["rotation"] = serde_json::json!([half, 0.0, 0.0, half]);
+    });
+    // (rows, columns) holding ink below the label and above the key bar.
+    let extent = |input: &Path| -> (usize, usize) {
+        let sheet = dir.path().join("fox.png");
+        let r = run_ok(&["preview", s(input), "-o", s(&sheet)]);
+        let line = String::from_utf8_lossy(&r.stderr);
+        assert!(line.contains("note: no morph keys"), "{line}");
+        assert!(line.contains("in the pose its joints rest in"), "{line}");
+        let (w, h, rgb) = decode_png(&sheet);
+        assert!(ink(&rgb, w, 0, h) > 1500, "{}", ink(&rgb, w, 0, h));
+        let inked = |x: usize, y: usize| rgb[3 * (y * w + x)..3 * (y * w + x) + 3] != BACKGROUND;
+        let band = 24..h - 8;
+        let rows = band
+            .clone()
+            .filter(|&y| (0..w).any(|x| inked(x, y)))
+            .count();
+        let cols = (0..w)
+            .filter(|&x| band.clone().any(|y| inked(x, y)))
+            .count();
+        (rows, cols)
+    };
+    let (rows, cols) = extent(&fox);
+    assert!(rows < cols, "Fox on its feet: {rows} rows, {cols} columns");
+    let (rows, cols) = extent(&upright);
+    assert!(rows > cols, "Fox upright: {rows} rows, {cols} columns");
 }
 
 #[test]

@@ -3,7 +3,8 @@
 //! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
 //! container, buffers; [`uri`] says what external files it may read) -> [`decode`] (meshopt
 //! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`,
-//! triangles; [`channel`]: animation channels read and evaluated) ... the command's own work
+//! triangles; [`channel`]: animation channels read and evaluated, nodes' rest transforms;
+//! [`skin`]: skinned points at any pose) ... the command's own work
 //! ... -> [`build`] (new accessors and buffer views on an [`Output`]) -> [`mod@reorder`] (with
 //! meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors
 //! nothing uses any more dropped) -> [`encode`] (meshopt compression, when asked for) ->
@@ -18,13 +19,15 @@ mod decode;
 mod encode;
 mod read;
 mod reorder;
+mod skin;
 mod uri;
 mod write;
 
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{set_bounds, BinBuilder, Output, Storage};
 pub use channel::{
-    clip_name, close_keys, push_key, read_channels, slerp, Channel, Interp, Path, MIN_QUATERNION,
+    clip_name, close_keys, push_key, read_channels, rest_matrix, rest_trs, slerp, Channel, Interp,
+    Path, MIN_QUATERNION,
 };
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
 pub use encode::{
@@ -34,5 +37,6 @@ pub use read::{
     arr, at, listed, node_target, quoted_name, weights_target, Document, WeightsTarget,
 };
 pub use reorder::reorder;
+pub use skin::Skinning;
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

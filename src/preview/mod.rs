@@ -15,7 +15,7 @@ mod sheet;
 pub use camera::View;
 pub use raster::{Picture, Shading, BACKGROUND};
 
-use crate::gltf::{arr, Access, Document};
+use crate::gltf::{arr, Access, Document, Skinning};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
@@ -328,13 +328,18 @@ fn still(doc: &Document) -> Result<Scene> {
     let mut triangles = Vec::new();
     let mut points = Vec::new();
     for (mi, world) in worlds.iter().enumerate() {
-        if !arr(&doc.json, "nodes")
+        let nodes = arr(&doc.json, "nodes");
+        // The node drawing the mesh (the one `mesh_worlds` places it by).
+        let Some(node) = nodes
             .iter()
-            .any(|n| n["mesh"].as_u64() == Some(mi as u64))
-        {
+            .position(|n| n["mesh"].as_u64() == Some(mi as u64))
+        else {
             continue;
-        }
-        for (base, tris) in mesh_geometry(doc, mi)? {
+        };
+        let drawn = (arr(&doc.json["meshes"][mi], "primitives").iter())
+            .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4);
+        for ((base, tris), p) in mesh_geometry(doc, mi)?.into_iter().zip(drawn) {
+            let base = skinned_at_rest(doc, node, p, base)?;
             points.push(base.iter().map(|&p| world.transform_point3(p)).collect());
             triangles.push(tris);
         }
@@ -351,6 +356,22 @@ fn still(doc: &Document) -> Result<Scene> {
         triangles,
         bands: vec![(Shown::Stored, vec![col])],
     })
+}
+
+/// Primitive `p`'s stored points `base` as node `node` shows them with no clip playing: moved
+/// by its skin's joints in the pose they rest in where the node has a skin (in the node's
+/// space, as the points are), else as stored.
+fn skinned_at_rest(doc: &Document, node: usize, p: &Value, base: Vec<DVec3>) -> Result<Vec<DVec3>> {
+    let what = format!("node {node}'s mesh");
+    let Some(skin) = Skinning::read(doc, node, p, base.len(), &what, &|_| Vec::new())? else {
+        return Ok(base);
+    };
+    let mut points: Vec<[f32; 3]> = base.iter().map(|p| p.as_vec3().to_array()).collect();
+    skin.apply(0.0, &mut points, None);
+    Ok(points
+        .iter()
+        .map(|&p| glam::Vec3::from(p).as_dvec3())
+        .collect())
 }
 
 /// Draw every column of `scene` in cells of `cell` pixels.
@@ -562,7 +583,7 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
             Some((meshes, shown)),
         )
     } else {
-        note = Some("no morph keys: the meshes as stored (for a skinned file its bind pose; blend plays skeletal clips)".into());
+        note = Some("no morph keys: the meshes as the file shows them with no clip playing (a skinned one in the pose its joints rest in; blend plays skeletal clips)".into());
         (still(&doc)?, None)
     };
     let columns = scene

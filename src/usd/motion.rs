@@ -9,7 +9,8 @@
 //! Clips that move nodes but have no frames on the stage are named in a warning.
 
 use crate::gltf::{
-    arr, clip_name, close_keys, node_target, read_channels, Channel, Document, Interp, Path,
+    arr, clip_name, close_keys, node_target, read_channels, rest_trs, Channel, Document, Interp,
+    Path,
 };
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
@@ -133,43 +134,4 @@ impl NodeMotion {
         out.dedup_by(|b, a| a.0 == b.0);
         out
     }
-}
-
-/// A node's rest transform: its `matrix`, else its translation, rotation and scale.
-pub(super) fn rest_matrix(node: &Value) -> DMat4 {
-    let nums = node["matrix"]
-        .as_array()
-        .map(|a| a.iter().filter_map(Value::as_f64).collect::<Vec<f64>>());
-    match nums.filter(|m| m.len() == 16) {
-        Some(m) => DMat4::from_cols_slice(&m),
-        None => {
-            let (t, r, s) = rest_trs(node);
-            DMat4::from_scale_rotation_translation(s, r, t)
-        }
-    }
-}
-
-/// A node's rest translation, rotation and scale (its `matrix` decomposed when it has one).
-pub(super) fn rest_trs(node: &Value) -> (DVec3, DQuat, DVec3) {
-    let nums = |k: &str| -> Option<Vec<f64>> {
-        node[k]
-            .as_array()
-            .map(|a| a.iter().filter_map(Value::as_f64).collect())
-    };
-    if let Some(m) = nums("matrix").filter(|m| m.len() == 16) {
-        let (s, r, t) = DMat4::from_cols_slice(&m).to_scale_rotation_translation();
-        return (t, r, s);
-    }
-    let t = nums("translation")
-        .filter(|v| v.len() == 3)
-        .map_or(DVec3::ZERO, |v| DVec3::new(v[0], v[1], v[2]));
-    let r = nums("rotation")
-        .filter(|v| v.len() == 4)
-        .map_or(DQuat::IDENTITY, |v| {
-            DQuat::from_xyzw(v[0], v[1], v[2], v[3]).normalize()
-        });
-    let s = nums("scale")
-        .filter(|v| v.len() == 3)
-        .map_or(DVec3::ONE, |v| DVec3::new(v[0], v[1], v[2]));
-    (t, r, s)
 }

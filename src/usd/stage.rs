@@ -24,18 +24,17 @@
 //!   prototype in a `Prototypes` scope);
 //! * meshes that are not animated are written once, without time samples, in the pose the
 //!   glTF shows (morph targets blended by the node's or the mesh's default weights);
-//! * a skinned mesh's points are baked at each of its samples ([`super::skin`]); one that is
+//! * a skinned mesh's points are baked at each of its samples ([`crate::gltf::Skinning`]); one that is
 //!   not animated but whose joints a clip on the stage moves is sampled at that clip's codes;
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
 
 use super::camera_light::{self, say, Plain};
 use super::material::{st_name, Look, LookBuilder};
-use super::motion::{rest_matrix, ClipOnStage, NodeMotion};
-use super::skin::Skinning;
+use super::motion::{ClipOnStage, NodeMotion};
 use crate::gltf::{
-    arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3, Document,
-    MIN_QUATERNION,
+    arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3,
+    rest_matrix, Document, Skinning, MIN_QUATERNION,
 };
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};

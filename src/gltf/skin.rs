@@ -1,7 +1,7 @@
-//! Skinned meshes in the point cache, baked: a point cache has no skeleton, so each sample of
-//! a skinned primitive holds its points as the glTF's skin places them at that time code
-//! (linear blend skinning, glTF 2.0 section 3.7.3), in the space of the mesh node's Xform that
-//! the Mesh prim sits under.
+//! Skinning: a skinned primitive's points as the glTF's skin places them at a time code (linear
+//! blend skinning, glTF 2.0 section 3.7.3), in the space of the mesh node (the USD point cache
+//! bakes each sample of a skinned Mesh with it, under the node's Xform; `preview` draws a
+//! skinned file in the pose its joints rest in).
 //!
 //! For a vertex with joints `j` and weights `w` (every `JOINTS_n`/`WEIGHTS_n` set, weights
 //! scaled to sum to 1) at time code `c`:
@@ -10,11 +10,11 @@
 //! p(c) = inverse(W_mesh(c)) * sum_k w_k * W_joint_k(c) * IBM_k * p
 //! ```
 //!
-//! where `W` is a node's world transform as the stage evaluates it: each node's local transform
-//! is its Xform's time samples where a clip on the stage moves it (held before the first and
-//! after the last, interpolated linearly between two, as USD reads a `matrix4d`), else its
-//! rest transform. So a skinned mesh follows the same joints and nodes as every Xform of the
-//! stage. Normals are turned by each vertex's blended matrix's cofactor (its inverse transpose
+//! where `W` is a node's world transform from its local transforms: each node's time samples
+//! given by the caller (the USD stage's Xform samples where a clip on the stage moves the node:
+//! held before the first and after the last, interpolated linearly between two, as USD reads a
+//! `matrix4d`), else its rest transform. So a skinned mesh follows the same joints and nodes as
+//! every Xform of the stage. Normals are turned by each vertex's blended matrix's cofactor (its inverse transpose
 //! up to scale, which keeps them normal under non-uniform scale) and renormalised.
 //!
 //! ```text
@@ -22,8 +22,7 @@
 //! skin.apply(code, &mut points, normals.as_deref_mut());
 //! ```
 
-use super::motion::rest_matrix;
-use crate::gltf::{arr, read_attribute, Document};
+use super::{arr, read_attribute, rest_matrix, Document};
 use anyhow::{bail, Result};
 use glam::{DMat3, DMat4, DVec3};
 use rayon::prelude::*;
@@ -78,8 +77,8 @@ pub struct Skinning {
 impl Skinning {
     /// The skinning of primitive `p` (of `n` vertices) drawn by node `node` of `doc`, which
     /// has a skin; `None` when the primitive has no `JOINTS_0`. `samples_of(node)` gives a
-    /// node's local transform at each time code a clip on the stage moves it (see
-    /// [`super::motion`]). An error names `what` (the primitive) when the skin's data breaks
+    /// node's local transform at each time code it moves (the USD stage's node motion; none:
+    /// the rest pose). An error names `what` (the primitive) when the skin's data breaks
     /// glTF's rules.
     pub fn read(
         doc: &Document,
