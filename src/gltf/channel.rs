@@ -248,6 +248,21 @@ pub fn read_channels(
     Ok(channels)
 }
 
+/// Each node's parent (the node listing it among its `children`; the last such where a broken
+/// file lists it twice), `None` for a root.
+pub fn node_parents(json: &Value) -> Vec<Option<usize>> {
+    let nodes = arr(json, "nodes");
+    let mut parents = vec![None; nodes.len()];
+    for (i, n) in nodes.iter().enumerate() {
+        for c in arr(n, "children").iter().filter_map(Value::as_u64) {
+            if let Some(x) = parents.get_mut(c as usize) {
+                *x = Some(i);
+            }
+        }
+    }
+    parents
+}
+
 /// A node's rest transform: its `matrix`, else its translation, rotation and scale.
 pub fn rest_matrix(node: &Value) -> DMat4 {
     let nums = node["matrix"]

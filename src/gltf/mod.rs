@@ -26,8 +26,8 @@ mod write;
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{set_bounds, BinBuilder, Output, Storage};
 pub use channel::{
-    clip_name, close_keys, push_key, read_channels, rest_matrix, rest_trs, slerp, Channel, Interp,
-    Path, MIN_QUATERNION,
+    clip_name, close_keys, node_parents, push_key, read_channels, rest_matrix, rest_trs, slerp,
+    Channel, Interp, Path, MIN_QUATERNION,
 };
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
 pub use encode::{
@@ -37,6 +37,6 @@ pub use read::{
     arr, at, listed, node_target, quoted_name, weights_target, Document, WeightsTarget,
 };
 pub use reorder::reorder;
-pub use skin::Skinning;
+pub use skin::{Skeleton, Skinning};
 pub use uri::Access;
 pub use write::{begin, finish, stage, Container};

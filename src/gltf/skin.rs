@@ -18,17 +18,19 @@
 //! up to scale, which keeps them normal under non-uniform scale) and renormalised.
 //!
 //! ```text
-//! let skin = Skinning::read(doc, node, primitive, n, what, &samples_of)?;  // None: not skinned
+//! let skeleton = Skeleton::read(doc, node, &samples_of)?;  // None: the node has no skin
+//! let skin = Skinning::read(doc, &skeleton, primitive, n, what)?;  // once per primitive
 //! skin.apply(code, &mut points, normals.as_deref_mut());
 //! ```
 
-use super::{arr, read_attribute, rest_matrix, Document};
+use super::{arr, node_parents, read_attribute, rest_matrix, Document};
 use anyhow::{bail, Result};
 use glam::{DMat3, DMat4, DVec3};
 use rayon::prelude::*;
 use serde_json::Value;
+use std::sync::Arc;
 
-/// A node a skinned mesh depends on: its parent's place in [`Skinning::nodes`] (always
+/// A node a skinned mesh depends on: its parent's place in [`Skeleton::nodes`] (always
 /// before it), its rest transform, and its local transform's time samples (time order).
 struct NodeTrack {
     parent: Option<usize>,
@@ -60,34 +62,36 @@ impl NodeTrack {
     }
 }
 
-/// What skinning one primitive needs: the nodes its joints and its own node hang from, the
-/// joints' inverse bind matrices, and each vertex's influences.
-pub struct Skinning {
+/// What skinning the primitives of one node needs, read once for all of them: the nodes its
+/// skin's joints and the node itself hang from, and the joints' inverse bind matrices.
+pub struct Skeleton {
+    /// The skin's index, for what is said.
+    skin: u64,
     nodes: Vec<NodeTrack>,
     /// The mesh node's place in `nodes`.
     mesh_node: usize,
     /// Each joint of the skin: its node's place in `nodes` and its inverse bind matrix.
     joints: Vec<(usize, DMat4)>,
+}
+
+/// One primitive's skinning: its node's [`Skeleton`] and each vertex's influences.
+pub struct Skinning {
+    skeleton: Arc<Skeleton>,
     /// `per` (joint of the skin, weight) pairs a vertex, weights summing to 1 (a vertex whose
     /// weights are all zero has none: it stays where the mesh node puts it).
     influences: Vec<(u32, f32)>,
     per: usize,
 }
 
-impl Skinning {
-    /// The skinning of primitive `p` (of `n` vertices) drawn by node `node` of `doc`, which
-    /// has a skin; `None` when the primitive has no `JOINTS_0`. `samples_of(node)` gives a
-    /// node's local transform at each time code it moves (the USD stage's node motion; none:
-    /// the rest pose). An error names `what` (the primitive) when the skin's data breaks
-    /// glTF's rules.
+impl Skeleton {
+    /// The skeleton of node `node` of `doc`; `None` when the node has no skin.
+    /// `samples_of(node)` gives a node's local transform at each time code it moves (the USD
+    /// stage's node motion; none: the rest pose). An error says what breaks glTF's rules.
     pub fn read(
         doc: &Document,
         node: usize,
-        p: &Value,
-        n: usize,
-        what: &str,
         samples_of: &dyn Fn(usize) -> Vec<(f64, [f64; 16])>,
-    ) -> Result<Option<Skinning>> {
+    ) -> Result<Option<Arc<Skeleton>>> {
         let json = &doc.json;
         let Some(skin) = json["nodes"][node]["skin"].as_u64() else {
             return Ok(None);
@@ -119,59 +123,8 @@ impl Skinning {
             }
             None => vec![DMat4::IDENTITY; joint_nodes.len()],
         };
-        // Every JOINTS_n / WEIGHTS_n set, four influences each.
-        let mut sets = Vec::new();
-        for set in 0.. {
-            let joints = read_attribute(doc, p, &format!("JOINTS_{set}"), 4, n, what)?;
-            let weights = read_attribute(doc, p, &format!("WEIGHTS_{set}"), 4, n, what)?;
-            match (joints, weights) {
-                (Some(j), Some(w)) => sets.push((j, w)),
-                (None, None) => break,
-                _ => bail!(doc.err(format!(
-                    "{what} has JOINTS_{set} or WEIGHTS_{set} without the other"
-                ))),
-            }
-        }
-        if sets.is_empty() {
-            return Ok(None);
-        }
-        let per = 4 * sets.len();
-        let mut influences = Vec::with_capacity(n * per);
-        for v in 0..n {
-            let start = influences.len();
-            let mut sum = 0.0;
-            for (j, w) in &sets {
-                for c in 0..4 {
-                    let (joint, weight) = (j[4 * v + c], w[4 * v + c]);
-                    if weight <= 0.0 {
-                        influences.push((0, 0.0));
-                        continue;
-                    }
-                    if joint as usize >= joint_nodes.len() {
-                        bail!(doc.err(format!(
-                            "{what} vertex {v} is weighted to joint {joint} of skin {skin}, which has {}",
-                            joint_nodes.len()
-                        )));
-                    }
-                    influences.push((joint as u32, weight as f32));
-                    sum += weight;
-                }
-            }
-            if sum > 0.0 {
-                for x in &mut influences[start..] {
-                    x.1 = (x.1 as f64 / sum) as f32;
-                }
-            }
-        }
         // The nodes the joints and the mesh node hang from, each after its parent.
-        let mut parents = vec![None; node_count];
-        for (i, nd) in arr(json, "nodes").iter().enumerate() {
-            for c in arr(nd, "children").iter().filter_map(Value::as_u64) {
-                if let Some(x) = parents.get_mut(c as usize) {
-                    *x = Some(i);
-                }
-            }
-        }
+        let parents = node_parents(json);
         let mut slot = vec![usize::MAX; node_count];
         let mut nodes: Vec<NodeTrack> = Vec::new();
         let mut place = |start: usize, nodes: &mut Vec<NodeTrack>| -> usize {
@@ -204,13 +157,12 @@ impl Skinning {
         let joints = (joint_nodes.iter().zip(ibms))
             .map(|(&j, ibm)| (place(j, &mut nodes), ibm))
             .collect();
-        Ok(Some(Skinning {
+        Ok(Some(Arc::new(Skeleton {
+            skin,
             nodes,
             mesh_node,
             joints,
-            influences,
-            per,
-        }))
+        })))
     }
 
     /// The time codes at which a node the skin depends on has a sample (time order): where
@@ -252,11 +204,75 @@ impl Skinning {
     pub fn works_at(&self, codes: &[f64]) -> bool {
         codes.iter().all(|&c| self.matrices(c).is_some())
     }
+}
+
+impl Skinning {
+    /// The skinning of primitive `p` (of `n` vertices) drawn by the node of `skeleton`;
+    /// `None` when the primitive has no `JOINTS_0`. An error names `what` (the primitive) when
+    /// its influences break glTF's rules.
+    pub fn read(
+        doc: &Document,
+        skeleton: &Arc<Skeleton>,
+        p: &Value,
+        n: usize,
+        what: &str,
+    ) -> Result<Option<Skinning>> {
+        let skin = skeleton.skin;
+        // Every JOINTS_n / WEIGHTS_n set, four influences each.
+        let mut sets = Vec::new();
+        for set in 0.. {
+            let joints = read_attribute(doc, p, &format!("JOINTS_{set}"), 4, n, what)?;
+            let weights = read_attribute(doc, p, &format!("WEIGHTS_{set}"), 4, n, what)?;
+            match (joints, weights) {
+                (Some(j), Some(w)) => sets.push((j, w)),
+                (None, None) => break,
+                _ => bail!(doc.err(format!(
+                    "{what} has JOINTS_{set} or WEIGHTS_{set} without the other"
+                ))),
+            }
+        }
+        if sets.is_empty() {
+            return Ok(None);
+        }
+        let per = 4 * sets.len();
+        let mut influences = Vec::with_capacity(n * per);
+        for v in 0..n {
+            let start = influences.len();
+            let mut sum = 0.0;
+            for (j, w) in &sets {
+                for c in 0..4 {
+                    let (joint, weight) = (j[4 * v + c], w[4 * v + c]);
+                    if weight <= 0.0 {
+                        influences.push((0, 0.0));
+                        continue;
+                    }
+                    if joint as usize >= skeleton.joints.len() {
+                        bail!(doc.err(format!(
+                            "{what} vertex {v} is weighted to joint {joint} of skin {skin}, which has {}",
+                            skeleton.joints.len()
+                        )));
+                    }
+                    influences.push((joint as u32, weight as f32));
+                    sum += weight;
+                }
+            }
+            if sum > 0.0 {
+                for x in &mut influences[start..] {
+                    x.1 = (x.1 as f64 / sum) as f32;
+                }
+            }
+        }
+        Ok(Some(Skinning {
+            skeleton: Arc::clone(skeleton),
+            influences,
+            per,
+        }))
+    }
 
     /// Skin `points` (and `normals`) at time code `code`, in place; left as they are where
-    /// the mesh node's world transform has no inverse (see [`Skinning::works_at`]).
+    /// the mesh node's world transform has no inverse (see [`Skeleton::works_at`]).
     pub fn apply(&self, code: f64, points: &mut [[f32; 3]], normals: Option<&mut [[f32; 3]]>) {
-        let Some(mats) = self.matrices(code) else {
+        let Some(mats) = self.skeleton.matrices(code) else {
             return;
         };
         let blended = |v: usize| -> Option<DMat4> {

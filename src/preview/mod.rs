@@ -15,7 +15,7 @@ mod sheet;
 pub use camera::View;
 pub use raster::{Picture, Shading, BACKGROUND};
 
-use crate::gltf::{arr, Access, Document, Skinning};
+use crate::gltf::{arr, node_parents, Access, Document, Skeleton, Skinning};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
@@ -30,6 +30,7 @@ use rayon::prelude::*;
 use serde_json::Value;
 use sheet::Band;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// What a band shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -189,14 +190,7 @@ fn mesh_worlds(json: &Value) -> Vec<DMat4> {
             DVec3::new(t[0], t[1], t[2]),
         )
     };
-    let mut parent = vec![None; nodes.len()];
-    for (i, n) in nodes.iter().enumerate() {
-        for c in arr(n, "children") {
-            if let Some(c) = c.as_u64().map(|c| c as usize).filter(|&c| c < nodes.len()) {
-                parent[c] = Some(i);
-            }
-        }
-    }
+    let parent = node_parents(json);
     let world = |mut i: usize| -> DMat4 {
         let mut m = DMat4::IDENTITY;
         // A cycle in a broken file ends after as many steps as there are nodes.
@@ -338,8 +332,13 @@ fn still(doc: &Document) -> Result<Scene> {
         };
         let drawn = (arr(&doc.json["meshes"][mi], "primitives").iter())
             .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4);
+        // The node's skin, its joints at rest (no clip plays).
+        let skeleton = Skeleton::read(doc, node, &|_| Vec::new())?;
         for ((base, tris), p) in mesh_geometry(doc, mi)?.into_iter().zip(drawn) {
-            let base = skinned_at_rest(doc, node, p, base)?;
+            let base = match &skeleton {
+                Some(skeleton) => skinned_at_rest(doc, skeleton, p, base, node)?,
+                None => base,
+            };
             points.push(base.iter().map(|&p| world.transform_point3(p)).collect());
             triangles.push(tris);
         }
@@ -358,12 +357,18 @@ fn still(doc: &Document) -> Result<Scene> {
     })
 }
 
-/// Primitive `p`'s stored points `base` as node `node` shows them with no clip playing: moved
-/// by its skin's joints in the pose they rest in where the node has a skin (in the node's
-/// space, as the points are), else as stored.
-fn skinned_at_rest(doc: &Document, node: usize, p: &Value, base: Vec<DVec3>) -> Result<Vec<DVec3>> {
+/// Primitive `p`'s stored points `base` moved by `skeleton`'s joints (those of node `node`) in
+/// the pose they rest in (in the node's space, as the points are): as the node shows them with
+/// no clip playing.
+fn skinned_at_rest(
+    doc: &Document,
+    skeleton: &Arc<Skeleton>,
+    p: &Value,
+    base: Vec<DVec3>,
+    node: usize,
+) -> Result<Vec<DVec3>> {
     let what = format!("node {node}'s mesh");
-    let Some(skin) = Skinning::read(doc, node, p, base.len(), &what, &|_| Vec::new())? else {
+    let Some(skin) = Skinning::read(doc, skeleton, p, base.len(), &what)? else {
         return Ok(base);
     };
     let mut points: Vec<[f32; 3]> = base.iter().map(|p| p.as_vec3().to_array()).collect();

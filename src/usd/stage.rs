@@ -34,13 +34,14 @@ use super::material::{st_name, Look, LookBuilder};
 use super::motion::{ClipOnStage, NodeMotion};
 use crate::gltf::{
     arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3,
-    rest_matrix, Document, Skinning, MIN_QUATERNION,
+    rest_matrix, Document, Skeleton, Skinning, MIN_QUATERNION,
 };
 use anyhow::{bail, Result};
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::{json, Value};
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
 
 /// One Mesh prim to write.
 pub struct MeshPrim {
@@ -566,38 +567,33 @@ impl Ctx<'_> {
         Ok((points, normals))
     }
 
-    /// The skinning of primitive `p` (`n` vertices, of mesh `mesh_name`) drawn by skinned
-    /// node `node`, whose frames are `animation` when it has any; `None` (and a line saying
-    /// so) where the node's world transform cannot be inverted at one of its time codes.
-    fn skinning(
+    /// Node `node`'s skeleton, for its mesh `mesh_name` (whose frames are at `frames`), and
+    /// the time codes its joints move at; `None` where the node has no skin, or (with a line
+    /// saying so) where its world transform cannot be inverted at one of its time codes.
+    fn skeleton(
         &self,
         node: usize,
-        p: &Value,
-        n: usize,
-        what: &str,
         mesh_name: &str,
-        animation: Option<&Animation>,
-    ) -> Result<Option<Skinning>> {
+        frames: &[f64],
+    ) -> Result<Option<(Arc<Skeleton>, Vec<f64>)>> {
         let json = &self.doc.json;
         let samples_of = |x: usize| self.motion.samples(x, &json["nodes"][x]);
-        let Some(skin) = Skinning::read(self.doc, node, p, n, what, &samples_of)? else {
+        let Some(skeleton) = Skeleton::read(self.doc, node, &samples_of)? else {
             return Ok(None);
         };
-        let mut codes = skin.codes();
-        if let Some(a) = animation {
-            codes.extend_from_slice(&a.times);
-        }
+        let moves = skeleton.codes();
+        let mut codes = [&moves[..], frames].concat();
         if codes.is_empty() {
             codes.push(0.0);
         }
-        if !skin.works_at(&codes) {
+        if !skeleton.works_at(&codes) {
             let node_name = quoted_name(&json["nodes"][node], || node.to_string());
             say(&mut self.left_out.borrow_mut(), format!(
                 "node {node_name} is scaled to nothing, so mesh {mesh_name:?}'s skin cannot be placed in it: written unskinned"
             ));
             return Ok(None);
         }
-        Ok(Some(skin))
+        Ok(Some((skeleton, moves)))
     }
 
     /// Primitive `p`'s look: its material's base colour (white for a material without one;
@@ -707,6 +703,10 @@ impl Ctx<'_> {
             .unwrap_or_else(|| format!("mesh{mi}"));
         let processed = self.meshes.iter().position(|m| m.mesh == mi);
         let prims = arr(mesh, "primitives");
+        // The node's skeleton and where its joints move: read at the first primitive that is
+        // skinned, once for them all.
+        let frames = processed.map_or(&[][..], |k| &self.codes[k][..]);
+        let mut skeleton: Option<Option<(Arc<Skeleton>, Vec<f64>)>> = None;
         // Primitives with the same attributes and targets draw one vertex buffer (three.js'
         // and Babylon.js' material groups): one Mesh with a subset per primitive.
         let mut groups: Vec<(Value, MeshPrim)> = Vec::new();
@@ -797,16 +797,23 @@ impl Ctx<'_> {
                     skin_only: false,
                     extra: Vec::new(),
                 });
-            let skin = match skinned {
-                true => self.skinning(node, p, n, &what, &mesh_name, animation.as_ref())?,
-                false => None,
+            if skinned && skeleton.is_none() {
+                skeleton = Some(self.skeleton(node, &mesh_name, frames)?);
+            }
+            let read = skeleton.as_ref().and_then(Option::as_ref);
+            let skin = match read {
+                Some((skeleton, _)) => Skinning::read(doc, skeleton, p, n, &what)?,
+                None => None,
             };
+            let moves: &[f64] = read.map_or(&[], |(_, codes)| codes);
             // Where a skinned prim's joints move and it plays no frame, its still pose.
             let extra: Vec<f64> = match (&animation, &skin) {
-                (Some(a), Some(skin)) => {
+                (Some(a), Some(_)) => {
                     let played: Vec<f64> = a.pick(&a.times);
-                    let codes = skin.codes().into_iter();
-                    codes.filter(|c| !played.contains(c)).collect()
+                    (moves.iter())
+                        .filter(|c| !played.contains(c))
+                        .copied()
+                        .collect()
                 }
                 _ => Vec::new(),
             };
@@ -827,10 +834,10 @@ impl Ctx<'_> {
                     extra,
                     ..a
                 }),
-                (None, Some(skin)) if !skin.codes().is_empty() => Some(Animation {
+                (None, Some(_)) if !moves.is_empty() => Some(Animation {
                     mesh: usize::MAX,
                     primitive: pi,
-                    times: skin.codes(),
+                    times: moves.to_vec(),
                     played: None,
                     normals: normals.is_some(),
                     instance: node + 1,
