@@ -320,11 +320,11 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
 /// clips of one file, or one clip of each of two files (the first file's character).
 fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
     let format = Format::of(&job.output).ok();
-    let usd = matches!(format, Some(Format::Usda | Format::Usdc | Format::Usdz));
+    let usd = format.filter(|f| matches!(f, Format::Usda | Format::Usdc | Format::Usdz));
     // A USD output is staged from the glTF the blends make, held as a .glb.
     let Some(container) = format
         .and_then(Container::of)
-        .or(usd.then_some(Container::Glb))
+        .or(usd.map(|_| Container::Glb))
     else {
         bail!(
             "{}: blend writes a glTF character's clips to .gltf or .glb, or a USD point cache (.usda, .usdc, .usdz); .bvh from two .bvh captures",
@@ -374,8 +374,8 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
     }
     let mut files = Outputs::new();
     let mut warnings = Vec::new();
-    match format {
-        Some(format) if usd => {
+    match usd {
+        Some(format) => {
             let left_out = super::write_usd::write(
                 out,
                 &appended,
@@ -388,7 +388,7 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
             let input = inputs[0].display();
             warnings.extend(left_out.iter().map(|what| format!("{input}: {what}")));
         }
-        _ => {
+        None => {
             gltf::stage(out, container, &job.output, &mut files)?;
         }
     }
