@@ -14,8 +14,9 @@
 //! given by the caller (the USD stage's Xform samples where a clip on the stage moves the node:
 //! held before the first and after the last, interpolated linearly between two, as USD reads a
 //! `matrix4d`), else its rest transform. So a skinned mesh follows the same joints and nodes as
-//! every Xform of the stage. Normals are turned by each vertex's blended matrix's cofactor (its inverse transpose
-//! up to scale, which keeps them normal under non-uniform scale) and renormalised.
+//! every Xform of the stage. Normals are turned by each vertex's blended matrix's cofactor (its
+//! inverse transpose up to scale, which keeps them normal under non-uniform scale) and
+//! renormalised.
 //!
 //! ```text
 //! let skeleton = Skeleton::read(doc, node, &samples_of)?;  // None: the node has no skin

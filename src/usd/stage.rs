@@ -24,8 +24,9 @@
 //!   prototype in a `Prototypes` scope);
 //! * meshes that are not animated are written once, without time samples, in the pose the
 //!   glTF shows (morph targets blended by the node's or the mesh's default weights);
-//! * a skinned mesh's points are baked at each of its samples ([`crate::gltf::Skinning`]); one that is
-//!   not animated but whose joints a clip on the stage moves is sampled at that clip's codes;
+//! * a skinned mesh's points are baked at each of its samples ([`crate::gltf::Skinning`]); one
+//!   that is not animated but whose joints a clip on the stage moves is sampled at that clip's
+//!   codes;
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
 //!   `_1`, `_2`, ... suffix, deterministically.
 
