@@ -131,7 +131,8 @@ impl From<LayoutArg> for Layout {
 #[derive(Clone, Copy, ValueEnum)]
 pub enum KeysArg {
     /// `animation` for meshes whose weights the file animates (a morph mesh beside them that no
-    /// clip animates keeps its pose); `targets` when the file animates no mesh's weights.
+    /// clip animates keeps its pose); `targets` when no clip animates weights or moves a node
+    /// (beside a character's skeletal clips, morph targets are blend shapes, not keys).
     Auto,
     /// Key 0 = base mesh, key k = base + target k at weight 1; key times 0, 1, 2, ... s.
     Targets,

@@ -724,6 +724,53 @@ fn held_keys_are_tweened_and_said_so() {
 }
 
 #[test]
+fn morph_targets_beside_clips_that_only_move_nodes_are_not_taken_as_keys() {
+    // flag_wave with its weights clip replaced by one that turns its node: a file whose clips
+    // move nodes and animate no weights, as RobotExpressive's face shapes beside its skeletal
+    // clips come out of gltfpack (which drops constant weights channels). Its targets are
+    // blend shapes, not keys: refused under `--keys auto` with the hint (the original Robot,
+    // whose channels hold its weights still, is refused too), tweened with `--keys targets`.
+    let dir = tempfile::tempdir().unwrap();
+    let plain = sample("flag_wave.glb");
+    let doc = Document::open(&plain).unwrap();
+    let (mut json, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let times = json["animations"][0]["samplers"][0]["input"]
+        .as_u64()
+        .unwrap() as usize;
+    let n = json["accessors"][times]["count"].as_u64().unwrap() as usize;
+    let turns: Vec<f32> = (0..n)
+        .flat_map(|k| {
+            let h = 0.1 * k as f32;
+            [0.0, h.sin(), 0.0, h.cos()]
+        })
+        .collect();
+    let rotation = push_f32_accessor(&mut json, &mut bin, &turns, "VEC4");
+    let node = json["animations"][0]["channels"][0]["target"]["node"].clone();
+    json["animations"][0] = serde_json::json!({
+        "name": "turn",
+        "samplers": [{"input": times, "output": rotation}],
+        "channels": [{"sampler": 0, "target": {"node": node, "path": "rotation"}}],
+    });
+    let input = out_in(&dir, "turning.glb");
+    write_glb(&input, &json, &bin);
+    let out = out_in(&dir, "out.glb");
+    assert_refused(
+        &["tween", s(&input), "-o", s(&out)],
+        "turning.glb",
+        "no clip animates its weights; --keys targets tweens the targets",
+        &out,
+    );
+    tween_quietly(&input, &out, &["--keys", "targets"]);
+    let count = |j: &serde_json::Value| {
+        j["meshes"][0]["primitives"][0]["targets"]
+            .as_array()
+            .map_or(0, Vec::len)
+    };
+    let (targets, authored) = (count(&Document::open(&out).unwrap().json), count(&json));
+    assert!(targets > authored, "{targets} targets, {authored} authored");
+}
+
+#[test]
 fn weights_that_move_no_vertex_are_refused_saying_why() {
     // flag_wave with its targets' POSITION deltas gone (targets of normals only, as shading
     // shapes are), and with one key: nothing to tween, each said as it is.

@@ -18,7 +18,8 @@ use std::collections::HashMap;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum KeySource {
     /// `animation` for meshes whose weights the file animates (a morph mesh beside them that no
-    /// clip animates keeps its pose); `targets` when the file animates no mesh's weights.
+    /// clip animates keeps its pose); `targets` when no clip animates weights or moves a node
+    /// (beside a character's skeletal clips, morph targets are blend shapes, not keys).
     #[default]
     Auto,
     /// Key 0 = base mesh, key k = base + target k at weight 1; key times 0, 1, 2, ... s.
@@ -148,21 +149,37 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
         Some(sel) => Some(find_animation(doc, sel)?),
     };
     let mut out = Vec::new();
-    // Why a mesh animated by its weights was passed over: its weights hold one pose, or
-    // they change only targets that move no vertex (normals, texture coordinates, colours).
-    let (mut held_one_pose, mut moves_no_vertex) = (false, false);
+    // Why a morph mesh was passed over: its weights hold one pose, they change only targets
+    // that move no vertex (normals, texture coordinates, colours), or no clip animates them.
+    let (mut held_one_pose, mut moves_no_vertex, mut not_animated) = (false, false, false);
     let users = MeshUsers::of(&doc.json);
-    // `--keys auto` tweens a mesh's targets only in a file that animates no mesh's weights
-    // (the clip picked by `--animation`, when given): beside a weights animation, a morph mesh
-    // with none keeps its authored pose (a prop held by its default weights).
+    // `--keys auto` tweens a mesh's targets only in a file with no clip (the clip picked by
+    // `--animation`, when given) that animates weights or moves a node: beside a weights
+    // animation, a morph mesh with none keeps its authored pose (a prop held by its default
+    // weights), and a character's face shapes beside its skeletal clips are blend shapes, not
+    // keys (RobotExpressive through gltfpack, which drops its constant weights channels, was
+    // tweened through Angry, Surprised and Sad, where the original file is refused).
     let animates_weights =
         (users.channels.values().flatten()).any(|&(a, _, _)| selected.is_none_or(|s| s == a));
+    let moves_nodes = arr(&doc.json, "animations")
+        .iter()
+        .enumerate()
+        .any(|(a, anim)| selected.is_none_or(|s| s == a) && moves_a_node(anim));
     for mi in 0..arr(&doc.json, "meshes").len() {
-        let found = morph_mesh(doc, mi, &users, opts, selected, animates_weights)?;
+        let found = morph_mesh(
+            doc,
+            mi,
+            &users,
+            opts,
+            selected,
+            animates_weights || moves_nodes,
+        )?;
         let Some((mm, use_animation)) = found else {
             continue;
         };
-        if mm.tracks.iter().any(|t| has_distinct_keys(&mm, t)) {
+        if mm.tracks.is_empty() {
+            not_animated = true;
+        } else if mm.tracks.iter().any(|t| has_distinct_keys(&mm, t)) {
             out.push(mm);
         } else if use_animation {
             let varies = |t: &Track| t.weights.iter().any(|w| *w != t.weights[0]);
@@ -174,22 +191,24 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
     }
     if out.is_empty() {
         let clips = skeletal_clips(&doc.json);
-        let hint = if moves_no_vertex {
+        let mut hint = if moves_no_vertex {
             " (its weights animations change only targets that move no vertex: normals, texture coordinates or colours, which a viewer blends as authored)"
-                .to_string()
         } else if held_one_pose {
             " (its weights animations hold a single pose; --keys targets tweens the targets)"
-                .to_string()
-        } else if !arr(&doc.json, "skins").is_empty() && !clips.is_empty() {
-            format!(
+        } else if not_animated {
+            " (no clip animates its weights; --keys targets tweens the targets)"
+        } else {
+            ""
+        }
+        .to_string();
+        if !arr(&doc.json, "skins").is_empty() && !clips.is_empty() {
+            hint += &format!(
                 "; it has a skinned character with {} clip{} ({}): `inbetween blend` mixes skeletal clips",
                 clips.len(),
                 if clips.len() == 1 { "" } else { "s" },
                 listed(&clips)
-            )
-        } else {
-            String::new()
-        };
+            );
+        }
         bail!(doc.err(format!(
             "no mesh with morph targets and at least two distinct keys{hint}"
         )));
@@ -216,7 +235,8 @@ pub fn meshes_without_weights_animation(doc: &Document) -> Vec<usize> {
 }
 
 /// Mesh `mi` with its tracks, and whether they come from an animation; `None` when it has no
-/// morph targets, or no track under `--keys auto` with `--animation`.
+/// morph targets. Its tracks are empty where keys come from the animation and no clip (the one
+/// `--animation` picks, when given) animates its weights.
 fn morph_mesh(
     doc: &Document,
     mi: usize,
@@ -258,7 +278,6 @@ fn morph_mesh(
                         .unwrap_or_default()
                 )));
             }
-            return Ok(None);
         }
         (tracks, dropped)
     } else {
@@ -386,16 +405,19 @@ pub fn skeletal_clips(json: &Value) -> Vec<String> {
     arr(json, "animations")
         .iter()
         .enumerate()
-        .filter(|(_, a)| {
-            arr(a, "channels").iter().any(|c| {
-                matches!(
-                    c["target"]["path"].as_str(),
-                    Some("translation" | "rotation" | "scale")
-                )
-            })
-        })
+        .filter(|(_, a)| moves_a_node(a))
         .map(|(i, a)| quoted_name(a, || i.to_string()))
         .collect()
+}
+
+/// Whether an animation has a translation, rotation or scale channel.
+fn moves_a_node(anim: &Value) -> bool {
+    arr(anim, "channels").iter().any(|c| {
+        matches!(
+            c["target"]["path"].as_str(),
+            Some("translation" | "rotation" | "scale")
+        )
+    })
 }
 
 /// True when at least two keys of the track give different poses.
