@@ -269,15 +269,13 @@ fn morph_mesh(
     };
     let (tracks, dropped) = if use_animation {
         let (tracks, dropped) = animation_tracks(doc, &channels, selected, target_count)?;
-        if tracks.is_empty() {
-            if opts.source == KeySource::Animation {
-                bail!(doc.err(format!(
-                    "--keys animation: no animation{} drives the weights of mesh {name:?}",
-                    opts.animation
-                        .map(|a| format!(" {a:?}"))
-                        .unwrap_or_default()
-                )));
-            }
+        if tracks.is_empty() && opts.source == KeySource::Animation {
+            bail!(doc.err(format!(
+                "--keys animation: no animation{} drives the weights of mesh {name:?}",
+                opts.animation
+                    .map(|a| format!(" {a:?}"))
+                    .unwrap_or_default()
+            )));
         }
         (tracks, dropped)
     } else {
