@@ -341,6 +341,10 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
         .map(|p| Document::open_with(p, &job.access))
         .collect::<Result<Vec<_>>>()?;
     let mut out = gltf::begin(&docs[0], container, &job.output)?;
+    let input = inputs[0].display();
+    let mut warnings: Vec<String> = (out.mended.iter())
+        .map(|what| format!("{input}: {what}"))
+        .collect();
     let mut blends = Vec::new();
     // (animation, times) of each blend.
     let mut appended = Vec::new();
@@ -373,7 +377,6 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
         });
     }
     let mut files = Outputs::new();
-    let mut warnings = Vec::new();
     match usd {
         Some(format) => {
             let left_out = super::write_usd::write(
@@ -385,7 +388,6 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
                 &job.access,
                 &mut files,
             )?;
-            let input = inputs[0].display();
             warnings.extend(left_out.iter().map(|what| format!("{input}: {what}")));
         }
         None => {

@@ -164,6 +164,8 @@ pub struct Output {
     pub(crate) copies: Vec<(Vec<u8>, PathBuf)>,
     /// Compress the buffer views with `EXT_meshopt_compression` when written.
     pub meshopt: bool,
+    /// What the output mends in the input's data, one line each, for the summary's warnings.
+    pub mended: Vec<String>,
 }
 
 impl Output {
@@ -174,6 +176,7 @@ impl Output {
             bin: BinBuilder::new(),
             copies: Vec::new(),
             meshopt: false,
+            mended: Vec::new(),
         }
     }
 

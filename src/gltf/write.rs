@@ -10,6 +10,7 @@ use super::build::{BinBuilder, Output};
 use super::encode;
 use super::read::{arr, Document};
 use super::uri::{percent_decode, reference, Reference};
+use super::weights;
 use crate::output::{folder_of, Format, Outputs};
 use anyhow::{anyhow, Result};
 use serde_json::{json, Value};
@@ -35,7 +36,8 @@ impl Container {
 }
 
 /// Start an output from the input: all buffer views copied into one buffer; external images
-/// embedded in a `.glb`, or copied beside a `.gltf` written elsewhere when it is finished.
+/// embedded in a `.glb`, or copied beside a `.gltf` written elsewhere when it is finished; skin
+/// weights that do not sum to one mended ([`weights::normalize`], said in `Output::mended`).
 pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Output> {
     let mut json = doc.json.clone();
     let mut bin = BinBuilder::new();
@@ -50,11 +52,13 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         bin.views[idx] = view;
     }
     embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
+    let mended = weights::normalize(&json, &mut bin);
     Ok(Output {
         json,
         bin,
         copies,
         meshopt: false,
+        mended,
     })
 }
 

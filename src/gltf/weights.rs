@@ -1,0 +1,277 @@
+//! Weights stage (on write): skin weights made to sum to one, as glTF requires and the Khronos
+//! validator checks.
+//!
+//! Two kinds of file break the rule, and the output would carry it: exporters that write
+//! weights summing to something else (FBX2glTF's RobotExpressive: 188 vertices at 0.96-1.04,
+//! 752 validator errors), and Draco-compressed weights, which decode with the codec's
+//! quantization in them (glTF-Transform `draco` at its default 12 bits: sums 1 +- 2.5e-4; the
+//! validator cannot look inside Draco, so the input passes and the decoded output did not,
+//! 30-318 errors on the skinned fixtures). Every viewer that normalizes (Blender, and our own
+//! USD point cache) shows the same pose before and after.
+//!
+//! The check is the validator's own: per vertex, the weights of its distinct joints summed in
+//! single precision, in attribute order, within [`PER_INFLUENCE`] times the influences of 1
+//! (glTF-Validator 2.0.0-dev.3.10, the one the tests run; its source's other rule, [`SUM_STEP`]
+//! times (influences / 2, rounded up, less one), exactly 1 for one or two influences, is
+//! checked too). A vertex that fails is divided by its sum and its largest weight then moved
+//! by single-precision steps until the sum passes; a joint with weight 0 is made joint 0 (the
+//! validator warns of one that is not, which Draco leaves where it rounds a small weight to
+//! nothing: RobotExpressive's hands, 5 warnings). Float weights only: normalized integer
+//! weights (gltfpack) are left as they are; a vertex with a negative weight, a joint twice or
+//! no weight at all is left too (normalizing cannot mend those).
+
+use super::build::BinBuilder;
+use super::read::{arr, quoted_name};
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+/// The validator's tolerance per influence (its release 2.0.0-dev.3.10).
+const PER_INFLUENCE: f64 = 2e-7;
+
+/// The validator's step of tolerance per two influences in its source's other rule: a little
+/// over 1/255, the error of 8-bit quantization.
+const SUM_STEP: f64 = 0.0039216;
+
+/// Sums farther than this from 1 are named in a warning line (an exporter's error); nearer,
+/// they are a codec's quantization and mended without a word.
+const SAID_ABOVE: f64 = SUM_STEP;
+
+/// Where one VEC4 float attribute's elements lie in the output buffer.
+#[derive(Clone, Copy)]
+struct Column {
+    start: usize,
+    stride: usize,
+    component: u64,
+}
+
+impl Column {
+    /// Attribute `acc` of `json` with its data in `bin` (views placed by `write::begin`), when
+    /// it is a plain (not sparse) VEC4 accessor of `count` elements inside the buffer.
+    fn of(json: &Value, bin: &BinBuilder, acc: usize, count: usize) -> Option<Column> {
+        let a = &json["accessors"][acc];
+        let component = a["componentType"].as_u64()?;
+        let size = match component {
+            5121 => 1,
+            5123 => 2,
+            5126 => 4,
+            _ => return None,
+        };
+        if a["type"].as_str() != Some("VEC4")
+            || a.get("sparse").is_some()
+            || a["count"].as_u64() != Some(count as u64)
+        {
+            return None;
+        }
+        let v = a["bufferView"].as_u64()? as usize;
+        let view = bin.views.get(v)?;
+        let start = (view["byteOffset"].as_u64()? + a["byteOffset"].as_u64().unwrap_or(0)) as usize;
+        let stride = view["byteStride"].as_u64().map_or(4 * size, |s| s as usize);
+        let end = start + count.checked_sub(1)? * stride + 4 * size;
+        let view_end = view["byteOffset"].as_u64()? + view["byteLength"].as_u64()?;
+        (end as u64 <= view_end && end <= bin.bytes.len()).then_some(Column {
+            start,
+            stride,
+            component,
+        })
+    }
+
+    fn at(&self, i: usize, c: usize) -> usize {
+        let size = match self.component {
+            5121 => 1,
+            5123 => 2,
+            _ => 4,
+        };
+        self.start + i * self.stride + c * size
+    }
+
+    fn joint(&self, bytes: &[u8], i: usize, c: usize) -> u32 {
+        let p = self.at(i, c);
+        match self.component {
+            5121 => bytes[p] as u32,
+            _ => u16::from_le_bytes([bytes[p], bytes[p + 1]]) as u32,
+        }
+    }
+
+    fn set_joint(&self, bytes: &mut [u8], i: usize, c: usize, j: u32) {
+        let p = self.at(i, c);
+        match self.component {
+            5121 => bytes[p] = j as u8,
+            _ => bytes[p..p + 2].copy_from_slice(&(j as u16).to_le_bytes()),
+        }
+    }
+
+    fn weight(&self, bytes: &[u8], i: usize, c: usize) -> f32 {
+        let p = self.at(i, c);
+        f32::from_le_bytes(bytes[p..p + 4].try_into().unwrap())
+    }
+
+    fn set_weight(&self, bytes: &mut [u8], i: usize, c: usize, w: f32) {
+        let p = self.at(i, c);
+        bytes[p..p + 4].copy_from_slice(&w.to_le_bytes());
+    }
+}
+
+/// Whether weights `w` of joints `j` sum to one as the validator reckons it: `None` where
+/// normalizing cannot mend them (a negative weight, a joint twice, no weight).
+fn sums_to_one(w: &[f32], j: &[u32]) -> Option<bool> {
+    let (mut sum, mut seen) = (0f32, Vec::with_capacity(w.len()));
+    for (&w, &j) in w.iter().zip(j) {
+        if w == 0.0 {
+            continue;
+        }
+        if w < 0.0 || !w.is_finite() || seen.contains(&j) {
+            return None;
+        }
+        seen.push(j);
+        sum = (sum as f64 + w as f64) as f32;
+    }
+    if seen.is_empty() {
+        return None;
+    }
+    let n = seen.len();
+    let tolerance = (PER_INFLUENCE * n as f64).min(SUM_STEP * (n.div_ceil(2) - 1) as f64);
+    Some((sum as f64 - 1.0).abs() <= tolerance)
+}
+
+/// Weights `w` divided by their sum, their largest then stepped until [`sums_to_one`] passes.
+fn normalized(w: &mut [f32], j: &[u32]) {
+    let sum: f64 = w.iter().map(|&x| x as f64).sum();
+    for x in w.iter_mut() {
+        *x = (*x as f64 / sum) as f32;
+    }
+    let k = (0..w.len()).fold(0, |k, i| if w[i] > w[k] { i } else { k });
+    for _ in 0..64 {
+        if sums_to_one(w, j) != Some(false) {
+            return;
+        }
+        let rest: f64 = (w.iter().enumerate())
+            .filter(|&(i, _)| i != k)
+            .map(|(_, &x)| x as f64)
+            .sum();
+        let want = (1.0 - rest) as f32;
+        w[k] = match want == w[k] {
+            // One single-precision step towards the sum's shortfall.
+            true => {
+                let total: f32 = w.iter().fold(0f32, |s, &x| (s as f64 + x as f64) as f32);
+                let bits = w[k].to_bits();
+                f32::from_bits(if total < 1.0 { bits + 1 } else { bits - 1 })
+            }
+            false => want,
+        };
+    }
+}
+
+/// Make every float `WEIGHTS_n` set of the output sum to one per vertex (see the module
+/// comment), in place in `bin`; returns a line for each mesh whose sums were off by more than
+/// quantization.
+pub fn normalize(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
+    // Mesh -> (vertices mended, the sums' range before), for the lines.
+    let mut said: BTreeMap<usize, (usize, f64, f64)> = BTreeMap::new();
+    for (m, mesh) in arr(json, "meshes").iter().enumerate() {
+        for p in arr(mesh, "primitives") {
+            let attrs = &p["attributes"];
+            let pairs: Vec<(u64, u64)> = (0..)
+                .map_while(|n| {
+                    let j = attrs[format!("JOINTS_{n}")].as_u64()?;
+                    Some((j, attrs[format!("WEIGHTS_{n}")].as_u64()?))
+                })
+                .collect();
+            let Some(count) = pairs
+                .first()
+                .and_then(|&(_, w)| json["accessors"][w as usize]["count"].as_u64())
+            else {
+                continue;
+            };
+            let count = count as usize;
+            let columns: Option<Vec<(Column, Column)>> = (pairs.iter())
+                .map(|&(j, w)| {
+                    let j = Column::of(json, bin, j as usize, count)?;
+                    let w = Column::of(json, bin, w as usize, count)?;
+                    (j.component != 5126 && w.component == 5126).then_some((j, w))
+                })
+                .collect();
+            let Some(columns) = columns.filter(|c| !c.is_empty()) else {
+                continue;
+            };
+            let (mut w, mut j) = (vec![0f32; 4 * columns.len()], vec![0u32; 4 * columns.len()]);
+            for i in 0..count {
+                for (s, (jc, wc)) in columns.iter().enumerate() {
+                    for c in 0..4 {
+                        w[4 * s + c] = wc.weight(&bin.bytes, i, c);
+                        j[4 * s + c] = jc.joint(&bin.bytes, i, c);
+                    }
+                }
+                // A joint with no weight is joint 0 (the validator warns of others): Draco's
+                // quantization rounds a small weight to 0 and keeps its joint.
+                for (s, (jc, _)) in columns.iter().enumerate() {
+                    for c in 0..4 {
+                        if w[4 * s + c] == 0.0 && j[4 * s + c] != 0 {
+                            j[4 * s + c] = 0;
+                            jc.set_joint(&mut bin.bytes, i, c, 0);
+                        }
+                    }
+                }
+                if sums_to_one(&w, &j) != Some(false) {
+                    continue;
+                }
+                let before: f64 = w.iter().map(|&x| x as f64).sum();
+                normalized(&mut w, &j);
+                for (s, (_, wc)) in columns.iter().enumerate() {
+                    for c in 0..4 {
+                        wc.set_weight(&mut bin.bytes, i, c, w[4 * s + c]);
+                    }
+                }
+                let e = said
+                    .entry(m)
+                    .or_insert((0, f64::INFINITY, f64::NEG_INFINITY));
+                *e = (e.0 + 1, e.1.min(before), e.2.max(before));
+            }
+        }
+    }
+    said.into_iter()
+        .filter(|&(_, (_, lo, hi))| (1.0 - lo).max(hi - 1.0) > SAID_ABOVE)
+        .map(|(m, (n, lo, hi))| {
+            let name = quoted_name(&json["meshes"][m], || format!("mesh {m}"));
+            format!(
+                "mesh {name}: the skin weights of {n} vertices summed to {lo:.4}-{hi:.4}, not 1 as glTF requires; written divided by their sums"
+            )
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn off_sums_are_mended_to_pass_the_validator_s_check() {
+        let mut lcg = crate::dev::synth::Lcg(3);
+        for case in 0..20_000 {
+            let n = 1 + case % 8;
+            let mut w: Vec<f32> = (0..8)
+                .map(|i| match i < n {
+                    true => (lcg.unit() * 0.9 + 0.01) as f32,
+                    false => 0.0,
+                })
+                .collect();
+            let j: Vec<u32> = (0..8).collect();
+            let before: Vec<f64> = w.iter().map(|&x| x as f64).collect();
+            let sum: f64 = before.iter().sum();
+            normalized(&mut w, &j);
+            assert_eq!(sums_to_one(&w, &j), Some(true), "{before:?} -> {w:?}");
+            // Each weight within a few single-precision steps of its share.
+            for (a, b) in w.iter().zip(&before) {
+                assert!((*a as f64 - b / sum).abs() < 1e-6, "{before:?} -> {w:?}");
+            }
+        }
+        // Two influences must sum to exactly 1 in single precision.
+        let (mut w, j) = (vec![0.30001, 0.70012, 0.0, 0.0], vec![3, 5, 0, 0]);
+        assert_eq!(sums_to_one(&w, &j), Some(false));
+        normalized(&mut w, &j);
+        assert_eq!(w[0] + w[1], 1.0);
+        // What normalizing cannot mend is left.
+        assert_eq!(sums_to_one(&[0.5, 0.6, 0.0, 0.0], &[1, 1, 0, 0]), None);
+        assert_eq!(sums_to_one(&[-0.5, 1.5, 0.0, 0.0], &[1, 2, 0, 0]), None);
+        assert_eq!(sums_to_one(&[0.0; 4], &[0; 4]), None);
+    }
+}
