@@ -13,15 +13,6 @@ fn s(p: &Path) -> &str {
 /// (mesh name, primitive index, primitive count, points of every frame)
 type GltfPrimitiveFrames = (String, usize, usize, Vec<Vec<[f32; 3]>>);
 
-/// Blender as a Python module (PyPI bpy, in .venv-bpy), or None (noted as a missing tool).
-fn bpy() -> Option<PathBuf> {
-    let bpy = root().join(".venv-bpy/bin/python");
-    if !bpy.exists() && missing_tool("Blender as a Python module (.venv-bpy with bpy 5.0.1)") {
-        return None;
-    }
-    Some(bpy)
-}
-
 /// Mesh `prim` of `usd` in world space at each of its samples (tools/usd_world_points.py).
 fn world_points(python: &Path, usd: &Path, prim: &str, what: &str) -> serde_json::Value {
     let out = run_tool(

@@ -66,7 +66,10 @@ pub fn write(bvh: &Bvh, poses: &[Pose], out: &mut dyn Write) -> Result<()> {
     for (f, pose) in poses.iter().enumerate() {
         line.clear();
         for (k, (j, list)) in bvh.dofs.iter().enumerate() {
-            let local = &pose.local[*j];
+            let mut local = pose.local[*j];
+            // A capture turned upright on read goes back to the file's own up.
+            let back = bvh.turn.inverse();
+            (local.t, local.r) = (back * local.t, back * local.r * bvh.turn);
             let mut angles = match orders[k] {
                 Some(order) => euler(local.r, order),
                 None => [0.0; 3],

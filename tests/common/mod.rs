@@ -776,3 +776,12 @@ pub fn flag_beside_a_posed_copy(out: &Path) {
         j["scenes"][0]["nodes"] = serde_json::json!([0, 1, 2]);
     });
 }
+
+/// Blender as a Python module (PyPI bpy, in .venv-bpy), or None (noted as a missing tool).
+pub fn bpy() -> Option<PathBuf> {
+    let bpy = root().join(".venv-bpy/bin/python");
+    if !bpy.exists() && missing_tool("Blender as a Python module (.venv-bpy with bpy 5.0.1)") {
+        return None;
+    }
+    Some(bpy)
+}
