@@ -300,6 +300,83 @@ fn skin_weights_are_written_summing_to_one() {
     }
 }
 
+/// Rotation keys off unit length (Fox with each float rotation key scaled by 0.9 to 1.1, as
+/// some exporters leave them; the validator refuses them beyond 0.0077): read as the rotations
+/// they stand for, so the blend's figures are the original's (a slerp between the raw keys
+/// turned by other angles: the run's sliding read 0.0825 against 0.0777), and written divided
+/// by their lengths, each clip named in a line, the output passing the validator.
+#[test]
+fn rotation_keys_off_unit_length_are_read_and_written_as_unit() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let fox = fx.join("skinned/Fox.glb");
+    let doc = Document::open(&fox).unwrap();
+    let (json, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let mut outputs = std::collections::BTreeSet::new();
+    for a in json["animations"].as_array().unwrap() {
+        for c in a["channels"].as_array().unwrap() {
+            if c["target"]["path"] == "rotation" {
+                let s = c["sampler"].as_u64().unwrap() as usize;
+                outputs.insert(a["samplers"][s]["output"].as_u64().unwrap() as usize);
+            }
+        }
+    }
+    for &o in &outputs {
+        let acc = &json["accessors"][o];
+        assert_eq!(acc["componentType"], 5126);
+        let view = &json["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
+        let start = (view["byteOffset"].as_u64().unwrap_or(0)
+            + acc["byteOffset"].as_u64().unwrap_or(0)) as usize;
+        let count = acc["count"].as_u64().unwrap() as usize;
+        for k in 0..count {
+            let scale = 0.9 + 0.2 * (k % 5) as f32 / 4.0;
+            for c in 0..4 {
+                let at = start + 16 * k + 4 * c;
+                let x = f32::from_le_bytes(bin[at..at + 4].try_into().unwrap());
+                bin[at..at + 4].copy_from_slice(&(x * scale).to_le_bytes());
+            }
+        }
+    }
+    let scaled = dir.path().join("scaled.glb");
+    write_glb(&scaled, &json, &bin);
+    let figures = |input: &Path, name: &str| {
+        let out = dir.path().join(format!("{name}.glb"));
+        let rep = dir.path().join(format!("{name}.json"));
+        let p = |f: &Path| f.to_str().unwrap().to_string();
+        let args = ["blend", &p(input), "--clips", "Walk", "Run", "-o", &p(&out)];
+        let r = run_ok(&[&args[..], &["--report", &p(&rep)]].concat());
+        let r = (
+            String::from_utf8_lossy(&r.stderr).into_owned(),
+            read_json(&rep),
+        );
+        (out, r.0, r.1)
+    };
+    let (_, _, want) = figures(&fox, "original");
+    let (out, err, got) = figures(&scaled, "scaled");
+    let said = err
+        .lines()
+        .filter(|l| l.contains("rotation keys of length"))
+        .count();
+    assert_eq!(said, 3, "{err}");
+    for (a, b) in [
+        (
+            &want["result"]["before_cleanup"]["sliding"]["mean"],
+            &got["result"]["before_cleanup"]["sliding"]["mean"],
+        ),
+        (&want["result"]["jerk_ratio"], &got["result"]["jerk_ratio"]),
+        (
+            &want["clips"][1]["figures"]["sliding"]["mean"],
+            &got["clips"][1]["figures"]["sliding"]["mean"],
+        ),
+    ] {
+        let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-6 * a.abs(), "{a} against {b}");
+    }
+    if let Some((errors, _, line)) = validate(&out) {
+        assert_eq!(errors, 0, "{line}");
+    }
+}
+
 /// CesiumMan has one clip, a walk: blended with itself started half a cycle later, the cycles
 /// synchronise on the same touchdown, so the blend slides as little as the walk (about 0.010
 /// leg/frame before clean-up) where the naive blend mixes opposite phases.

@@ -199,7 +199,7 @@ pub fn read_channels(
         let input = s["input"].as_u64().unwrap_or(u64::MAX) as usize;
         let output = s["output"].as_u64().unwrap_or(u64::MAX) as usize;
         let (times, _) = doc.read_f64(input)?;
-        let (values, ncomp) = doc.read_f64(output)?;
+        let (mut values, ncomp) = doc.read_f64(output)?;
         if times.is_empty() {
             bail!(doc.err(format!("animation {name:?} has a sampler without keys")));
         }
@@ -235,6 +235,7 @@ pub fn read_channels(
                     "animation {name:?}: rotation key {k} of node {node} (accessor {output}) is not a unit quaternion"
                 )));
             }
+            unit_keys(&mut values, per_key, mid);
         }
         channels.push(Channel {
             node,
@@ -246,6 +247,23 @@ pub fn read_channels(
         });
     }
     Ok(channels)
+}
+
+/// A rotation key farther from unit length than float32 rounding leaves one: some exporters
+/// write such keys (the validator refuses them beyond 0.0077), and a player's slerp between
+/// them turns by another angle than between the rotations they stand for.
+const UNIT_KEY: f64 = 1e-6;
+
+/// Divide each rotation key of `values` (`per_key` numbers a key, its quaternion from `mid`;
+/// a CUBICSPLINE key's tangents with it) farther than [`UNIT_KEY`] from unit length by its
+/// length, as the output's keys are written (`mend::rotations`).
+fn unit_keys(values: &mut [f64], per_key: usize, mid: usize) {
+    for key in values.chunks_exact_mut(per_key) {
+        let length = DQuat::from_slice(&key[mid..mid + 4]).length();
+        if (length - 1.0).abs() > UNIT_KEY {
+            key.iter_mut().for_each(|x| *x /= length);
+        }
+    }
 }
 
 /// Each node's parent (the node listing it among its `children`; the last such where a broken

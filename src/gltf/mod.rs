@@ -5,8 +5,9 @@
 //! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`,
 //! triangles; [`channel`]: animation channels read and evaluated, nodes' rest transforms;
 //! [`skin`]: skinned points at any pose) ... the command's own work
-//! ... -> [`build`] (new accessors and buffer views on an [`Output`]; [`weights`]: skin
-//! weights that do not sum to one mended as the input is copied) -> [`mod@reorder`] (with
+//! ... -> [`build`] (new accessors and buffer views on an [`Output`]; [`mend`]: skin
+//! weights that do not sum to one and rotation keys off unit length mended as the input is
+//! copied) -> [`mod@reorder`] (with
 //! meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors
 //! nothing uses any more dropped) -> [`encode`] (meshopt compression, when asked for) ->
 //! [`write`] (`.glb` or `.gltf` with its `.bin` and images,
@@ -18,11 +19,11 @@ mod channel;
 mod compact;
 mod decode;
 mod encode;
+mod mend;
 mod read;
 mod reorder;
 mod skin;
 mod uri;
-mod weights;
 mod write;
 
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};

@@ -8,9 +8,9 @@
 
 use super::build::{BinBuilder, Output};
 use super::encode;
+use super::mend;
 use super::read::{arr, Document};
 use super::uri::{percent_decode, reference, Reference};
-use super::weights;
 use crate::output::{folder_of, Format, Outputs};
 use anyhow::{anyhow, Result};
 use serde_json::{json, Value};
@@ -37,7 +37,8 @@ impl Container {
 
 /// Start an output from the input: all buffer views copied into one buffer; external images
 /// embedded in a `.glb`, or copied beside a `.gltf` written elsewhere when it is finished; skin
-/// weights that do not sum to one mended ([`weights::normalize`], said in `Output::mended`).
+/// weights that do not sum to one and rotation keys off unit length mended ([`mend::all`],
+/// said in `Output::mended`).
 pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Output> {
     let mut json = doc.json.clone();
     let mut bin = BinBuilder::new();
@@ -52,7 +53,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         bin.views[idx] = view;
     }
     embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
-    let mended = weights::normalize(&json, &mut bin);
+    let mended = mend::all(&json, &mut bin);
     Ok(Output {
         json,
         bin,

@@ -1,13 +1,15 @@
-//! Weights stage (on write): skin weights made to sum to one, as glTF requires and the Khronos
-//! validator checks.
+//! Mend stage (on write): data the glTF specification constrains that an input breaks, made
+//! right as the input is copied into the output, so that the Khronos validator accepts what we
+//! write. Each fix is what every viewer that copes with the broken data does anyway; a line
+//! names it where it is more than a codec's rounding.
 //!
-//! Two kinds of file break the rule, and the output would carry it: exporters that write
-//! weights summing to something else (FBX2glTF's RobotExpressive: 188 vertices at 0.96-1.04,
-//! 752 validator errors), and Draco-compressed weights, which decode with the codec's
-//! quantization in them (glTF-Transform `draco` at its default 12 bits: sums 1 +- 2.5e-4; the
-//! validator cannot look inside Draco, so the input passes and the decoded output did not,
-//! 30-318 errors on the skinned fixtures). Every viewer that normalizes (Blender, and our own
-//! USD point cache) shows the same pose before and after.
+//! **Skin weights** ([`weights`]) must sum to one. Two kinds of file break the rule, and the
+//! output would carry it: exporters that write weights summing to something else (FBX2glTF's
+//! RobotExpressive: its hands up to 1.76, 752 validator errors), and Draco-compressed weights,
+//! which decode with the codec's quantization in them (glTF-Transform `draco` at its default 12
+//! bits: sums 1 +- 2.5e-4; the validator cannot look inside Draco, so the input passes and the
+//! decoded output did not, 30-318 errors on the skinned fixtures). three.js's loader, Blender
+//! and our own USD point cache divide by the sum: they show the same pose before and after.
 //!
 //! The check is the validator's own: per vertex, the weights of its distinct joints summed in
 //! single precision, in attribute order, within [`PER_INFLUENCE`] times the influences of 1
@@ -19,6 +21,10 @@
 //! nothing: RobotExpressive's hands, 5 warnings). Float weights only: normalized integer
 //! weights (gltfpack) are left as they are; a vertex with a negative weight, a joint twice or
 //! no weight at all is left too (normalizing cannot mend those).
+//!
+//! **Rotation keys** ([`rotations`]) must be unit quaternions: a key farther from unit length
+//! than the validator allows ([`UNIT_LENGTH`]) is divided by its length (a CUBICSPLINE key's
+//! tangents by the same), as a player's slerp does; float outputs of `rotation` channels only.
 
 use super::build::BinBuilder;
 use super::read::{arr, quoted_name};
@@ -100,12 +106,12 @@ impl Column {
         }
     }
 
-    fn weight(&self, bytes: &[u8], i: usize, c: usize) -> f32 {
+    fn float(&self, bytes: &[u8], i: usize, c: usize) -> f32 {
         let p = self.at(i, c);
         f32::from_le_bytes(bytes[p..p + 4].try_into().unwrap())
     }
 
-    fn set_weight(&self, bytes: &mut [u8], i: usize, c: usize, w: f32) {
+    fn set_float(&self, bytes: &mut [u8], i: usize, c: usize, w: f32) {
         let p = self.at(i, c);
         bytes[p..p + 4].copy_from_slice(&w.to_le_bytes());
     }
@@ -161,10 +167,17 @@ fn normalized(w: &mut [f32], j: &[u32]) {
     }
 }
 
+/// Every mend, in place in `bin` (the views placed by `write::begin`); returns the lines.
+pub fn all(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
+    let mut lines = weights(json, bin);
+    lines.extend(rotations(json, bin));
+    lines
+}
+
 /// Make every float `WEIGHTS_n` set of the output sum to one per vertex (see the module
 /// comment), in place in `bin`; returns a line for each mesh whose sums were off by more than
 /// quantization.
-pub fn normalize(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
+pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
     // Mesh -> (vertices mended, the sums' range before), for the lines.
     let mut said: BTreeMap<usize, (usize, f64, f64)> = BTreeMap::new();
     for (m, mesh) in arr(json, "meshes").iter().enumerate() {
@@ -197,7 +210,7 @@ pub fn normalize(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
             for i in 0..count {
                 for (s, (jc, wc)) in columns.iter().enumerate() {
                     for c in 0..4 {
-                        w[4 * s + c] = wc.weight(&bin.bytes, i, c);
+                        w[4 * s + c] = wc.float(&bin.bytes, i, c);
                         j[4 * s + c] = jc.joint(&bin.bytes, i, c);
                     }
                 }
@@ -218,7 +231,7 @@ pub fn normalize(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
                 normalized(&mut w, &j);
                 for (s, (_, wc)) in columns.iter().enumerate() {
                     for c in 0..4 {
-                        wc.set_weight(&mut bin.bytes, i, c, w[4 * s + c]);
+                        wc.set_float(&mut bin.bytes, i, c, w[4 * s + c]);
                     }
                 }
                 let e = said
@@ -237,6 +250,63 @@ pub fn normalize(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
             )
         })
         .collect()
+}
+
+/// How far from 1 the validator lets a rotation key's length be.
+const UNIT_LENGTH: f64 = 0.00769;
+
+/// Divide every float rotation key of the output's animations that is farther than
+/// [`UNIT_LENGTH`] from unit length by its length (a CUBICSPLINE key's tangents by the same),
+/// in place in `bin`; returns a line for each animation with such keys.
+pub fn rotations(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut done = std::collections::BTreeSet::new();
+    for (a, anim) in arr(json, "animations").iter().enumerate() {
+        let (mut keys, mut lo, mut hi) = (0, f64::INFINITY, f64::NEG_INFINITY);
+        for ch in arr(anim, "channels") {
+            if ch["target"]["path"].as_str() != Some("rotation") {
+                continue;
+            }
+            let sampler = &anim["samplers"][ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize];
+            let Some(out) = sampler["output"].as_u64().map(|o| o as usize) else {
+                continue;
+            };
+            let count = json["accessors"][out]["count"].as_u64().unwrap_or(0) as usize;
+            let column = Column::of(json, bin, out, count).filter(|c| c.component == 5126);
+            let Some(column) = column.filter(|_| done.insert(out)) else {
+                continue;
+            };
+            // CUBICSPLINE: (in-tangent, value, out-tangent) per key.
+            let per_key = match sampler["interpolation"].as_str() {
+                Some("CUBICSPLINE") => 3,
+                _ => 1,
+            };
+            for k in 0..count / per_key {
+                let value = per_key * k + per_key / 2;
+                let q: Vec<f64> = (0..4)
+                    .map(|c| column.float(&bin.bytes, value, c) as f64)
+                    .collect();
+                let length = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if (length - 1.0).abs() <= UNIT_LENGTH || !(length > 0.0) || !length.is_finite() {
+                    continue;
+                }
+                for e in per_key * k..per_key * (k + 1) {
+                    for c in 0..4 {
+                        let x = column.float(&bin.bytes, e, c) as f64;
+                        column.set_float(&mut bin.bytes, e, c, (x / length) as f32);
+                    }
+                }
+                (keys, lo, hi) = (keys + 1, lo.min(length), hi.max(length));
+            }
+        }
+        if keys > 0 {
+            let name = quoted_name(anim, || format!("{a}"));
+            lines.push(format!(
+                "animation {name}: {keys} rotation keys of length {lo:.4}-{hi:.4}, not the unit quaternions glTF requires; written divided by their lengths"
+            ));
+        }
+    }
+    lines
 }
 
 #[cfg(test)]
