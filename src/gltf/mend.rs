@@ -287,7 +287,7 @@ pub fn rotations(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
                     .map(|c| column.float(&bin.bytes, value, c) as f64)
                     .collect();
                 let length = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if (length - 1.0).abs() <= UNIT_LENGTH || !(length > 0.0) || !length.is_finite() {
+                if (length - 1.0).abs() <= UNIT_LENGTH || length <= 0.0 || !length.is_finite() {
                     continue;
                 }
                 for e in per_key * k..per_key * (k + 1) {
