@@ -69,6 +69,8 @@ fn compressed_fixtures_tween_to_the_frames_of_the_uncompressed_files() {
     };
     let dir = tempfile::tempdir().unwrap();
     let mut rows = Vec::new();
+    // Compressed inputs whose output grew past the warning and was told why.
+    let mut grown = 0;
     for (k, input) in morph_fixtures(&fx).iter().enumerate() {
         let plain = dir.path().join(format!("plain{k}.glb"));
         tween_quietly(input, &plain, &[]);
@@ -90,8 +92,15 @@ fn compressed_fixtures_tween_to_the_frames_of_the_uncompressed_files() {
                 .collect();
             node_tool(&bin, tool, &args);
             let out = dir.path().join(format!("out{k}.glb"));
-            tween_quietly(&packed, &out, &[]);
+            let told = run_ok(&["tween", s(&packed), "-o", s(&out)]);
             assert_valid(&out);
+            // A growth warning says when it is the compression undone.
+            let err = String::from_utf8_lossy(&told.stderr);
+            if let Some(w) = err.lines().find(|l| l.contains("x the size of the input")) {
+                let names = w.contains("--meshopt compresses it");
+                assert_eq!(names, !name.ends_with("quantize"), "{name}: {w}");
+                grown += names as usize;
+            }
             // The output is uncompressed: no compression extension is left.
             let written = Document::open(&out).unwrap().json;
             for e in [
@@ -178,6 +187,8 @@ fn compressed_fixtures_tween_to_the_frames_of_the_uncompressed_files() {
     for r in &rows {
         eprintln!("{r}");
     }
+    eprintln!("{grown} outputs grew past the warning, the compression undone named");
+    assert!(grown > 0);
 }
 
 /// Key times of the `channel`-th weights channel of mesh 0 in `path`.
