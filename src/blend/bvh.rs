@@ -80,10 +80,9 @@ fn parse_layout(text: &str) -> Result<Bvh, String> {
         return Err("not a BVH file (no HIERARCHY)".into());
     }
     let (h, motion_at) = hierarchy(&mut words, text)?;
-    let (mut channels, frame_time) = motion(&mut words, &h)?;
+    let (channels, frame_time) = motion(&mut words, &h)?;
     let n = h.names.len();
-    let turn = upright(&h);
-    let mut rest = Pose {
+    let rest = Pose {
         local: h
             .offsets
             .iter()
@@ -91,14 +90,17 @@ fn parse_layout(text: &str) -> Result<Bvh, String> {
             .collect(),
         weights: vec![Vec::new(); n],
     };
+    let mut rig = Rig::new(h.names, h.parent, rest).map_err(|e| e.to_string())?;
+    let mut clip = clip_from_channels("motion".into(), 0, channels);
     // Every joint's offset, translation and rotation expressed in the upright axes: the posed
     // skeleton turned as one, and its local rotations what a Y-up file of the same skeleton
     // holds (so a Z-up capture blends with a Y-up one).
+    let turn = upright(&rig, &clip);
     if turn != DQuat::IDENTITY {
-        for r in &mut rest.local {
+        for r in &mut rig.rest.local {
             r.t = turn * r.t;
         }
-        for c in &mut channels {
+        for c in &mut clip.channels {
             for v in c.values.chunks_exact_mut(c.width) {
                 match c.path {
                     Path::Translation => {
@@ -111,10 +113,9 @@ fn parse_layout(text: &str) -> Result<Bvh, String> {
             }
         }
     }
-    let rig = Rig::new(h.names, h.parent, rest).map_err(|e| e.to_string())?;
     Ok(Bvh {
         rig,
-        clip: clip_from_channels("motion".into(), 0, channels),
+        clip,
         frame_time,
         header: text[..motion_at].to_string(),
         dofs: h.dofs,
@@ -125,7 +126,8 @@ fn parse_layout(text: &str) -> Result<Bvh, String> {
 /// A standing skeleton's up-down asymmetry (feet below, one head above) is larger than its
 /// front-back one by at least this factor, each measured as how far its joints land from any
 /// joint when mirrored across the plane through their mean (fraction of the skeleton's size):
-/// 2.7-5.3 on the CMU captures, whose left-right mirror is 0.0005-0.009.
+/// 2.7-5.3 on the CMU captures' rest poses, whose left-right mirror is 0.0005-0.009. (Posed,
+/// a capture walking across the axes is mirrored by none: 1.3 on start-walk-stop.)
 const UP_ASYMMETRY: f64 = 2.0;
 
 /// The root stands at least this much farther above the lowest joint than below the highest
@@ -137,25 +139,31 @@ const ROOT_LOW: f64 = 1.15;
 /// captures have tens to a few hundred.
 const MOST_JUDGED: usize = 4096;
 
-/// The turn that stands the capture up in +Y, the world up of the later stages, judged from
-/// its rest pose: BVH is Y-up by convention, but Blender's BVH export (and 3ds Max's) writes
-/// its own Z-up world, where the CMU walk's legs were not found. The up axis is the one whose
-/// mirror moves the joints farthest (see [`UP_ASYMMETRY`]), up the side the root is nearer to
-/// (see [`ROOT_LOW`]); where either is not clear, or up is +Y, the identity.
-fn upright(h: &Hierarchy) -> DQuat {
-    let n = h.offsets.len();
-    let mut pos = vec![DVec3::ZERO; n];
-    for j in 0..n {
-        // Parents come before their children in a BVH hierarchy.
-        pos[j] = h.parent[j].map_or(DVec3::ZERO, |p| pos[p]) + h.offsets[j];
-    }
-    let Some(root) = (0..n).find(|&j| h.parent[j].is_none()) else {
+/// The turn that stands the capture up in +Y, the world up of the later stages: BVH is Y-up by
+/// convention, but Blender's BVH export (and 3ds Max's) writes its own Z-up world, where the
+/// CMU walk's legs were not found. Judged from the rest pose (where a skeleton stands
+/// symmetric): the up axis is the one whose mirror moves the joints farthest (see
+/// [`UP_ASYMMETRY`]), up the side the root is nearer to (see [`ROOT_LOW`]); kept only where
+/// the motion stands along it too (the posed skeleton, at the first, middle and last frames,
+/// is tallest along it: a rest pose lying down that the root's rotation stands up is not
+/// turned). Where any of it is not clear, or up is +Y, the identity.
+fn upright(rig: &Rig, clip: &Clip) -> DQuat {
+    let n = rig.len();
+    let Some(root) = (0..n).find(|&j| rig.parent[j].is_none()) else {
         return DQuat::IDENTITY;
     };
-    let lo = pos.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
-    let hi = pos.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    if !(4..=MOST_JUDGED).contains(&n) {
+        return DQuat::IDENTITY;
+    }
+    let bounds = |pos: &[DVec3]| {
+        let lo = pos.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+        let hi = pos.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+        (lo, hi)
+    };
+    let pos = rig.positions(&rig.rest);
+    let (lo, hi) = bounds(&pos);
     let size = (hi - lo).max_element();
-    if !(4..=MOST_JUDGED).contains(&n) || !size.is_finite() || size <= 0.0 {
+    if !size.is_finite() || size <= 0.0 {
         return DQuat::IDENTITY;
     }
     let mean = pos.iter().sum::<DVec3>() / n as f64;
@@ -189,7 +197,21 @@ fn upright(h: &Hierarchy) -> DQuat {
     };
     let mut up = DVec3::ZERO;
     up[u] = sign;
-    DQuat::from_rotation_arc(up, DVec3::Y)
+    let turn = DQuat::from_rotation_arc(up, DVec3::Y);
+    if turn == DQuat::IDENTITY {
+        return turn;
+    }
+    let posed = [clip.start, 0.5 * (clip.start + clip.end), clip.end]
+        .iter()
+        .map(|&t| {
+            let (lo, hi) = bounds(&rig.positions(&clip.pose(rig, t)));
+            hi - lo
+        })
+        .sum::<DVec3>();
+    match (0..3).all(|a| a == u || posed[a] < posed[u]) {
+        true => turn,
+        false => DQuat::IDENTITY,
+    }
 }
 
 /// The hierarchy, up to and including the word MOTION, and where that word starts in `text`.
@@ -332,4 +354,66 @@ fn num(s: &str) -> Result<f64, String> {
         .ok()
         .filter(|v| v.is_finite())
         .ok_or_else(|| format!("{s:?} is not a number"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stick figure in a T-pose (hips, two legs with knees and feet, a spine to the head,
+    /// two arms out), each offset given Y-up and written through `axes`; one frame, the root
+    /// turned `root_x` degrees about X.
+    fn figure(axes: impl Fn(DVec3) -> DVec3, root_x: f64) -> String {
+        let o = |x: f64, y: f64, z: f64| {
+            let v = axes(DVec3::new(x, y, z));
+            format!("OFFSET {} {} {}", v.x, v.y, v.z)
+        };
+        let leg = |side: &str, x: f64| {
+            format!(
+                "JOINT {side}Hip {{ {} JOINT {side}Knee {{ {} JOINT {side}Foot {{ {} End Site {{ {} }} }} }} }}",
+                o(x, -0.05, 0.0),
+                o(0.0, -0.45, 0.0),
+                o(0.0, -0.45, 0.0),
+                o(0.0, -0.05, 0.15)
+            )
+        };
+        let arm = |side: &str, x: f64| {
+            format!(
+                "JOINT {side}Arm {{ {} JOINT {side}Hand {{ {} End Site {{ {} }} }} }}",
+                o(x * 0.2, 0.0, 0.0),
+                o(x * 0.5, 0.0, 0.0),
+                o(x * 0.15, 0.0, 0.0)
+            )
+        };
+        format!(
+            "HIERARCHY\nROOT Hips {{ {} CHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation {} {} JOINT Chest {{ {} {} {} JOINT Head {{ {} End Site {{ {} }} }} }} }}\nMOTION\nFrames: 1\nFrame Time: 0.0333\n0 0 0 {root_x} 0 0\n",
+            o(0.0, 0.0, 0.0),
+            leg("L", 0.1),
+            leg("R", -0.1),
+            o(0.0, 0.45, 0.0),
+            arm("L", 1.0),
+            arm("R", -1.0),
+            o(0.0, 0.15, 0.0),
+            o(0.0, 0.12, 0.0)
+        )
+    }
+
+    #[test]
+    fn a_z_up_capture_is_stood_up_and_a_y_up_one_is_left() {
+        let y_up = parse_layout(&figure(|v| v, 0.0)).unwrap();
+        assert_eq!(y_up.turn, DQuat::IDENTITY);
+        // Z-up, as Blender writes: (x, y, z) -> (x, -z, y).
+        let z_up = parse_layout(&figure(|v| DVec3::new(v.x, -v.z, v.y), 0.0)).unwrap();
+        assert!(z_up
+            .turn
+            .abs_diff_eq(DQuat::from_rotation_arc(DVec3::Z, DVec3::Y), 1e-12));
+        // Stood up, its joints are where the Y-up file has them.
+        let at = |b: &Bvh| b.rig.positions(&b.clip.pose(&b.rig, 0.0));
+        for (p, q) in at(&y_up).iter().zip(at(&z_up)) {
+            assert!(p.distance(q) < 1e-12, "{p} against {q}");
+        }
+        // A Z-up rest pose that its root's rotation stands up in the motion is left as read.
+        let stood = parse_layout(&figure(|v| DVec3::new(v.x, -v.z, v.y), -90.0)).unwrap();
+        assert_eq!(stood.turn, DQuat::IDENTITY);
+    }
 }
