@@ -303,8 +303,9 @@ fn skin_weights_are_written_summing_to_one() {
 /// Rotation keys off unit length (Fox with each float rotation key scaled by 0.9 to 1.1, as
 /// some exporters leave them; the validator refuses them beyond 0.0077): read as the rotations
 /// they stand for, so the blend's figures are the original's (a slerp between the raw keys
-/// turned by other angles: the run's sliding read 0.0825 against 0.0777), and written divided
-/// by their lengths, each clip named in a line, the output passing the validator.
+/// turns by other angles: with Fox's keys scaled 0.9 to 1.1 along each clip, before clean-up
+/// 0.058317 against 0.058297, jerk ratio 0.8105 against 0.8125), and written divided by their
+/// lengths, each clip named in a line, the output passing the validator.
 #[test]
 fn rotation_keys_off_unit_length_are_read_and_written_as_unit() {
     let Some(fx) = fixtures() else { return };
