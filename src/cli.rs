@@ -47,9 +47,10 @@ inbetween blend walk.glb run.glb -o jog.glb\n  inbetween blend walk.bvh run.bvh 
     /// Show what inbetween finds in a file: morph meshes and their targets, animations (keys,
     /// key rate, duration), what `tween` would write with its defaults (frames, new targets,
     /// bytes), the skinned clips `blend` can mix, and the extensions with whether they are
-    /// decoded.
+    /// decoded; for a BVH capture, its skeleton, frames, up axis, and the feet, stride and
+    /// cycles `blend` finds (or why it refuses the clip).
     #[command(
-        after_help = "Examples:\n  inbetween inspect Flamingo.glb\n  inbetween inspect face.glb --json"
+        after_help = "Examples:\n  inbetween inspect Flamingo.glb\n  inbetween inspect face.glb --json\n  inbetween inspect walk.bvh"
     )]
     Inspect(InspectArgs),
     /// Draw a contact sheet (PNG) of a mesh's frames: one band per method (labelled), frames
@@ -544,7 +545,7 @@ impl BlendArgs {
 
 #[derive(Args)]
 pub struct InspectArgs {
-    /// Input .gltf or .glb.
+    /// Input .gltf, .glb or .bvh.
     pub input: PathBuf,
     /// Print JSON (schema: schemas/inspect.schema.json) instead of text.
     #[arg(long)]

@@ -839,6 +839,9 @@ fn a_z_up_capture_from_blender_blends_as_the_original() {
         out
     };
     let (walk_z, run_z) = (z_up(&walk), z_up(&run));
+    let told = run_ok(&["inspect", walk_z.to_str().unwrap(), "--json"]);
+    let told: Value = serde_json::from_slice(&told.stdout).unwrap();
+    assert_eq!(told["up"], "Z", "{told}");
     let figures = |r: &Value| {
         let r = r.get(0).unwrap_or(r);
         let res = &r["result"];
@@ -872,6 +875,84 @@ fn a_z_up_capture_from_blender_blends_as_the_original() {
     assert_eq!(v["frames"][0], v["frames"][1], "{v}");
     let (worst, size) = (v["worst"].as_f64().unwrap(), v["size"].as_f64().unwrap());
     assert!(worst <= 1e-5 * size, "{v}");
+}
+
+/// `inspect` on a BVH capture says what `blend` finds in it: the skeleton, the motion, the up
+/// axis and the clip's gait (feet, stride, cycles), or why `blend` refuses it (the walk held
+/// on its first frame: a still pose); the JSON follows the schema.
+#[test]
+fn inspect_tells_a_capture_s_skeleton_motion_and_gait() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let python = python();
+    let inspect = |f: &Path| {
+        let out = run_ok(&["inspect", f.to_str().unwrap(), "--json"]);
+        let json = dir.path().join("inspect.json");
+        std::fs::write(&json, &out.stdout).unwrap();
+        if let Some(py) = &python {
+            check_schema(py, "inspect.schema.json", &json, &f.display().to_string());
+        }
+        let text = run_ok(&["inspect", f.to_str().unwrap()]);
+        (
+            read_json(&json),
+            String::from_utf8_lossy(&text.stdout).into_owned(),
+        )
+    };
+    for (file, joints, frames, feet) in [
+        (
+            "kevinxie4c_walk.bvh",
+            19,
+            299,
+            ["LeftAnkle_end", "RightAnkle_end"],
+        ),
+        (
+            "kevinxie4c_cmu_run_filtered.bvh",
+            19,
+            174,
+            ["lFoot_end", "rFoot_end"],
+        ),
+        (
+            "bvh11_131_01_start_walk_stop.bvh",
+            31,
+            994,
+            ["LeftToe_end", "RightToe_end"],
+        ),
+    ] {
+        let (v, text) = inspect(&fx.join("bvh").join(file));
+        assert_eq!(v["format"], "bvh", "{v}");
+        assert_eq!(
+            (v["joints"].as_u64(), v["frames"].as_u64()),
+            (Some(joints), Some(frames))
+        );
+        assert_eq!(v["up"], "Y");
+        assert_eq!(v["blend"]["feet"], serde_json::json!(feet), "{file}");
+        assert!(
+            v["blend"]["refused"].is_null() && !v["blend"]["cycles"].as_array().unwrap().is_empty()
+        );
+        assert!(
+            text.contains("a BVH motion capture") && text.contains("blend: feet"),
+            "{text}"
+        );
+    }
+    let walk = fx.join("bvh/kevinxie4c_walk.bvh");
+    let text = std::fs::read_to_string(&walk)
+        .unwrap()
+        .replace("\r\n", "\n");
+    let (head, motion) = text.split_once("MOTION\n").unwrap();
+    let mut lines = motion.lines();
+    let (count, time, first) = (
+        lines.next().unwrap(),
+        lines.next().unwrap(),
+        lines.next().unwrap(),
+    );
+    let n: usize = count["Frames:".len()..].trim().parse().unwrap();
+    let still = dir.path().join("still.bvh");
+    let held = vec![first; n].join("\n");
+    std::fs::write(&still, format!("{head}MOTION\n{count}\n{time}\n{held}\n")).unwrap();
+    let (v, text) = inspect(&still);
+    let why = v["blend"]["refused"].as_str().unwrap_or_default();
+    assert!(why.contains("no stride cycle"), "{v}");
+    assert!(text.contains("blend: refuses it alone"), "{text}");
 }
 
 /// The BVH capture at `path` without its first `skip` frames.

@@ -30,6 +30,46 @@ pub struct Bvh {
     pub(super) turn: DQuat,
 }
 
+impl Bvh {
+    /// The file's own up axis, as judged on read (`Y`, `Z`, `-X` ...; see [`upright`]).
+    pub fn up_axis(&self) -> String {
+        let up = self.turn.inverse() * DVec3::Y;
+        let a = up.abs().max_position();
+        format!(
+            "{}{}",
+            if up[a] < 0.0 { "-" } else { "" },
+            ["X", "Y", "Z"][a]
+        )
+    }
+
+    /// Joints with channels, and joints without (End Sites).
+    pub fn joint_counts(&self) -> (usize, usize) {
+        (self.dofs.len(), self.rig.len() - self.dofs.len())
+    }
+
+    /// Values per frame (every joint's channels).
+    pub fn channels_per_frame(&self) -> usize {
+        self.dofs.iter().map(|(_, l)| l.len()).sum()
+    }
+
+    /// The rotation channel orders in the file (`ZXY` ...), each once, in file order.
+    pub fn rotation_orders(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for (_, list) in &self.dofs {
+            let order: String = (list.iter())
+                .filter_map(|d| match d {
+                    Dof::Rot(a) => Some(["X", "Y", "Z"][a.abs().max_position()]),
+                    Dof::Pos(_) => None,
+                })
+                .collect();
+            if !order.is_empty() && !out.contains(&order) {
+                out.push(order);
+            }
+        }
+        out
+    }
+}
+
 /// Read a BVH file into a rig (every joint in the skeleton) and its motion.
 pub fn read(path: &FsPath) -> Result<(Rig, Clip)> {
     load(path).map(|b| (b.rig, b.clip))

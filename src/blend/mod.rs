@@ -32,7 +32,7 @@ pub use cycles::{touchdowns, CycleMethod};
 pub use job::{
     blend_clips, blend_files, run_blend, BlendDone, BlendJob, BlendSummary, BlendedClips,
 };
-pub use plan::{blend, BlendOptions, Blended};
+pub use plan::{blend, gait, BlendOptions, Blended, Gait};
 pub use rig::{load_gltf, slerp, Clip, Path, Pose, Rig};
 pub use track::{pose_unwrapped, size, Track};
 pub use write::append_animation;

@@ -525,6 +525,31 @@ fn walks(clip: &Clip, an: &Analysis, ch: &Character) -> anyhow::Result<()> {
     )
 }
 
+/// What `blend` finds in one clip alone (for `inspect`): the feet (their chains' end joints),
+/// how far they stride (leg lengths), and its stride cycles (start and period, seconds), or
+/// why blend refuses the clip.
+pub struct Gait {
+    pub feet: Vec<String>,
+    pub stride: f64,
+    pub cycles: anyhow::Result<Vec<(f64, f64)>>,
+}
+
+/// [`Gait`] of `clip`, analysed as `blend` analyses a clip (with the legs' default cycle
+/// method), alone.
+pub fn gait(rig: &Rig, clip: &Clip) -> Gait {
+    let size = super::track::size(rig, &rig.rest);
+    let closed = super::track::close_open_loop(rig, clip, size);
+    let clip = closed.as_ref().unwrap_or(clip);
+    let (ch, an) = analyze(rig, &[clip], CycleMethod::Legs);
+    let an = &an[0];
+    Gait {
+        feet: ch.legs.iter().map(|l| rig.names[l.end()].clone()).collect(),
+        stride: an.stride,
+        cycles: walks(clip, an, &ch)
+            .map(|_| an.cycles.as_ref().map_or(Vec::new(), |c| c.spans.clone())),
+    }
+}
+
 /// Blend clip `a` with clip `b` (weight `opts.weight` on `b`).
 /// Refused (unless `--cycles none`) when either clip has no stride cycle.
 pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Result<Blended> {

@@ -1,9 +1,9 @@
-//! `inbetween inspect FILE`: what the tool finds in a file before anything is run. Morph meshes
-//! (targets, names, vertices, triangles), animations (channels, keys, key rate and grid,
-//! duration, interpolation), the tracks `tween` would use with its default options and what
-//! it would write (frames, new targets, about how many bytes), the skinned clips `blend` can
-//! mix, and the required extensions with whether they are decoded. Text, or JSON
-//! (`schemas/inspect.schema.json`).
+//! `inbetween inspect FILE`: what the tool finds in a file before anything is run. For glTF:
+//! morph meshes (targets, names, vertices, triangles), animations (channels, keys, key rate
+//! and grid, duration, interpolation), the tracks `tween` would use with its default options
+//! and what it would write (frames, new targets, about how many bytes), the skinned clips
+//! `blend` can mix, and the required extensions with whether they are decoded. For a BVH
+//! capture, see [`bvh`]. Text, or JSON (`schemas/inspect.schema.json`).
 
 use crate::gltf::{arr, listed, quoted_name, weights_target, Access, Document, PASSED_THROUGH};
 use crate::tween::{
@@ -15,6 +15,46 @@ use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeSet;
 use std::path::Path;
+
+mod bvh;
+
+pub use bvh::{BvhBlendInfo, BvhInspection};
+
+/// What `inspect` found: a glTF file or a BVH capture.
+#[derive(Serialize)]
+#[serde(untagged)]
+pub enum Found {
+    Gltf(Inspection),
+    Bvh(BvhInspection),
+}
+
+/// Inspect the file at `path`: a BVH capture (by its `.bvh` extension or its first word,
+/// HIERARCHY), else glTF.
+pub fn inspect(path: &Path, access: &Access) -> Result<Found> {
+    let named =
+        (path.extension().and_then(|e| e.to_str())).is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
+    let mut start = [0u8; 64];
+    let read = std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut start))
+        .unwrap_or(0);
+    let head = String::from_utf8_lossy(&start[..read]);
+    let hierarchy = head
+        .trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with("HIERARCHY");
+    match named || hierarchy {
+        true => bvh::inspect(path).map(Found::Bvh),
+        false => inspect_gltf(path, access).map(Found::Gltf),
+    }
+}
+
+/// The inspection as text for a person.
+pub fn text(found: &Found) -> String {
+    match found {
+        Found::Gltf(i) => gltf_text(i),
+        Found::Bvh(i) => bvh::text(i),
+    }
+}
 
 #[derive(Serialize)]
 pub struct Inspection {
@@ -93,7 +133,7 @@ pub struct BlendInfo {
 }
 
 /// Inspect the file at `path`.
-pub fn inspect(path: &Path, access: &Access) -> Result<Inspection> {
+fn inspect_gltf(path: &Path, access: &Access) -> Result<Inspection> {
     let doc = Document::open_with(path, access)?;
     let json = &doc.json;
     let meshes = find_morph_meshes(
@@ -298,8 +338,8 @@ fn blend_clips(json: &Value) -> Vec<String> {
         .collect()
 }
 
-/// The inspection as text for a person.
-pub fn text(i: &Inspection) -> String {
+/// A glTF file's inspection as text for a person.
+fn gltf_text(i: &Inspection) -> String {
     let mut s = format!("{}: {} bytes", i.file, i.bytes);
     if let Some(g) = &i.generator {
         s += &format!(", written by {g}");
