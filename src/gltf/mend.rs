@@ -56,7 +56,7 @@ impl Column {
     fn of(json: &Value, bin: &BinBuilder, acc: usize, count: usize) -> Option<Column> {
         let a = &json["accessors"][acc];
         let component = a["componentType"].as_u64()?;
-        let size = match component {
+        let size: u64 = match component {
             5121 => 1,
             5123 => 2,
             5126 => 4,
@@ -70,15 +70,27 @@ impl Column {
         }
         let v = a["bufferView"].as_u64()? as usize;
         let view = bin.views.get(v)?;
-        let start = (view["byteOffset"].as_u64()? + a["byteOffset"].as_u64().unwrap_or(0)) as usize;
-        let stride = view["byteStride"].as_u64().map_or(4 * size, |s| s as usize);
-        let end = start + count.checked_sub(1)? * stride + 4 * size;
-        let view_end = view["byteOffset"].as_u64()? + view["byteLength"].as_u64()?;
-        (end as u64 <= view_end && end <= bin.bytes.len()).then_some(Column {
-            start,
-            stride,
-            component,
-        })
+        // Checked: a hostile file's counts and offsets must not wrap past the bounds test.
+        let start = view["byteOffset"]
+            .as_u64()?
+            .checked_add(a["byteOffset"].as_u64().unwrap_or(0))?;
+        let stride = view["byteStride"].as_u64().unwrap_or(4 * size);
+        let end = (count as u64)
+            .checked_sub(1)?
+            .checked_mul(stride)?
+            .checked_add(start)?
+            .checked_add(4 * size)?;
+        let view_end = view["byteOffset"]
+            .as_u64()?
+            .checked_add(view["byteLength"].as_u64()?)?;
+        let (start, stride) = (start as usize, stride as usize);
+        (stride >= 4 * size as usize && end <= view_end && end <= bin.bytes.len() as u64).then_some(
+            Column {
+                start,
+                stride,
+                component,
+            },
+        )
     }
 
     fn at(&self, i: usize, c: usize) -> usize {
