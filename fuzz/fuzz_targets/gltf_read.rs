@@ -1,7 +1,8 @@
-//! The glTF/GLB reader: container, JSON, structure, buffers, and every accessor decoded.
+//! The glTF/GLB reader: container, JSON, structure, buffers, and every accessor decoded; then
+//! the output's start (`gltf::begin`: the views copied, skin weights and rotation keys mended).
 #![no_main]
 
-use inbetween::gltf::{Access, Document};
+use inbetween::gltf::{begin, Access, Container, Document};
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
@@ -14,4 +15,5 @@ fuzz_target!(|data: &[u8]| {
         let _ = doc.read_f64(i);
         let _ = doc.read_indices(i);
     }
+    let _ = begin(&doc, Container::Glb, Path::new("fuzz/out.glb"));
 });
