@@ -46,8 +46,9 @@ inbetween blend walk.glb run.glb -o jog.glb\n  inbetween blend walk.bvh run.bvh 
     Blend(BlendArgs),
     /// Show what inbetween finds in a file: morph meshes and their targets, animations (keys,
     /// key rate, duration), what `tween` would write with its defaults (frames, new targets,
-    /// bytes), the skinned clips `blend` can mix, and the extensions with whether they are
-    /// decoded; for a BVH capture, its skeleton, frames, up axis, and the feet, stride and
+    /// bytes), the skinned clips `blend` can mix (each with the feet, stride and cycles it finds
+    /// in it, or why it refuses it), and the extensions with whether they are decoded; for a BVH
+    /// capture, its skeleton, frames, up axis, and the feet, stride and
     /// cycles `blend` finds (or why it refuses the clip).
     #[command(
         after_help = "Examples:\n  inbetween inspect Flamingo.glb\n  inbetween inspect face.glb --json\n  inbetween inspect walk.bvh"

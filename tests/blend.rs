@@ -879,7 +879,8 @@ fn a_z_up_capture_from_blender_blends_as_the_original() {
 
 /// `inspect` on a BVH capture says what `blend` finds in it: the skeleton, the motion, the up
 /// axis and the clip's gait (feet, stride, cycles), or why `blend` refuses it (the walk held
-/// on its first frame: a still pose); the JSON follows the schema.
+/// on its first frame: a still pose); on a glTF character, the same for each of its clips;
+/// the JSON follows the schema.
 #[test]
 fn inspect_tells_a_capture_s_skeleton_motion_and_gait() {
     let Some(fx) = fixtures() else { return };
@@ -934,6 +935,23 @@ fn inspect_tells_a_capture_s_skeleton_motion_and_gait() {
             "{text}"
         );
     }
+    // A glTF character's clips, each as blend finds it alone: Fox's survey stands still.
+    let (v, text) = inspect(&fx.join("skinned/Fox.glb"));
+    let gaits = v["blend"]["gaits"].as_array().unwrap();
+    let clips: Vec<&str> = gaits.iter().map(|g| g["clip"].as_str().unwrap()).collect();
+    assert_eq!(clips, ["Survey", "Walk", "Run"], "{v}");
+    assert!(gaits[0]["refused"]
+        .as_str()
+        .unwrap()
+        .contains("no stride cycle"));
+    for g in &gaits[1..] {
+        assert_eq!(g["feet"].as_array().unwrap().len(), 4, "{g}");
+        assert!(
+            g["refused"].is_null() && g["cycles"].as_array().unwrap().len() == 1,
+            "{g}"
+        );
+    }
+    assert!(text.contains("  clip \"Walk\": feet"), "{text}");
     let walk = fx.join("bvh/kevinxie4c_walk.bvh");
     let text = std::fs::read_to_string(&walk)
         .unwrap()

@@ -4,7 +4,7 @@
 
 use super::by_name;
 use super::cycles::CycleMethod;
-use super::plan::{blend, BlendOptions, Blended, Report};
+use super::plan::{blend, gait, BlendOptions, Blended, Gait, Report};
 use super::rig::{self, Clip, Path, Rig};
 use crate::gltf::{self, listed, Access, Container, Document};
 use crate::output::{Format, Outputs};
@@ -220,6 +220,35 @@ fn skins_of(doc: &Document) -> Result<Vec<BTreeSet<usize>>> {
     Ok(skins)
 }
 
+/// The skin (index in `skins`) whose joints `clip` animates most, the first of as many.
+fn skin_of(skins: &[BTreeSet<usize>], clip: &Clip) -> Option<usize> {
+    let nodes = skeleton_nodes(clip);
+    (0..skins.len())
+        .map(|s| (skins[s].intersection(&nodes).count(), usize::MAX - s))
+        .max()
+        .filter(|&(n, _)| n > 0)
+        .map(|(_, s)| usize::MAX - s)
+}
+
+/// What `blend` finds in each of `doc`'s clips that animate a skin, alone (for `inspect`):
+/// (the animation's index, its [`Gait`] on the skeleton of that skin). Empty for a file
+/// without a skin.
+pub fn clip_gaits(doc: &Document) -> Result<Vec<(usize, Gait)>> {
+    let (rig, clips) = rig::load_gltf(doc)?;
+    let skins = rig::skins(doc);
+    let mut out = Vec::new();
+    for clip in &clips {
+        let Some(skin) = skin_of(&skins, clip) else {
+            continue;
+        };
+        check_size(doc, clip)?;
+        let mut rig = rig.clone();
+        rig::use_skin(doc, &mut rig, skin);
+        out.push((clip.index, gait(&rig, clip)));
+    }
+    Ok(out)
+}
+
 /// Clips `a` and `b` (each with the document it came from, for messages) blended on `doc`'s
 /// character `rig`, its skeleton the one of `skins` whose joints they animate.
 fn blend_on(
@@ -231,22 +260,15 @@ fn blend_on(
 ) -> Result<BlendedClips> {
     check_size(doc_a, a)?;
     check_size(doc_b, b)?;
-    let (na, nb) = (skeleton_nodes(a), skeleton_nodes(b));
-    let best = |nodes: &BTreeSet<usize>| {
-        (0..skins.len())
-            .map(|s| (skins[s].intersection(nodes).count(), usize::MAX - s))
-            .max()
-            .filter(|&(n, _)| n > 0)
-            .map(|(_, s)| usize::MAX - s)
-    };
-    let Some(skin) = best(&na) else {
+    let nb = skeleton_nodes(b);
+    let Some(skin) = skin_of(skins, a) else {
         bail!(doc.err(format!(
             "animation {:?} animates no joint of a skin",
             a.name
         )));
     };
     if skins[skin].intersection(&nb).next().is_none() {
-        match best(&nb) {
+        match skin_of(skins, b) {
             Some(other) => bail!(doc.err(format!(
                 "animations {:?} and {:?} animate different skeletons (skins {skin} and {other})",
                 a.name, b.name

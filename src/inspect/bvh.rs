@@ -3,6 +3,7 @@
 //! duration), the file's up axis (a Z-up capture is stood up on read), and the clip alone as
 //! `blend` analyses it (feet, stride, cycles, or why it would refuse the clip).
 
+use super::{gait_line, GaitInfo};
 use crate::blend::{gait, load_bvh};
 use anyhow::Result;
 use serde::Serialize;
@@ -28,19 +29,8 @@ pub struct BvhInspection {
     pub duration: f64,
     /// The file's up axis (`Y` by the format's convention; `Z` as Blender and 3ds Max write).
     pub up: String,
-    pub blend: BvhBlendInfo,
-}
-
-#[derive(Serialize)]
-pub struct BvhBlendInfo {
-    /// The feet found (their chains' end joints).
-    pub feet: Vec<String>,
-    /// How far the feet travel forward and back relative to the root, in leg lengths.
-    pub stride: f64,
-    /// Stride cycles found: (start, period) in seconds.
-    pub cycles: Vec<[f64; 2]>,
-    /// Why `blend` would refuse the clip (without `--cycles none`).
-    pub refused: Option<String>,
+    /// What `blend` finds in the clip alone.
+    pub blend: GaitInfo,
 }
 
 /// Inspect the BVH file at `path`.
@@ -48,11 +38,7 @@ pub fn inspect(path: &Path) -> Result<BvhInspection> {
     let bvh = load_bvh(path)?;
     let (joints, end_sites) = bvh.joint_counts();
     let frames = bvh.clip.channels.first().map_or(0, |c| c.times.len());
-    let g = gait(&bvh.rig, &bvh.clip);
-    let (cycles, refused) = match g.cycles {
-        Ok(spans) => (spans.iter().map(|&(a, b)| [a, b]).collect(), None),
-        Err(e) => (Vec::new(), Some(format!("{e:#}"))),
-    };
+    let blend = GaitInfo::of(gait(&bvh.rig, &bvh.clip));
     Ok(BvhInspection {
         file: path.display().to_string(),
         bytes: std::fs::metadata(path).map_or(0, |m| m.len()),
@@ -66,12 +52,7 @@ pub fn inspect(path: &Path) -> Result<BvhInspection> {
         frame_time: bvh.frame_time,
         duration: bvh.clip.duration(),
         up: bvh.up_axis(),
-        blend: BvhBlendInfo {
-            feet: g.feet,
-            stride: g.stride,
-            cycles,
-            refused,
-        },
+        blend,
     })
 }
 
@@ -97,22 +78,6 @@ pub fn text(i: &BvhInspection) -> String {
         "Y" => "up: Y, as BVH is by convention\n".to_string(),
         up => format!("up: {up} (as Blender and 3ds Max write BVH): stood up to Y on read, written back in {up}\n"),
     };
-    let feet: Vec<String> = i.blend.feet.iter().map(|f| format!("{f:?}")).collect();
-    match &i.blend.refused {
-        Some(why) => s += &format!("blend: refuses it alone: {why}\n"),
-        None => {
-            let periods: Vec<String> = (i.blend.cycles.iter())
-                .map(|c| format!("{:.3}", c[1]))
-                .collect();
-            s += &format!(
-                "blend: feet {}, stride {:.2} leg lengths, {} cycle{} of {} s\n",
-                feet.join(", "),
-                i.blend.stride,
-                i.blend.cycles.len(),
-                if i.blend.cycles.len() == 1 { "" } else { "s" },
-                periods.join(", ")
-            );
-        }
-    }
+    s += &format!("blend: {}\n", gait_line(&i.blend));
     s
 }

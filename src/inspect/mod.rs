@@ -2,7 +2,8 @@
 //! morph meshes (targets, names, vertices, triangles), animations (channels, keys, key rate
 //! and grid, duration, interpolation), the tracks `tween` would use with its default options
 //! and what it would write (frames, new targets, about how many bytes), the skinned clips
-//! `blend` can mix, and the required extensions with whether they are decoded. For a BVH
+//! `blend` can mix (each with what it finds in the clip alone: `blend::clip_gaits`), and the
+//! required extensions with whether they are decoded. For a BVH
 //! capture, see [`bvh`]. Text, or JSON (`schemas/inspect.schema.json`).
 
 use crate::gltf::{arr, listed, quoted_name, weights_target, Access, Document, PASSED_THROUGH};
@@ -18,7 +19,7 @@ use std::path::Path;
 
 mod bvh;
 
-pub use bvh::{BvhBlendInfo, BvhInspection};
+pub use bvh::BvhInspection;
 
 /// What `inspect` found: a glTF file or a BVH capture.
 #[derive(Serialize)]
@@ -130,6 +131,60 @@ pub struct BlendInfo {
     pub skins: usize,
     /// Animations that move joints of a skin: what `blend --clips` can name.
     pub clips: Vec<String>,
+    /// What `blend` finds in each of them alone.
+    pub gaits: Vec<ClipGait>,
+}
+
+#[derive(Serialize)]
+pub struct ClipGait {
+    pub clip: String,
+    #[serde(flatten)]
+    pub gait: GaitInfo,
+}
+
+/// What `blend` finds in one clip alone ([`crate::blend::Gait`]).
+#[derive(Serialize)]
+pub struct GaitInfo {
+    /// The feet found (their chains' end joints).
+    pub feet: Vec<String>,
+    /// How far the feet travel forward and back relative to the root, in leg lengths.
+    pub stride: f64,
+    /// Stride cycles found: (start, period) in seconds.
+    pub cycles: Vec<[f64; 2]>,
+    /// Why `blend` would refuse the clip (without `--cycles none`).
+    pub refused: Option<String>,
+}
+
+impl GaitInfo {
+    pub fn of(g: crate::blend::Gait) -> GaitInfo {
+        let (cycles, refused) = match g.cycles {
+            Ok(spans) => (spans.iter().map(|&(a, b)| [a, b]).collect(), None),
+            Err(e) => (Vec::new(), Some(format!("{e:#}"))),
+        };
+        GaitInfo {
+            feet: g.feet,
+            stride: g.stride,
+            cycles,
+            refused,
+        }
+    }
+}
+
+/// A clip's gait in words: its feet, stride and cycles, or why `blend` refuses it alone.
+fn gait_line(g: &GaitInfo) -> String {
+    if let Some(why) = &g.refused {
+        return format!("refuses it alone: {why}");
+    }
+    let feet: Vec<String> = g.feet.iter().map(|f| format!("{f:?}")).collect();
+    let periods: Vec<String> = g.cycles.iter().map(|c| format!("{:.3}", c[1])).collect();
+    format!(
+        "feet {}, stride {:.2} leg lengths, {} cycle{} of {} s",
+        feet.join(", "),
+        g.stride,
+        g.cycles.len(),
+        if g.cycles.len() == 1 { "" } else { "s" },
+        periods.join(", ")
+    )
 }
 
 /// Inspect the file at `path`.
@@ -158,6 +213,17 @@ fn inspect_gltf(path: &Path, access: &Access) -> Result<Inspection> {
         blend: BlendInfo {
             skins: arr(json, "skins").len(),
             clips: blend_clips(json),
+            // A file `blend` cannot read (a broken rig) still shows the rest.
+            gaits: (crate::blend::clip_gaits(&doc)
+                .unwrap_or_default()
+                .into_iter())
+            .map(|(a, g)| ClipGait {
+                // As `blend --clips` names it: its name, or its index.
+                clip: (json["animations"][a]["name"].as_str())
+                    .map_or_else(|| a.to_string(), str::to_owned),
+                gait: GaitInfo::of(g),
+            })
+            .collect(),
         },
     })
 }
@@ -422,6 +488,9 @@ fn gltf_text(i: &Inspection) -> String {
             if i.blend.skins == 1 { "" } else { "s" },
             listed(&i.blend.clips)
         );
+    }
+    for g in &i.blend.gaits {
+        s += &format!("  clip {:?}: {}\n", g.clip, gait_line(&g.gait));
     }
     s
 }
