@@ -238,10 +238,10 @@ pub fn clip_gaits(doc: &Document) -> Result<Vec<(usize, Gait)>> {
     let skins = rig::skins(doc);
     let mut out = Vec::new();
     for clip in &clips {
-        let Some(skin) = skin_of(&skins, clip) else {
+        // A clip too long to analyse is left out (blend refuses it, saying so).
+        let Some(skin) = skin_of(&skins, clip).filter(|_| check_size(doc, clip).is_ok()) else {
             continue;
         };
-        check_size(doc, clip)?;
         let mut rig = rig.clone();
         rig::use_skin(doc, &mut rig, skin);
         out.push((clip.index, gait(&rig, clip)));
