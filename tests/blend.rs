@@ -829,13 +829,15 @@ fn a_z_up_capture_from_blender_blends_as_the_original() {
     let Some(bpy) = bpy() else { return };
     let dir = tempfile::tempdir().unwrap();
     let (walk, run) = cmu_walk_and_run(&fx);
-    let blender = |args: &[&std::ffi::OsStr]| {
-        String::from_utf8_lossy(&run_tool(&bpy, "bpy_bvh.py", args, "blender")).into_owned()
-    };
     let z_up = |p: &Path| {
         let out = dir.path().join(p.file_name().unwrap());
         let zxy = std::ffi::OsStr::new("ZXY");
-        blender(&["reexport".as_ref(), p.as_os_str(), out.as_os_str(), zxy]);
+        run_tool(
+            &bpy,
+            "bpy_bvh.py",
+            &["reexport".as_ref(), p.as_os_str(), out.as_os_str(), zxy],
+            "blender",
+        );
         out
     };
     let (walk_z, run_z) = (z_up(&walk), z_up(&run));
@@ -866,11 +868,8 @@ fn a_z_up_capture_from_blender_blends_as_the_original() {
         }
     }
     let z_out = dir.path().join("z_up.bvh");
-    let stdout = blender(&["compare".as_ref(), original.as_os_str(), z_out.as_os_str()]);
-    let line = (stdout.lines())
-        .find_map(|l| l.strip_prefix("BPY_BVH "))
-        .unwrap_or_else(|| panic!("no result from bpy: {stdout}"));
-    let v: Value = serde_json::from_str(line).unwrap();
+    let args = ["compare".as_ref(), original.as_os_str(), z_out.as_os_str()];
+    let v = bpy_result(&bpy, "bpy_bvh.py", &args, "blender", "BPY_BVH ");
     eprintln!("Blender reads the Z-up blend: {v}");
     assert_eq!(v["frames"][0], v["frames"][1], "{v}");
     let (worst, size) = (v["worst"].as_f64().unwrap(), v["size"].as_f64().unwrap());

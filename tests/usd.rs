@@ -37,12 +37,13 @@ fn blender_points(
         args.extend([std::ffi::OsStr::new("--action"), std::ffi::OsStr::new(a)]);
     }
     args.extend(seconds.iter().map(std::ffi::OsStr::new));
-    let stdout = run_tool(bpy, "bpy_skinned_points.py", &args, "blender");
-    let stdout = String::from_utf8_lossy(&stdout);
-    let line = (stdout.lines())
-        .find_map(|l| l.strip_prefix("BPY_POINTS "))
-        .unwrap_or_else(|| panic!("no result from bpy: {stdout}"));
-    serde_json::from_str(line).unwrap()
+    bpy_result(
+        bpy,
+        "bpy_skinned_points.py",
+        &args,
+        "blender",
+        "BPY_POINTS ",
+    )
 }
 
 /// The largest difference of any coordinate between two lists of points (JSON), which must
@@ -728,13 +729,13 @@ fn blender_imports_materials_and_colours() {
         let out = dir.path().join(format!("blender.{fmt}"));
         tween_quietly(input, &out, &["--fps", "2"]);
         let what = format!("{} .{fmt}", input.display());
-        let stdout = run_tool(&bpy, "bpy_import.py", &[out.as_os_str()], &what);
-        let stdout = String::from_utf8_lossy(&stdout);
-        let line = stdout
-            .lines()
-            .find_map(|l| l.strip_prefix("BPY_IMPORT "))
-            .unwrap_or_else(|| panic!("{what}: no result from bpy: {stdout}"));
-        serde_json::from_str(line).unwrap()
+        bpy_result(
+            &bpy,
+            "bpy_import.py",
+            &[out.as_os_str()],
+            &what,
+            "BPY_IMPORT ",
+        )
     };
     let mpt = fx.join("morph-khronos/MorphPrimitivesTest/glTF/MorphPrimitivesTest.gltf");
     for fmt in FORMATS {

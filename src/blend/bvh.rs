@@ -34,12 +34,12 @@ impl Bvh {
     /// The file's own up axis, as judged on read (`Y`, `Z`, `-X` ...; see [`upright`]).
     pub fn up_axis(&self) -> String {
         let up = self.turn.inverse() * DVec3::Y;
-        let a = up.abs().max_position();
-        format!(
-            "{}{}",
-            if up[a] < 0.0 { "-" } else { "" },
-            ["X", "Y", "Z"][a]
-        )
+        let sign = if up[up.abs().max_position()] < 0.0 {
+            "-"
+        } else {
+            ""
+        };
+        format!("{sign}{}", axis_name(up))
     }
 
     /// Joints with channels, and joints without (End Sites).
@@ -58,7 +58,7 @@ impl Bvh {
         for (_, list) in &self.dofs {
             let order: String = (list.iter())
                 .filter_map(|d| match d {
-                    Dof::Rot(a) => Some(["X", "Y", "Z"][a.abs().max_position()]),
+                    Dof::Rot(a) => Some(axis_name(*a)),
                     Dof::Pos(_) => None,
                 })
                 .collect();
@@ -68,6 +68,11 @@ impl Bvh {
         }
         out
     }
+}
+
+/// `X`, `Y` or `Z`: the axis along which `v` is longest.
+fn axis_name(v: DVec3) -> &'static str {
+    ["X", "Y", "Z"][v.abs().max_position()]
 }
 
 /// Read a BVH file into a rig (every joint in the skeleton) and its motion.
@@ -188,10 +193,7 @@ const MOST_JUDGED: usize = 4096;
 /// is tallest along it: a rest pose lying down that the root's rotation stands up is not
 /// turned). Where any of it is not clear, or up is +Y, the identity.
 fn upright(rig: &Rig, clip: &Clip) -> DQuat {
-    let n = rig.len();
-    let Some(root) = (0..n).find(|&j| rig.parent[j].is_none()) else {
-        return DQuat::IDENTITY;
-    };
+    let (n, root) = (rig.len(), rig.root);
     if !(4..=MOST_JUDGED).contains(&n) {
         return DQuat::IDENTITY;
     }

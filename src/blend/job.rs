@@ -290,7 +290,7 @@ fn blend_on(
 }
 
 /// Whether `p` names a BVH file (by its extension, any case).
-fn is_bvh(p: &std::path::Path) -> bool {
+pub fn is_bvh(p: &std::path::Path) -> bool {
     p.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))

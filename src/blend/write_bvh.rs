@@ -63,12 +63,12 @@ pub fn write(bvh: &Bvh, poses: &[Pose], out: &mut dyn Write) -> Result<()> {
     write!(out, "Frame Time: {:.8}{eol}", bvh.frame_time)?;
     let mut previous: Vec<[f64; 3]> = vec![[0.0; 3]; bvh.dofs.len()];
     let mut line = String::new();
+    // A capture turned upright on read goes back to the file's own up.
+    let back = bvh.turn.inverse();
     for (f, pose) in poses.iter().enumerate() {
         line.clear();
         for (k, (j, list)) in bvh.dofs.iter().enumerate() {
             let mut local = pose.local[*j];
-            // A capture turned upright on read goes back to the file's own up.
-            let back = bvh.turn.inverse();
             (local.t, local.r) = (back * local.t, back * local.r * bvh.turn);
             let mut angles = match orders[k] {
                 Some(order) => euler(local.r, order),

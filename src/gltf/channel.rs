@@ -281,18 +281,22 @@ pub fn node_parents(json: &Value) -> Vec<Option<usize>> {
     parents
 }
 
+/// A node's `matrix`, where it has one of 16 numbers.
+fn matrix_of(node: &Value) -> Option<DMat4> {
+    let m: Vec<f64> = node["matrix"]
+        .as_array()?
+        .iter()
+        .filter_map(Value::as_f64)
+        .collect();
+    (m.len() == 16).then(|| DMat4::from_cols_slice(&m))
+}
+
 /// A node's rest transform: its `matrix`, else its translation, rotation and scale.
 pub fn rest_matrix(node: &Value) -> DMat4 {
-    let nums = node["matrix"]
-        .as_array()
-        .map(|a| a.iter().filter_map(Value::as_f64).collect::<Vec<f64>>());
-    match nums.filter(|m| m.len() == 16) {
-        Some(m) => DMat4::from_cols_slice(&m),
-        None => {
-            let (t, r, s) = rest_trs(node);
-            DMat4::from_scale_rotation_translation(s, r, t)
-        }
-    }
+    matrix_of(node).unwrap_or_else(|| {
+        let (t, r, s) = rest_trs(node);
+        DMat4::from_scale_rotation_translation(s, r, t)
+    })
 }
 
 /// A node's rest translation, rotation and scale (its `matrix` decomposed when it has one).
@@ -302,8 +306,8 @@ pub fn rest_trs(node: &Value) -> (DVec3, DQuat, DVec3) {
             .as_array()
             .map(|a| a.iter().filter_map(Value::as_f64).collect())
     };
-    if let Some(m) = nums("matrix").filter(|m| m.len() == 16) {
-        let (s, r, t) = DMat4::from_cols_slice(&m).to_scale_rotation_translation();
+    if let Some(m) = matrix_of(node) {
+        let (s, r, t) = m.to_scale_rotation_translation();
         return (t, r, s);
     }
     let t = nums("translation")

@@ -224,12 +224,8 @@ pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
                     for c in 0..4 {
                         w[4 * s + c] = wc.float(&bin.bytes, i, c);
                         j[4 * s + c] = jc.joint(&bin.bytes, i, c);
-                    }
-                }
-                // A joint with no weight is joint 0 (the validator warns of others): Draco's
-                // quantization rounds a small weight to 0 and keeps its joint.
-                for (s, (jc, _)) in columns.iter().enumerate() {
-                    for c in 0..4 {
+                        // A joint with no weight is joint 0 (the validator warns of others):
+                        // Draco's quantization rounds a small weight to 0 and keeps its joint.
                         if w[4 * s + c] == 0.0 && j[4 * s + c] != 0 {
                             j[4 * s + c] = 0;
                             jc.set_joint(&mut bin.bytes, i, c, 0);

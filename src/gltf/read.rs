@@ -57,15 +57,20 @@ pub fn quoted_name(part: &Value, fallback: impl FnOnce() -> String) -> String {
 /// How many names [`listed`] shows.
 const LISTED: usize = 8;
 
-/// The error for a file whose JSON does not parse; a motion capture handed to a glTF command
-/// is named as one, with what reads it.
-fn not_gltf(path: &Path, bytes: &[u8], e: serde_json::Error) -> anyhow::Error {
+/// Whether `bytes` (a file's start; 64 are enough) begin as a BVH motion capture does: the
+/// word HIERARCHY, after any byte-order mark and white space.
+pub fn starts_like_bvh(bytes: &[u8]) -> bool {
     let start = String::from_utf8_lossy(&bytes[..bytes.len().min(64)]);
-    if start
+    start
         .trim_start_matches('\u{feff}')
         .trim_start()
         .starts_with("HIERARCHY")
-    {
+}
+
+/// The error for a file whose JSON does not parse; a motion capture handed to a glTF command
+/// is named as one, with what reads it.
+fn not_gltf(path: &Path, bytes: &[u8], e: serde_json::Error) -> anyhow::Error {
+    if starts_like_bvh(bytes) {
         at(
             path,
             "a BVH motion capture, not a glTF file (`inbetween blend` reads two captures)",

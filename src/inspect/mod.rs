@@ -6,7 +6,9 @@
 //! required extensions with whether they are decoded. For a BVH
 //! capture, see [`bvh`]. Text, or JSON (`schemas/inspect.schema.json`).
 
-use crate::gltf::{arr, listed, quoted_name, weights_target, Access, Document, PASSED_THROUGH};
+use crate::gltf::{
+    arr, listed, quoted_name, starts_like_bvh, weights_target, Access, Document, PASSED_THROUGH,
+};
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, KeyOptions, KeySource, MorphMesh,
     TrackOrigin, TweenOptions,
@@ -32,18 +34,11 @@ pub enum Found {
 /// Inspect the file at `path`: a BVH capture (by its `.bvh` extension or its first word,
 /// HIERARCHY), else glTF.
 pub fn inspect(path: &Path, access: &Access) -> Result<Found> {
-    let named =
-        (path.extension().and_then(|e| e.to_str())).is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
     let mut start = [0u8; 64];
     let read = std::fs::File::open(path)
         .and_then(|mut f| std::io::Read::read(&mut f, &mut start))
         .unwrap_or(0);
-    let head = String::from_utf8_lossy(&start[..read]);
-    let hierarchy = head
-        .trim_start_matches('\u{feff}')
-        .trim_start()
-        .starts_with("HIERARCHY");
-    match named || hierarchy {
+    match crate::blend::is_bvh(path) || starts_like_bvh(&start[..read]) {
         true => bvh::inspect(path).map(Found::Bvh),
         false => inspect_gltf(path, access).map(Found::Gltf),
     }

@@ -234,8 +234,9 @@ pub fn meshes_without_weights_animation(doc: &Document) -> Vec<usize> {
         .collect()
 }
 
-/// Mesh `mi` with its tracks, and whether they come from an animation; `None` when it has no
-/// morph targets. Its tracks are empty where keys come from the animation and no clip (the one
+/// Mesh `mi` with its tracks, and whether they come from an animation (`clips_animate`: some
+/// clip animates weights or moves a node, which `--keys auto` takes keys from); `None` when it
+/// has no morph targets. Its tracks are empty where keys come from the animation and no clip (the one
 /// `--animation` picks, when given) animates its weights.
 fn morph_mesh(
     doc: &Document,
@@ -243,7 +244,7 @@ fn morph_mesh(
     users: &MeshUsers,
     opts: &KeyOptions,
     selected: Option<usize>,
-    animates_weights: bool,
+    clips_animate: bool,
 ) -> Result<Option<(MorphMesh, bool)>> {
     let json = &doc.json;
     let mesh = &json["meshes"][mi];
@@ -265,7 +266,7 @@ fn morph_mesh(
     let use_animation = match opts.source {
         KeySource::Targets => false,
         KeySource::Animation => true,
-        KeySource::Auto => animates_weights,
+        KeySource::Auto => clips_animate,
     };
     let (tracks, dropped) = if use_animation {
         let (tracks, dropped) = animation_tracks(doc, &channels, selected, target_count)?;

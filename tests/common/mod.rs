@@ -785,3 +785,20 @@ pub fn bpy() -> Option<PathBuf> {
     }
     Some(bpy)
 }
+
+/// Run the Blender script `script` (in `tools/`) with `args` (see [`run_tool`]) and parse the
+/// JSON it prints on its line starting `prefix` (`BPY_POINTS ` ...); `what` names the case.
+pub fn bpy_result(
+    bpy: &Path,
+    script: &str,
+    args: &[&std::ffi::OsStr],
+    what: &str,
+    prefix: &str,
+) -> serde_json::Value {
+    let stdout = run_tool(bpy, script, args, what);
+    let stdout = String::from_utf8_lossy(&stdout);
+    let line = (stdout.lines())
+        .find_map(|l| l.strip_prefix(prefix))
+        .unwrap_or_else(|| panic!("{what}: no result from bpy: {stdout}"));
+    serde_json::from_str(line).unwrap()
+}
