@@ -485,6 +485,13 @@ fn closest_branch(r: DVec3, target: DVec3) -> DVec3 {
     } else {
         target.try_normalize().unwrap_or(DVec3::X)
     };
+    // |r + 2 pi k axis - target|^2 - |r - target|^2 = 4 pi k (pi k + axis . (r - target)): the
+    // log's own branch (k = 0) is nearest by at least 4 pi 1e-6 (rad^2) while the two differ
+    // along the axis by less than half a turn less 1e-6 rad, far beyond the sums' rounding; the
+    // value is the one the search below returns then, bit for bit.
+    if axis.dot(r - target).abs() < PI - 1e-6 {
+        return r + axis * (2.0 * PI * 0.0);
+    }
     (-2..=2)
         .map(|k| r + axis * (2.0 * PI * k as f64))
         .min_by(|p, q| {
@@ -493,6 +500,57 @@ fn closest_branch(r: DVec3, target: DVec3) -> DVec3 {
                 .total_cmp(&(*q - target).length_squared())
         })
         .unwrap_or(r)
+}
+
+/// A rotation log's angle as the branch growth orders it: in nanoradians, so that angles equal
+/// within 1e-9 rad tie.
+fn angle_key(r: DVec3) -> u64 {
+    (r.length() * 1e9) as u64
+}
+
+/// The branch growth's regions' first triangles: each region starts from its least-rotated
+/// triangle, the regions taken in (angle, index) order, so the next start is the least (key,
+/// index) pair of the triangles not yet settled. A scan over the triangles finds it for the first
+/// [`Starts::SCANNED`] regions (a connected mesh has one); past them the rest are sorted once.
+/// (Key, index) pairs are distinct, so either way the starts come in the order a sort of every
+/// triangle's pair would give.
+#[derive(Default)]
+struct Starts {
+    regions: usize,
+    /// Past the scanned regions: the unsettled triangles' pairs, greatest first.
+    sorted: Vec<(u64, u32)>,
+}
+
+impl Starts {
+    const SCANNED: usize = 4;
+
+    /// The next region's first triangle, given which are settled and each triangle's key
+    /// (`None`: a triangle left out, never a start).
+    fn next<K>(&mut self, done: &[bool], key: K) -> Option<u32>
+    where
+        K: Fn(usize) -> Option<u64> + Sync,
+    {
+        let unsettled = || {
+            (0..done.len())
+                .into_par_iter()
+                .filter(|&t| !done[t])
+                .filter_map(|t| key(t).map(|k| (k, t as u32)))
+        };
+        self.regions += 1;
+        if self.regions <= Self::SCANNED {
+            return unsettled().min().map(|(_, t)| t);
+        }
+        if self.regions == Self::SCANNED + 1 {
+            self.sorted = unsettled().collect();
+            self.sorted.par_sort_unstable_by(|p, q| q.cmp(p));
+        }
+        while let Some((_, t)) = self.sorted.pop() {
+            if !done[t as usize] {
+                return Some(t);
+            }
+        }
+        None
+    }
 }
 
 impl<'a> SplineTrack<'a> {
@@ -538,21 +596,11 @@ impl<'a> SplineTrack<'a> {
         // Angles equal within 1e-9 rad tie, and the lower triangle index goes first: when two
         // regions are both unrotated (a part turned by exactly 360 degrees), the region listed
         // first in the file stays fixed.
-        let key = |r: DVec3| (r.length() * 1e9) as u64;
         // (angle, triangle, the one it was reached from)
         let mut heap: BinaryHeap<Reverse<(u64, u32, u32)>> = BinaryHeap::new();
-        // Keys computed once, sorted in parallel ((key, index) pairs are distinct, so the order
-        // is the same as a stable sort by key would give).
-        let mut starts: Vec<(u64, u32)> = per
-            .par_iter()
-            .enumerate()
-            .filter_map(|(t, x)| x.as_ref().map(|x| (key(x.log_b()), t as u32)))
-            .collect();
-        starts.par_sort_unstable();
-        for &(_, start) in &starts {
-            if done[start as usize] {
-                continue;
-            }
+        let mut starts = Starts::default();
+        let start_key = |t: usize| per[t].as_ref().map(|x| angle_key(x.log_b()));
+        while let Some(start) = starts.next(&done, start_key) {
             heap.push(Reverse((0, start, u32::MAX)));
             while let Some(Reverse((_, t, from))) = heap.pop() {
                 if done[t as usize] {
@@ -569,7 +617,7 @@ impl<'a> SplineTrack<'a> {
                 for &nb in self.pattern.neighbours(t as usize) {
                     if !done[nb as usize] {
                         let guess = closest_branch(logs[nb as usize].as_dvec3(), r);
-                        heap.push(Reverse((key(guess), nb, t)));
+                        heap.push(Reverse((angle_key(guess), nb, t)));
                     }
                 }
             }
@@ -2159,6 +2207,83 @@ impl SplineSegment {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The starts scanned and then sorted come in the order of one sort of every triangle's
+    /// (key, index) pair, skipping the settled: many regions, tied keys, triangles left out.
+    #[test]
+    fn region_starts_come_in_key_then_index_order() {
+        let mut rng = crate::dev::synth::Lcg(7);
+        let n = 2000;
+        let keys: Vec<Option<u64>> = (0..n)
+            .map(|_| (rng.unit() > 0.05).then(|| (rng.unit() * 50.0) as u64))
+            .collect();
+        let mut sorted: Vec<(u64, u32)> = (0..n)
+            .filter_map(|t| keys[t].map(|k| (k, t as u32)))
+            .collect();
+        sorted.sort_unstable();
+        let mut done: Vec<bool> = keys.iter().map(Option::is_none).collect();
+        let mut starts = Starts::default();
+        let mut count = 0;
+        while let Some(t) = starts.next(&done, |t| keys[t]) {
+            let want = sorted.iter().find(|&&(_, s)| !done[s as usize]);
+            assert_eq!(Some(t), want.map(|&(_, s)| s), "region {count}");
+            // The region grown from it: the start and a few dozen others.
+            done[t as usize] = true;
+            for _ in 0..(rng.unit() * 60.0) as usize {
+                done[(rng.unit() * n as f64) as usize % n] = true;
+            }
+            count += 1;
+        }
+        assert!(count > Starts::SCANNED + 10, "{count} regions");
+        assert!(done.iter().all(|&d| d));
+    }
+
+    /// The shortcut for a log's own branch gives the search's value bit for bit, near half a
+    /// turn apart too, and the search still decides past it.
+    #[test]
+    fn the_nearest_branch_is_the_search_s_bit_for_bit() {
+        let search = |r: DVec3, target: DVec3| {
+            let angle = r.length();
+            let axis = if angle > NO_TURN {
+                r / angle
+            } else {
+                target.try_normalize().unwrap_or(DVec3::X)
+            };
+            (-2..=2)
+                .map(|k| r + axis * (2.0 * PI * k as f64))
+                .min_by(|p, q| {
+                    (*p - target)
+                        .length_squared()
+                        .total_cmp(&(*q - target).length_squared())
+                })
+                .unwrap()
+        };
+        let mut rng = crate::dev::synth::Lcg(11);
+        let mut v =
+            |scale: f64| DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5) * scale;
+        let (mut own, mut other) = (0, 0);
+        for i in 0..200_000 {
+            let r = v([1e-7, 1.0, 4.0, 12.0][i % 4]);
+            // Targets near r, near half a turn along its axis from it, and anywhere.
+            let target = match i % 3 {
+                0 => r + v(0.5),
+                1 => r - r.normalize_or_zero() * (PI + v(1e-5).x) + v(1e-7),
+                _ => v(20.0),
+            };
+            let got = closest_branch(r, target);
+            let want = search(r, target);
+            assert_eq!(
+                got.to_array().map(f64::to_bits),
+                want.to_array().map(f64::to_bits)
+            );
+            if got == r {
+                own += 1
+            } else {
+                other += 1
+            }
+        }
+        assert!(own > 50_000 && other > 20_000, "{own} own, {other} other");
+    }
 
     #[test]
     fn a_triangle_s_data_takes_172_bytes() {
