@@ -56,10 +56,12 @@ inbetween blend walk.glb run.glb -o jog.glb\n  inbetween blend walk.bvh run.bvh 
     Inspect(InspectArgs),
     /// Draw a contact sheet (PNG) of a mesh's frames: one band per method (labelled), frames
     /// across in time order with keys marked, every cell from the same orthographic camera
-    /// fitted to the whole animation; optionally the frames as an animated GIF or APNG.
+    /// fitted to the whole animation; for a character without morph keys (a blend output), one
+    /// band per skeletal clip as it plays; optionally the frames as an animated GIF or APNG.
     #[command(
         after_help = "Examples:\n  inbetween preview samples/tube_bend.glb -o sheet.png --methods linear,seed,spline\n  \
-inbetween preview Flamingo.glb -o fl.png --frames 8 --animate fl.gif\n  inbetween preview tween_out.glb -o out.png"
+inbetween preview Flamingo.glb -o fl.png --frames 8 --animate fl.gif\n  inbetween preview tween_out.glb -o out.png\n  \
+inbetween blend Fox.glb --clips Walk Run -o jog.glb\n  inbetween preview jog.glb -o jog.png --animation Walk+Run --animate jog.gif"
     )]
     Preview(PreviewArgs),
     /// Hold-out accuracy: keep every K-th key, predict the dropped ones with each method, and
@@ -377,7 +379,8 @@ impl TweenArgs {
 #[derive(Args)]
 pub struct PreviewArgs {
     /// Input .gltf or .glb: morph keys (tweened by each method), a tween output (its own
-    /// frames: band `file`), or a file without morph keys (its meshes as stored).
+    /// frames: band `file`), or a file without morph keys (a band per clip that moves its
+    /// nodes, skins included, as a viewer plays it; with no such clip, its meshes at rest).
     input: PathBuf,
     /// The contact sheet (.png).
     #[arg(short, long)]
@@ -408,7 +411,8 @@ pub struct PreviewArgs {
     /// Where the keys come from.
     #[arg(long, value_enum, default_value_t = KeySource::default().into())]
     keys: KeysArg,
-    /// The animation (name or index) whose weights channel supplies the keys.
+    /// The animation (name or index) whose weights channel supplies the keys; in a file
+    /// without morph keys, the one clip drawn.
     #[arg(long, value_name = "NAME|INDEX")]
     animation: Option<String>,
     /// Also read external buffers and images of a .gltf input under this folder (repeatable).

@@ -201,18 +201,22 @@ fn a_tween_output_shows_its_own_frames() {
     assert!(ink(&rgb, w, 0, h) > 2000);
 }
 
-/// A skinned file without morph keys is drawn as a glTF viewer shows it with no clip playing:
-/// moved by its skin's joints in the pose they rest in, with a note. Fox stands on its four
-/// feet (its rest pose is its bind pose); with its root joint turned a quarter turn about x at
-/// rest it stands up on its hind legs, taller than long on the picture (the stored vertices,
-/// which the preview drew before, lie as the first).
+/// A skinned file without morph keys or clips is drawn as a glTF viewer shows it with no clip
+/// playing: moved by its skin's joints in the pose they rest in, with a note. Fox (its clips
+/// taken out) stands on its four feet (its rest pose is its bind pose); with its root joint
+/// turned a quarter turn about x at rest it stands up on its hind legs, taller than long on the
+/// picture (the stored vertices, which the preview drew before, lie as the first).
 #[test]
-fn a_skinned_file_shows_its_rest_pose_with_a_note() {
+fn a_skinned_file_without_clips_shows_its_rest_pose_with_a_note() {
     let Some(fx) = fixtures() else { return };
     let dir = tempfile::tempdir().unwrap();
     let fox = fx.join("skinned/Fox.glb");
+    let still = dir.path().join("still.glb");
+    edited_glb(&fox, &still, |j| {
+        j.as_object_mut().unwrap().remove("animations");
+    });
     let upright = dir.path().join("upright.glb");
-    edited_glb(&fox, &upright, |j| {
+    edited_glb(&still, &upright, |j| {
         let half = std::f64::consts::FRAC_1_SQRT_2;
         j["nodes"][2]["rotation"] = serde_json::json!([half, 0.0, 0.0, half]);
     });
@@ -221,7 +225,7 @@ fn a_skinned_file_shows_its_rest_pose_with_a_note() {
         let sheet = dir.path().join("fox.png");
         let r = run_ok(&["preview", s(input), "-o", s(&sheet)]);
         let line = String::from_utf8_lossy(&r.stderr);
-        assert!(line.contains("note: no morph keys"), "{line}");
+        assert!(line.contains("note: no morph keys and no clip"), "{line}");
         assert!(line.contains("in the pose its joints rest in"), "{line}");
         let (w, h, rgb) = decode_png(&sheet);
         assert!(ink(&rgb, w, 0, h) > 1500, "{}", ink(&rgb, w, 0, h));
@@ -236,10 +240,211 @@ fn a_skinned_file_shows_its_rest_pose_with_a_note() {
             .count();
         (rows, cols)
     };
-    let (rows, cols) = extent(&fox);
+    let (rows, cols) = extent(&still);
     assert!(rows < cols, "Fox on its feet: {rows} rows, {cols} columns");
     let (rows, cols) = extent(&upright);
     assert!(rows > cols, "Fox upright: {rows} rows, {cols} columns");
+}
+
+/// The points of every vertex of `file`'s first skinned mesh as clip `clip` poses it at time `t`,
+/// computed here with the `gltf` crate's readers, apart from inbetween's code: the clip's
+/// LINEAR or STEP channels sampled (rotations by slerp), each node's world transform, and
+/// linear blend skinning, `sum w_k * W_joint_k * IBM_k * p` with the weights scaled to sum 1.
+fn skinned_by_gltf_crate(file: &Path, clip: &str, t: f32) -> Vec<glam::Vec3> {
+    use glam::{Mat4, Quat, Vec3};
+    use gltf::animation::{util::ReadOutputs, Interpolation};
+    let (doc, buffers, _) = gltf::import(file).unwrap();
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut trs: Vec<(Vec3, Quat, Vec3)> = nodes
+        .iter()
+        .map(|n| {
+            let (t, r, s) = n.transform().decomposed();
+            (Vec3::from(t), Quat::from_array(r), Vec3::from(s))
+        })
+        .collect();
+    let anim = doc.animations().find(|a| a.name() == Some(clip)).unwrap();
+    for ch in anim.channels() {
+        let reader = ch.reader(|b| Some(&buffers[b.index()]));
+        let times: Vec<f32> = reader.read_inputs().unwrap().collect();
+        let interp = ch.sampler().interpolation();
+        assert!(matches!(
+            interp,
+            Interpolation::Linear | Interpolation::Step
+        ));
+        // Keys k and k + 1 around t, and the fraction between them.
+        let k = times.partition_point(|&x| x <= t).clamp(1, times.len()) - 1;
+        let k1 = (k + 1).min(times.len() - 1);
+        let u = match (interp, k1 > k) {
+            (Interpolation::Linear, true) => {
+                ((t - times[k]) / (times[k1] - times[k])).clamp(0.0, 1.0)
+            }
+            _ => 0.0,
+        };
+        let node = ch.target().node().index();
+        match reader.read_outputs().unwrap() {
+            ReadOutputs::Translations(v) => {
+                let v: Vec<Vec3> = v.map(Vec3::from).collect();
+                trs[node].0 = v[k].lerp(v[k1], u);
+            }
+            ReadOutputs::Rotations(v) => {
+                let v: Vec<Quat> = v.into_f32().map(Quat::from_array).collect();
+                trs[node].1 = v[k].normalize().slerp(v[k1].normalize(), u);
+            }
+            ReadOutputs::Scales(v) => {
+                let v: Vec<Vec3> = v.map(Vec3::from).collect();
+                trs[node].2 = v[k].lerp(v[k1], u);
+            }
+            ReadOutputs::MorphTargetWeights(_) => {}
+        }
+    }
+    let mut parent = vec![None; nodes.len()];
+    for n in &nodes {
+        for c in n.children() {
+            parent[c.index()] = Some(n.index());
+        }
+    }
+    let world = |mut i: usize| {
+        let mut m = Mat4::IDENTITY;
+        loop {
+            let (t, r, s) = trs[i];
+            m = Mat4::from_scale_rotation_translation(s, r, t) * m;
+            match parent[i] {
+                Some(p) => i = p,
+                None => return m,
+            }
+        }
+    };
+    let node = nodes.iter().find(|n| n.skin().is_some()).unwrap();
+    let skin = node.skin().unwrap();
+    let ibms: Vec<Mat4> = skin
+        .reader(|b| Some(&buffers[b.index()]))
+        .read_inverse_bind_matrices()
+        .unwrap()
+        .map(|m| Mat4::from_cols_array_2d(&m))
+        .collect();
+    let joints: Vec<Mat4> = (skin.joints().zip(ibms))
+        .map(|(j, ibm)| world(j.index()) * ibm)
+        .collect();
+    let prim = node.mesh().unwrap().primitives().next().unwrap();
+    let r = prim.reader(|b| Some(&buffers[b.index()]));
+    let js: Vec<[u16; 4]> = r.read_joints(0).unwrap().into_u16().collect();
+    let ws: Vec<[f32; 4]> = r.read_weights(0).unwrap().into_f32().collect();
+    r.read_positions()
+        .unwrap()
+        .enumerate()
+        .map(|(v, p)| {
+            let sum: f32 = ws[v].iter().sum();
+            let m = (0..4).fold(Mat4::ZERO, |m, c| {
+                m + joints[js[v][c] as usize] * (ws[v][c] / sum)
+            });
+            m.transform_point3(Vec3::from(p))
+        })
+        .collect()
+}
+
+/// A character without morph keys plays its clips, a band each, as a glTF viewer plays them:
+/// Fox's three clips seen from the side (its look around alone moves in the floor's plane),
+/// RobotExpressive's fourteen (its face shapes hold no keys: the clips, unless tween bands are
+/// asked for); one clip by `--animation`, its frames different poses, its animation at 30
+/// frames a second; every vertex where the `gltf` crate's own reading and skinning puts it;
+/// a clip the file lacks refused in one line.
+#[test]
+fn a_character_s_clips_play_a_band_each_posed_as_gltf_plays_them() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let fox = fx.join("skinned/Fox.glb");
+    let robot = fx.join("skinned/RobotExpressive.glb");
+    let sheet = dir.path().join("s.png");
+    let line = |r: std::process::Output| String::from_utf8_lossy(&r.stderr).to_string();
+    let l = line(run_ok(&["preview", s(&fox), "-o", s(&sheet)]));
+    assert!(l.contains("3 bands (Survey, Walk, Run) x 12 frames"), "{l}");
+    assert!(l.contains("Side view"), "{l}");
+    assert!(l.contains("clips that move its nodes as they play"), "{l}");
+    let l = line(run_ok(&[
+        "preview",
+        s(&robot),
+        "-o",
+        s(&sheet),
+        "--frames",
+        "4",
+    ]));
+    assert!(l.contains("14 bands (Dance, Death, Idle"), "{l}");
+    let r = inbetween(&["preview", s(&robot), "-o", s(&sheet), "--methods", "spline"]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(line(r).contains("no mesh with morph targets"));
+
+    // One clip: its frames differ (the legs move), its animation at 30 frames a second.
+    let gif = dir.path().join("walk.gif");
+    let args = ["preview", s(&fox), "-o", s(&sheet), "--animation", "Walk"];
+    let l = line(run_ok(
+        &[&args[..], &["--frames", "6", "--animate", s(&gif)]].concat(),
+    ));
+    assert!(l.contains("1 band (Walk) x 6 frames"), "{l}");
+    let doc = inbetween::gltf::Document::open(&fox).unwrap();
+    let walk = (doc.json["animations"].as_array().unwrap().iter())
+        .find(|a| a["name"] == "Walk")
+        .unwrap();
+    // The clip's keys span its samplers' inputs, first to last.
+    let (first, last) = (walk["samplers"].as_array().unwrap().iter()).fold(
+        (f64::MAX, f64::MIN),
+        |(a, b), sampler| {
+            let input = &doc.json["accessors"][sampler["input"].as_u64().unwrap() as usize];
+            let (min, max) = (
+                input["min"][0].as_f64().unwrap(),
+                input["max"][0].as_f64().unwrap(),
+            );
+            (a.min(min), b.max(max))
+        },
+    );
+    let span = last - first;
+    let frames = (span * 30.0).round() as usize + 1;
+    assert!(
+        l.contains(&format!("{frames} frames animated")),
+        "{frames}: {l}"
+    );
+    let (w, h, rgb) = decode_png(&sheet);
+    assert_eq!(w, 6 * 160);
+    let cell = |c: usize| -> Vec<bool> {
+        (0..h)
+            .flat_map(|y| (0..160).map(move |x| (x + 160 * c, y)))
+            .map(|(x, y)| rgb[3 * (y * w + x)..3 * (y * w + x) + 3] != BACKGROUND)
+            .collect()
+    };
+    let differ = |a: &[bool], b: &[bool]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+    for c in 1..5 {
+        let d = differ(&cell(0), &cell(c));
+        assert!(d > 100, "frame {c} differs from the first by {d} pixels");
+    }
+
+    // Every vertex where the gltf crate's reading and skinning puts it, at three times.
+    for t in [0.0, 0.3, 0.61] {
+        let ours = &inbetween::preview::posed(&doc, "Walk", &[t]).unwrap()[0][0];
+        let theirs = skinned_by_gltf_crate(&fox, "Walk", t as f32);
+        assert_eq!(ours.len(), theirs.len());
+        let (lo, hi) = theirs
+            .iter()
+            .fold((glam::Vec3::MAX, glam::Vec3::MIN), |(l, h), p| {
+                (l.min(*p), h.max(*p))
+            });
+        let worst = (ours.iter().zip(&theirs))
+            .map(|(a, b)| (a.as_vec3() - *b).length())
+            .fold(0.0f32, f32::max);
+        let size = (hi - lo).length();
+        eprintln!("Fox Walk at {t} s: every vertex within {worst:.2e} of the gltf crate's ({size:.1} across)");
+        assert!(worst < 1e-4 * size, "t {t}: {worst} off in {size}");
+    }
+
+    // A clip the file lacks: one line naming the clips there are, nothing written.
+    let none = dir.path().join("none.png");
+    let r = inbetween(&["preview", s(&fox), "-o", s(&none), "--animation", "Trot"]);
+    assert_eq!(r.status.code(), Some(2));
+    let l = line(r);
+    assert_eq!(l.trim().lines().count(), 1, "{l}");
+    assert!(
+        l.contains(r#"no clip "Trot""#) && l.contains(r#""Survey", "Walk", "Run""#),
+        "{l}"
+    );
+    assert!(!none.exists());
 }
 
 #[test]

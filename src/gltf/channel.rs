@@ -299,6 +299,32 @@ pub fn rest_matrix(node: &Value) -> DMat4 {
     })
 }
 
+/// Node `node`'s local transform at time `t` (seconds): its rest transform with the
+/// translation, rotation and scale `channels` (of one clip) sampled at `t` in their place;
+/// weights channels are passed over.
+pub fn local_at<'c>(
+    node: &Value,
+    channels: impl IntoIterator<Item = &'c Channel>,
+    t: f64,
+) -> DMat4 {
+    let (mut tr, mut r, mut s) = rest_trs(node);
+    let mut buf = [0.0f64; 4];
+    for c in channels {
+        if c.path == Path::Weights || c.width > buf.len() {
+            continue;
+        }
+        let v = &mut buf[..c.width];
+        c.sample(t, v);
+        match c.path {
+            Path::Translation => tr = DVec3::new(v[0], v[1], v[2]),
+            Path::Rotation => r = DQuat::from_slice(v).normalize(),
+            Path::Scale => s = DVec3::new(v[0], v[1], v[2]),
+            Path::Weights => {}
+        }
+    }
+    DMat4::from_scale_rotation_translation(s, r, tr)
+}
+
 /// A node's rest translation, rotation and scale (its `matrix` decomposed when it has one).
 pub fn rest_trs(node: &Value) -> (DVec3, DQuat, DVec3) {
     let nums = |k: &str| -> Option<Vec<f64>> {

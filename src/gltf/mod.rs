@@ -29,8 +29,8 @@ mod write;
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{set_bounds, BinBuilder, Output, Storage};
 pub use channel::{
-    clip_name, close_keys, node_parents, push_key, read_channels, rest_matrix, rest_trs, slerp,
-    Channel, Interp, Path, MIN_QUATERNION,
+    clip_name, close_keys, local_at, node_parents, push_key, read_channels, rest_matrix, rest_trs,
+    slerp, Channel, Interp, Path, MIN_QUATERNION,
 };
 pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
 pub use encode::{

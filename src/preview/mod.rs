@@ -2,25 +2,28 @@
 //! frames as an animation (GIF or APNG).
 //!
 //! The pipeline, one module per stage: frames (the `tween` stages, per method, at the frames
-//! picked) -> [`camera`] (view axis and fit) -> [`raster`] (shaded triangles, z-buffer) ->
+//! picked; for a file without morph keys [`clips`]: its meshes posed by each clip that moves
+//! its nodes, or at rest) -> [`camera`] (view axis and fit) -> [`raster`] (shaded triangles, z-buffer) ->
 //! [`sheet`] (bands, labels with [`font`], key marks) -> [`encode`] (PNG, APNG, GIF); [`run_preview`]
 //! runs it from file to file.
 
 mod camera;
+mod clips;
 mod encode;
 mod font;
 mod raster;
 mod sheet;
 
 pub use camera::View;
+pub use clips::posed;
 pub use raster::{Picture, Shading, BACKGROUND};
 
-use crate::gltf::{arr, node_parents, Access, Document, Skeleton, Skinning};
+use crate::gltf::{arr, node_parents, Access, Document};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
-    close_loop, find_morph_meshes, frames_at, mesh_geometry, plan, FrameAt, KeyOptions, KeySource,
-    Method, MorphMesh, Timing, TweenOptions,
+    close_loop, find_morph_meshes, frames_at, plan, FrameAt, KeyOptions, KeySource, Method,
+    MorphMesh, NoMorphKeys, Timing, TweenOptions,
 };
 use anyhow::{bail, Result};
 use camera::Camera;
@@ -30,7 +33,6 @@ use rayon::prelude::*;
 use serde_json::Value;
 use sheet::Band;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// What a band shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,8 +41,6 @@ pub enum Shown {
     Method(Method),
     /// The file's own keys as a renderer plays them (a tween output's frames).
     File,
-    /// The meshes as stored (a file without morph keys).
-    Stored,
 }
 
 impl Shown {
@@ -63,7 +63,6 @@ impl Shown {
             Shown::Method(Method::Seed) => "seed",
             Shown::Method(Method::Spline) => "spline",
             Shown::File => "file",
-            Shown::Stored => "as stored",
         }
     }
 }
@@ -100,7 +99,7 @@ pub struct PreviewJob {
 
 /// What was drawn, for the summary line.
 pub struct PreviewSummary {
-    pub bands: Vec<&'static str>,
+    pub bands: Vec<String>,
     pub frames: usize,
     pub view: View,
     pub size: (usize, usize),
@@ -151,10 +150,10 @@ struct Column {
     time: f64,
 }
 
-/// The triangles of each mesh drawn (welded), and each band's columns.
+/// The triangles of each mesh drawn (welded), and each band's label and columns.
 struct Scene {
     triangles: Vec<Vec<[u32; 3]>>,
-    bands: Vec<(Shown, Vec<Column>)>,
+    bands: Vec<(String, Vec<Column>)>,
 }
 
 /// World matrix of the first node that instances each mesh (identity when none does).
@@ -239,7 +238,7 @@ fn columns(
             .collect::<Vec<_>>()
     };
     match shown {
-        Shown::File | Shown::Stored => {
+        Shown::File => {
             let welded = crate::tween::Welded::build(m);
             let cols = picked
                 .iter()
@@ -274,7 +273,7 @@ fn columns(
 fn available(m: &MorphMesh, shown: Shown, base: &TweenOptions) -> usize {
     let track = &m.tracks[0];
     match shown {
-        Shown::File | Shown::Stored => track.times.len(),
+        Shown::File => track.times.len(),
         Shown::Method(method) => plan(&track.times, &TweenOptions { method, ..*base }).len(),
     }
 }
@@ -310,73 +309,10 @@ fn scene(
             }
             progress.inc();
         }
-        bands.push((s, cols));
+        bands.push((s.label().to_string(), cols));
     }
     progress.finish();
     Ok(Scene { triangles, bands })
-}
-
-/// The scene of a file without morph keys: every mesh instance's stored geometry, one column.
-fn still(doc: &Document) -> Result<Scene> {
-    let worlds = mesh_worlds(&doc.json);
-    let mut triangles = Vec::new();
-    let mut points = Vec::new();
-    for (mi, world) in worlds.iter().enumerate() {
-        let nodes = arr(&doc.json, "nodes");
-        // The node drawing the mesh (the one `mesh_worlds` places it by).
-        let Some(node) = nodes
-            .iter()
-            .position(|n| n["mesh"].as_u64() == Some(mi as u64))
-        else {
-            continue;
-        };
-        let drawn = (arr(&doc.json["meshes"][mi], "primitives").iter())
-            .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4);
-        // The node's skin, its joints at rest (no clip plays).
-        let skeleton = Skeleton::read(doc, node, &|_| Vec::new())?;
-        for ((base, tris), p) in mesh_geometry(doc, mi)?.into_iter().zip(drawn) {
-            let base = match &skeleton {
-                Some(skeleton) => skinned_at_rest(doc, skeleton, p, base, node)?,
-                None => base,
-            };
-            points.push(base.iter().map(|&p| world.transform_point3(p)).collect());
-            triangles.push(tris);
-        }
-    }
-    if triangles.is_empty() {
-        bail!(doc.err("has no triangle mesh to draw"));
-    }
-    let col = Column {
-        meshes: points,
-        key: true,
-        time: 0.0,
-    };
-    Ok(Scene {
-        triangles,
-        bands: vec![(Shown::Stored, vec![col])],
-    })
-}
-
-/// Primitive `p`'s stored points `base` moved by `skeleton`'s joints (those of node `node`) in
-/// the pose they rest in (in the node's space, as the points are): as the node shows them with
-/// no clip playing.
-fn skinned_at_rest(
-    doc: &Document,
-    skeleton: &Arc<Skeleton>,
-    p: &Value,
-    base: Vec<DVec3>,
-    node: usize,
-) -> Result<Vec<DVec3>> {
-    let what = format!("node {node}'s mesh");
-    let Some(skin) = Skinning::read(doc, skeleton, p, base.len(), &what)? else {
-        return Ok(base);
-    };
-    let mut points: Vec<[f32; 3]> = base.iter().map(|p| p.as_vec3().to_array()).collect();
-    skin.apply(0.0, &mut points, None);
-    Ok(points
-        .iter()
-        .map(|&p| glam::Vec3::from(p).as_dvec3())
-        .collect())
 }
 
 /// Draw every column of `scene` in cells of `cell` pixels.
@@ -384,8 +320,8 @@ fn draw_bands(scene: &Scene, camera: &Camera, cell: (usize, usize), shading: Sha
     scene
         .bands
         .iter()
-        .map(|(shown, cols)| Band {
-            label: shown.label().to_string(),
+        .map(|(label, cols)| Band {
+            label: label.clone(),
             cells: cols
                 .par_iter()
                 .map(|c| {
@@ -465,18 +401,27 @@ fn morph_scene(job: &PreviewJob, doc: &Document) -> Result<(Vec<MorphMesh>, Vec<
     Ok((meshes, shown))
 }
 
-/// The view of `--view auto`: the most motion over the first band's columns among the views
-/// whose pictures fill the cell well ([`probe_coverage`]), or for a still the widest picture.
-fn auto_view(scene: &Scene, cell: (usize, usize)) -> View {
-    let columns = &scene.bands[0].1;
-    let first: Vec<Vec<DVec3>> = columns.iter().map(|c| c.meshes.concat()).collect();
-    match first.len() {
+/// The view of `--view auto`: the most motion among the views whose pictures fill the cell
+/// well ([`probe_coverage`]), over the first band's columns (the bands of a morph mesh are one
+/// motion by several methods) or with `every_band` over all of them (a band per clip: a fox's
+/// look around alone moves in the floor's plane, its walk and run in the body's), or for a
+/// still the widest picture.
+fn auto_view(scene: &Scene, cell: (usize, usize), every_band: bool) -> View {
+    let bands = if every_band {
+        &scene.bands[..]
+    } else {
+        &scene.bands[..1]
+    };
+    let frames: Vec<Vec<DVec3>> = (bands.iter().flat_map(|(_, c)| c))
+        .map(|c| c.meshes.concat())
+        .collect();
+    match frames.len() {
         0 => return View::Front,
-        1 => return View::widest(&first[0]),
+        1 => return View::widest(&frames[0]),
         _ => {}
     }
     let coverage = [View::Front, View::Side, View::Top].map(|v| probe_coverage(scene, v, cell));
-    View::most_motion(&first, coverage)
+    View::most_motion(&frames, coverage)
 }
 
 /// Width in pixels of the small cells [`probe_coverage`] draws.
@@ -522,7 +467,8 @@ fn probe_coverage(scene: &Scene, view: View, cell: (usize, usize)) -> f64 {
     covered as f64 / (picked.len() * w * h) as f64
 }
 
-/// The animation's frames: each the bands stacked (one cell each), shown for its own time.
+/// The animation's frames: each the bands stacked (one cell each), shown for its own time; as
+/// many frames as the longest band has, a shorter band (a shorter clip) starting over.
 fn animation(
     anim: &Scene,
     camera: &Camera,
@@ -530,15 +476,20 @@ fn animation(
     shading: Shading,
 ) -> Vec<(Picture, f64)> {
     let drawn = draw_bands(anim, camera, cell, shading);
-    let n = drawn.iter().map(|b| b.cells.len()).min().unwrap_or(0);
-    let times: Vec<f64> = anim.bands[0].1.iter().map(|c| c.time).collect();
+    let Some(longest) = (0..drawn.len()).max_by_key(|&b| (drawn[b].cells.len(), usize::MAX - b))
+    else {
+        return Vec::new();
+    };
+    let n = drawn[longest].cells.len();
+    let times: Vec<f64> = anim.bands[longest].1.iter().map(|c| c.time).collect();
     (0..n)
         .map(|i| {
             let one: Vec<Band> = drawn
                 .iter()
+                .filter(|b| !b.cells.is_empty())
                 .map(|b| Band {
                     label: b.label.clone(),
-                    cells: vec![b.cells[i].clone()],
+                    cells: vec![b.cells[i % b.cells.len()].clone()],
                 })
                 .collect();
             let delay = if i + 1 < n {
@@ -581,15 +532,37 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
         extend: job.extend,
         ..TweenOptions::new(Method::default(), job.timing)
     };
-    let (scene, meshes) = if has_targets {
-        let (meshes, shown) = morph_scene(job, &doc)?;
+    // A file whose morph targets hold no keys (a character's face shapes beside its skeletal
+    // clips) is drawn as one without targets, unless bands of tween methods were asked for.
+    let morph = match has_targets {
+        true => match morph_scene(job, &doc) {
+            Err(e) if e.is::<NoMorphKeys>() && job.shown.is_empty() => None,
+            found => Some(found?),
+        },
+        false => None,
+    };
+    let played = match morph {
+        Some(_) => None,
+        None => clips::scene(&doc, job.animation.as_deref(), job.frames, false)?,
+    };
+    let (scene, meshes) = if let Some((meshes, shown)) = morph {
         (
             scene(&doc, &meshes, &shown, &base, job.frames, job.quiet)?,
             Some((meshes, shown)),
         )
+    } else if let Some((played, left)) = played {
+        note = Some(format!(
+            "no morph keys: the file's clips that move its nodes as they play, a band each{}",
+            match (played.bands.len(), left) {
+                (1, _) => String::new(),
+                (_, 0) => " (--animation NAME draws one)".into(),
+                (n, left) => format!(" (the first {n}; {left} more: --animation NAME draws any)"),
+            }
+        ));
+        (played, None)
     } else {
-        note = Some("no morph keys: the meshes as the file shows them with no clip playing (a skinned one in the pose its joints rest in; blend plays skeletal clips)".into());
-        (still(&doc)?, None)
+        note = Some("no morph keys and no clip that moves a node: the meshes as the file shows them (a skinned one in the pose its joints rest in)".into());
+        (clips::still(&doc)?, None)
     };
     let columns = scene
         .bands
@@ -614,7 +587,9 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
             .flat_map(|c| c.meshes.iter())
             .flatten()
     };
-    let view = job.view.unwrap_or_else(|| auto_view(&scene, cell));
+    let view = job
+        .view
+        .unwrap_or_else(|| auto_view(&scene, cell, meshes.is_none()));
     let camera = Camera::fit(view, all_points(), cell.0, cell.1);
     let draw_start = std::time::Instant::now();
     let drawn = draw_bands(&scene, &camera, cell, job.shading);
@@ -628,13 +603,13 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     let mut files = Outputs::new();
     files.write(&job.output, &encode::png(&picture)?)?;
     let mut animation_frames = 0;
-    if let (Some(path), Some(kind), Some((meshes, shown))) = (&job.animate, &anim_kind, &meshes) {
-        let frames = animation(
-            &scene_all(&doc, meshes, shown, &base, job.quiet)?,
-            &camera,
-            cell,
-            job.shading,
-        );
+    let animated = match (&job.animate, &meshes) {
+        (None, _) => None,
+        (Some(_), Some((meshes, shown))) => Some(scene_all(&doc, meshes, shown, &base, job.quiet)?),
+        (Some(_), None) => clips::scene(&doc, job.animation.as_deref(), 0, true)?.map(|s| s.0),
+    };
+    if let (Some(path), Some(kind), Some(animated)) = (&job.animate, &anim_kind, &animated) {
+        let frames = animation(animated, &camera, cell, job.shading);
         animation_frames = frames.len();
         let bytes = match kind.as_str() {
             "gif" => encode::gif(&frames)?,
@@ -646,7 +621,7 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     }
     files.commit()?;
     Ok(PreviewSummary {
-        bands: scene.bands.iter().map(|(s, _)| s.label()).collect(),
+        bands: scene.bands.iter().map(|(label, _)| label.clone()).collect(),
         frames: columns,
         view,
         size: (picture.width, picture.height),

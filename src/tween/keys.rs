@@ -209,12 +209,24 @@ pub fn find_morph_meshes(doc: &Document, opts: &KeyOptions) -> Result<Vec<MorphM
                 listed(&clips)
             );
         }
-        bail!(doc.err(format!(
-            "no mesh with morph targets and at least two distinct keys{hint}"
-        )));
+        let msg = format!("no mesh with morph targets and at least two distinct keys{hint}");
+        return Err(NoMorphKeys(doc.err(msg).to_string()).into());
     }
     Ok(out)
 }
+
+/// [`find_morph_meshes`]'s refusal of a file that reads well but holds no morph keys (as
+/// against a file it cannot read): `preview` then plays the file's clips.
+#[derive(Debug)]
+pub struct NoMorphKeys(String);
+
+impl std::fmt::Display for NoMorphKeys {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for NoMorphKeys {}
 
 /// The meshes with morph targets that no weights channel animates, by index: under
 /// `--keys auto` in a file that animates other meshes' weights, they keep their authored pose.

@@ -35,8 +35,8 @@ pub use compact::{Basis, CompactFigures, CompactOptions, DEFAULT_TOLERANCE};
 pub use frames::{frames_at, key_poses, track_frames_welded};
 pub use job::{run_tween, Summary, TweenJob};
 pub use keys::{
-    find_morph_meshes, mesh_geometry, skeletal_clips, KeyOptions, KeySource, MorphMesh, Track,
-    TrackOrigin,
+    find_morph_meshes, mesh_geometry, skeletal_clips, KeyOptions, KeySource, MorphMesh,
+    NoMorphKeys, Track, TrackOrigin,
 };
 pub use options::{Layout, Method, Timing, TweenOptions, DEFAULT_RATE};
 pub use schedule::{close_loop, plan, schedule, FrameAt};

@@ -9,10 +9,9 @@
 //! Clips that move nodes but have no frames on the stage are named in a warning.
 
 use crate::gltf::{
-    arr, clip_name, close_keys, node_target, read_channels, rest_trs, Channel, Document, Interp,
+    arr, clip_name, close_keys, local_at, node_target, read_channels, Channel, Document, Interp,
     Path,
 };
-use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -107,26 +106,12 @@ impl NodeMotion {
         let Some(moved) = self.by_node.get(&node) else {
             return Vec::new();
         };
-        let rest = rest_trs(json);
         let mut out: Vec<(f64, [f64; 16])> = Vec::new();
-        let mut buf = [0.0f64; 4];
         for (k, channels) in moved {
             let clip = &self.clips[*k];
             for &code in &clip.codes {
                 let t = (code - clip.offset) / self.rate;
-                let (mut tr, mut r, mut s) = rest;
-                for c in channels {
-                    let v = &mut buf[..c.width];
-                    c.sample(t, v);
-                    match c.path {
-                        Path::Translation => tr = DVec3::new(v[0], v[1], v[2]),
-                        Path::Rotation => r = DQuat::from_slice(v).normalize(),
-                        Path::Scale => s = DVec3::new(v[0], v[1], v[2]),
-                        Path::Weights => {}
-                    }
-                }
-                let m = DMat4::from_scale_rotation_translation(s, r, tr);
-                out.push((code, m.to_cols_array()));
+                out.push((code, local_at(json, channels, t).to_cols_array()));
             }
         }
         // Clips of different meshes may share codes: the first clip's sample stands.

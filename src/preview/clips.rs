@@ -1,0 +1,270 @@
+//! Posing (the scene of a file without morph keys): its meshes as the file shows them, each
+//! placed by the first node that instances it, skinned meshes through their skin
+//! ([`Skinning`]) and rigid ones by their node's world transform, either with no clip playing
+//! (the pose the joints rest in: band `as stored`) or played by each of its clips that move
+//! nodes (a band per clip, labelled with its name, the frames spread over the clip from its
+//! first key to its last), as a glTF viewer plays them.
+//!
+//! ```text
+//! let (scene, left_out) = clips::scene(&doc, Some("Walk"), 12, false)?.unwrap(); // None: no clip moves a node
+//! let still = clips::still(&doc)?;
+//! ```
+
+use super::{Column, Scene, MAX_ANIMATION_FRAMES};
+use crate::gltf::{arr, clip_name, local_at, node_parents, read_channels, rest_matrix};
+use crate::gltf::{Document, Path, Skeleton, Skinning};
+use crate::tween::mesh_geometry;
+use anyhow::{bail, Result};
+use glam::{DMat4, DVec3, Vec3};
+use std::collections::BTreeMap;
+
+/// Frames a second of a clip's animation (`--animate`).
+pub const ANIMATION_RATE: f64 = 30.0;
+
+/// Most clips drawn (a band each): the first ones in the file; `--animation` picks any.
+pub const MAX_BANDS: usize = 16;
+
+/// Most points posed for one picture or animation (24 bytes each: 1.2 GB): a large mesh gets
+/// fewer bands, then fewer animation frames (a 1M-vertex character: 4 bands of 12 frames, or
+/// an animation of 50 frames).
+pub const MAX_POINTS: usize = 50_000_000;
+
+/// Each node a clip moves: its local transform at every time of the frames drawn.
+type Samples = BTreeMap<usize, Vec<(f64, [f64; 16])>>;
+
+/// World-space points of every drawn primitive at every time: `[primitive][time][vertex]`.
+type Points = Vec<Vec<Vec<DVec3>>>;
+
+/// A clip that moves nodes: its name, animation index and time span (first to last key).
+struct ClipSpan {
+    name: String,
+    animation: usize,
+    span: (f64, f64),
+}
+
+/// The clips of `doc` that move nodes (translation, rotation or scale channels).
+fn moving_clips(doc: &Document) -> Result<Vec<ClipSpan>> {
+    let nodes = arr(&doc.json, "nodes").len();
+    let mut out = Vec::new();
+    for (a, anim) in arr(&doc.json, "animations").iter().enumerate() {
+        let name = clip_name(anim, a);
+        let channels = read_channels(doc, &name, anim, nodes)?;
+        let times = (channels.iter())
+            .filter(|c| c.path != Path::Weights)
+            .flat_map(|c| c.times.iter().copied());
+        let span = times.fold(None, |s: Option<(f64, f64)>, t| {
+            Some(s.map_or((t, t), |(a, b)| (a.min(t), b.max(t))))
+        });
+        if let Some(span) = span {
+            out.push(ClipSpan {
+                name,
+                animation: a,
+                span,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The local transforms clip `animation` gives the nodes it moves, at each of `times`.
+fn samples(doc: &Document, clip: &ClipSpan, times: &[f64]) -> Result<Samples> {
+    let anim = &doc.json["animations"][clip.animation];
+    let nodes = arr(&doc.json, "nodes").len();
+    let channels = read_channels(doc, &clip.name, anim, nodes)?;
+    let mut by_node: BTreeMap<usize, Vec<_>> = BTreeMap::new();
+    for c in channels.iter().filter(|c| c.path != Path::Weights) {
+        by_node.entry(c.node).or_default().push(c);
+    }
+    Ok(by_node
+        .into_iter()
+        .map(|(node, chans)| {
+            let json = &doc.json["nodes"][node];
+            let at = |&t: &f64| (t, local_at(json, chans.iter().copied(), t).to_cols_array());
+            (node, times.iter().map(at).collect())
+        })
+        .collect())
+}
+
+/// Every drawn mesh's world-space points at each of `times`, its nodes moved by `samples`
+/// (empty: at rest), and the triangles of each.
+fn pose(doc: &Document, samples: &Samples, times: &[f64]) -> Result<(Vec<Vec<[u32; 3]>>, Points)> {
+    let json = &doc.json;
+    let nodes = arr(json, "nodes");
+    let parents = node_parents(json);
+    // A node's world transform at time t (the samples hold exactly the times drawn).
+    let world = |mut x: usize, t: f64| -> DMat4 {
+        let mut m = DMat4::IDENTITY;
+        // A cycle in a broken file ends after as many steps as there are nodes.
+        for _ in 0..=nodes.len() {
+            let local = samples
+                .get(&x)
+                .and_then(|s| s.iter().find(|(c, _)| *c == t))
+                .map_or_else(
+                    || rest_matrix(&nodes[x]),
+                    |(_, m)| DMat4::from_cols_array(m),
+                );
+            m = local * m;
+            match parents[x] {
+                Some(p) => x = p,
+                None => break,
+            }
+        }
+        m
+    };
+    let samples_of = |x: usize| samples.get(&x).cloned().unwrap_or_default();
+    let mut triangles = Vec::new();
+    let mut points: Points = Vec::new();
+    for mi in 0..arr(json, "meshes").len() {
+        // The node drawing the mesh: the first that instances it.
+        let Some(node) = nodes
+            .iter()
+            .position(|n| n["mesh"].as_u64() == Some(mi as u64))
+        else {
+            continue;
+        };
+        let drawn = (arr(&json["meshes"][mi], "primitives").iter())
+            .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4);
+        let skeleton = Skeleton::read(doc, node, &samples_of)?;
+        for ((base, tris), p) in mesh_geometry(doc, mi)?.into_iter().zip(drawn) {
+            let what = format!("node {node}'s mesh");
+            let skin = match &skeleton {
+                Some(s) => Skinning::read(doc, s, p, base.len(), &what)?,
+                None => None,
+            };
+            let stored: Vec<[f32; 3]> = base.iter().map(|p| p.as_vec3().to_array()).collect();
+            let at = |&t: &f64| -> Vec<DVec3> {
+                let mut moved = stored.clone();
+                if let Some(skin) = &skin {
+                    skin.apply(t, &mut moved, None);
+                }
+                let w = world(node, t);
+                (moved.iter())
+                    .map(|&p| w.transform_point3(Vec3::from(p).as_dvec3()))
+                    .collect()
+            };
+            points.push(times.iter().map(at).collect());
+            triangles.push(tris);
+        }
+    }
+    if triangles.is_empty() {
+        bail!(doc.err("has no triangle mesh to draw"));
+    }
+    Ok((triangles, points))
+}
+
+/// The columns of `points` ([primitive][time]) at `times`.
+fn columns(points: Points, times: &[f64]) -> Vec<Column> {
+    let mut cols: Vec<Column> = (times.iter())
+        .map(|&time| Column {
+            meshes: Vec::new(),
+            key: false,
+            time,
+        })
+        .collect();
+    for prim in points {
+        for (col, p) in cols.iter_mut().zip(prim) {
+            col.meshes.push(p);
+        }
+    }
+    cols
+}
+
+/// Every drawn primitive's world-space points at each of `times` (seconds) as clip `clip`
+/// (name or index) plays: `[primitive][time][vertex]`, the primitives in file order (each mesh
+/// as its first node places it), the vertices as stored.
+pub fn posed(doc: &Document, clip: &str, times: &[f64]) -> Result<Points> {
+    let found = find(doc, clip)?;
+    Ok(pose(doc, &samples(doc, &found, times)?, times)?.1)
+}
+
+/// The clip `name` (or index) among those that move nodes, or an error listing them.
+fn find(doc: &Document, name: &str) -> Result<ClipSpan> {
+    let mut clips = moving_clips(doc)?;
+    let index = name.parse::<usize>().ok();
+    match (clips.iter()).position(|c| c.name == name || Some(c.animation) == index) {
+        Some(k) => Ok(clips.swap_remove(k)),
+        None => {
+            let names: Vec<String> = clips.iter().map(|c| format!("{:?}", c.name)).collect();
+            bail!(doc.err(format!(
+                "has no clip {name:?} that moves nodes (those that do: {})",
+                if names.is_empty() {
+                    "none".into()
+                } else {
+                    crate::gltf::listed(&names)
+                }
+            )))
+        }
+    }
+}
+
+/// The file's meshes with no clip playing: one column, band `as stored`.
+pub fn still(doc: &Document) -> Result<Scene> {
+    let (triangles, points) = pose(doc, &Samples::new(), &[0.0])?;
+    let mut cols = columns(points, &[0.0]);
+    cols[0].key = true;
+    Ok(Scene {
+        triangles,
+        bands: vec![("as stored".into(), cols)],
+    })
+}
+
+/// A band per clip that moves nodes (the first [`MAX_BANDS`], or only the one `only` names,
+/// by name or index), each of `count` frames spread over the clip's keys, first and last
+/// included (`animate`: frames [`ANIMATION_RATE`] a second, at most [`MAX_ANIMATION_FRAMES`]),
+/// within [`MAX_POINTS`], and how many clips were left out; `None` when no clip moves a node
+/// (and none is named).
+pub fn scene(
+    doc: &Document,
+    only: Option<&str>,
+    count: usize,
+    animate: bool,
+) -> Result<Option<(Scene, usize)>> {
+    let mut clips = match only {
+        Some(name) => vec![find(doc, name)?],
+        None => moving_clips(doc)?,
+    };
+    if clips.is_empty() {
+        return Ok(None);
+    }
+    // Vertices posed a frame: every drawn primitive of each mesh's first instance.
+    let json = &doc.json;
+    let vertices: usize = (0..arr(json, "meshes").len())
+        .filter(|&mi| (arr(json, "nodes").iter()).any(|n| n["mesh"].as_u64() == Some(mi as u64)))
+        .flat_map(|mi| arr(&json["meshes"][mi], "primitives"))
+        .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4)
+        .filter_map(|p| p["attributes"]["POSITION"].as_u64())
+        .filter_map(|a| json["accessors"][a as usize]["count"].as_u64())
+        .map(|c| c as usize)
+        .sum::<usize>()
+        .max(1);
+    let most_frames = (MAX_POINTS / vertices).max(2);
+    let wanted = if animate {
+        MAX_ANIMATION_FRAMES
+    } else {
+        count.max(1)
+    };
+    let bands = (most_frames / wanted).clamp(1, MAX_BANDS);
+    let left = clips.len().saturating_sub(bands);
+    clips.truncate(bands);
+    let mut triangles = Vec::new();
+    let mut bands = Vec::new();
+    for clip in &clips {
+        let (a, b) = clip.span;
+        let frames = match animate {
+            true => (((b - a) * ANIMATION_RATE).round() as usize + 1).min(MAX_ANIMATION_FRAMES),
+            false => count,
+        }
+        .min(most_frames);
+        // `frames` times over the span, first and last included.
+        let times: Vec<f64> = match frames {
+            0 | 1 => vec![a],
+            _ => (0..frames)
+                .map(|i| a + (b - a) * i as f64 / (frames - 1) as f64)
+                .collect(),
+        };
+        let (tris, points) = pose(doc, &samples(doc, clip, &times)?, &times)?;
+        triangles = tris;
+        bands.push((clip.name.clone(), columns(points, &times)));
+    }
+    Ok(Some((Scene { triangles, bands }, left)))
+}
