@@ -57,7 +57,8 @@ inbetween blend walk.glb run.glb -o jog.glb\n  inbetween blend walk.bvh run.bvh 
     /// Draw a contact sheet (PNG) of a mesh's frames: one band per method (labelled), frames
     /// across in time order with keys marked, every cell from the same orthographic camera
     /// fitted to the whole animation; for a character without morph keys (a blend output), one
-    /// band per skeletal clip as it plays; optionally the frames as an animated GIF or APNG.
+    /// band per skeletal clip as it plays, for a BVH capture its bones; optionally the frames as
+    /// an animated GIF or APNG.
     #[command(
         after_help = "Examples:\n  inbetween preview samples/tube_bend.glb -o sheet.png --methods linear,seed,spline\n  \
 inbetween preview Flamingo.glb -o fl.png --frames 8 --animate fl.gif\n  inbetween preview tween_out.glb -o out.png\n  \
@@ -380,7 +381,9 @@ impl TweenArgs {
 pub struct PreviewArgs {
     /// Input .gltf or .glb: morph keys (tweened by each method), a tween output (its own
     /// frames: band `file`), or a file without morph keys (a band per clip that moves its
-    /// nodes, skins included, as a viewer plays it; with no such clip, its meshes at rest).
+    /// nodes, skins included, as a viewer plays it; with no such clip, its meshes at rest);
+    /// or a .bvh motion capture (its skeleton as bones). A character or capture that travels
+    /// across the floor is followed by the camera.
     input: PathBuf,
     /// The contact sheet (.png).
     #[arg(short, long)]

@@ -447,6 +447,59 @@ fn a_character_s_clips_play_a_band_each_posed_as_gltf_plays_them() {
     assert!(!none.exists());
 }
 
+/// A BVH capture (no mesh) is drawn as bones, an octahedron a bone, posed at each frame; a
+/// capture that walks across the room is followed by the camera, so every cell holds the whole
+/// figure at the cell's height (over its 2.5 s the CMU walk travels twice its size: seen from
+/// one spot the figure would be a third as tall); a blend of two captures written as BVH is
+/// drawn the same way.
+#[test]
+fn a_capture_is_drawn_as_bones_and_followed_across_the_floor() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let walk = fx.join("bvh/kevinxie4c_walk.bvh");
+    let run = fx.join("bvh/kevinxie4c_cmu_run_filtered.bvh");
+    let sheet = dir.path().join("walk.png");
+    let gif = dir.path().join("walk.gif");
+    let r = run_ok(&[
+        "preview",
+        s(&walk),
+        "-o",
+        s(&sheet),
+        "--frames",
+        "8",
+        "--animate",
+        s(&gif),
+    ]);
+    let l = String::from_utf8_lossy(&r.stderr);
+    // 19 joints and 5 end sites: 23 bones of 8 triangles.
+    assert!(
+        l.contains("1 band (motion) x 8 frames of 184 triangles, Side view"),
+        "{l}"
+    );
+    assert!(
+        l.contains("drawn as bones") && l.contains("the camera follows it"),
+        "{l}"
+    );
+    assert!(l.contains("frames animated"), "{l}");
+    let (w, h, rgb) = decode_png(&sheet);
+    assert_eq!(w, 8 * 160);
+    for c in 0..8 {
+        let rows = (0..h)
+            .filter(|&y| (0..160).any(|x| rgb[3 * (y * w + 160 * c + x)..][..3] != BACKGROUND))
+            .count();
+        // The label and key bar take 32 of the 185 rows.
+        assert!(rows > 110, "cell {c}: the figure spans {rows} rows");
+    }
+    let jog = dir.path().join("jog.bvh");
+    run_ok(&["blend", s(&walk), s(&run), "-o", s(&jog), "-q"]);
+    let r = run_ok(&["preview", s(&jog), "-o", s(&sheet)]);
+    let l = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        l.contains("1 band (motion) x 12 frames of 184 triangles"),
+        "{l}"
+    );
+}
+
 #[test]
 fn bad_requests_fail_in_one_line_and_write_nothing() {
     let dir = tempfile::tempdir().unwrap();

@@ -3,10 +3,12 @@
 //!
 //! The pipeline, one module per stage: frames (the `tween` stages, per method, at the frames
 //! picked; for a file without morph keys [`clips`]: its meshes posed by each clip that moves
-//! its nodes, or at rest) -> [`camera`] (view axis and fit) -> [`raster`] (shaded triangles, z-buffer) ->
+//! its nodes, or at rest; for a BVH capture [`bones`]) -> the figure followed where it travels
+//! ([`follow`]) -> [`camera`] (view axis and fit) -> [`raster`] (shaded triangles, z-buffer) ->
 //! [`sheet`] (bands, labels with [`font`], key marks) -> [`encode`] (PNG, APNG, GIF); [`run_preview`]
 //! runs it from file to file.
 
+mod bones;
 mod camera;
 mod clips;
 mod encode;
@@ -502,6 +504,115 @@ fn animation(
         .collect()
 }
 
+/// How far (as a share of the figure's size) a figure may travel across the floor before the
+/// camera follows it.
+pub const FOLLOW_TRAVEL: f64 = 0.5;
+
+/// Each column's bounding-box centre on the floor (x and z).
+fn floor_centres(scene: &Scene) -> Vec<DVec3> {
+    let columns = scene.bands.iter().flat_map(|(_, c)| c);
+    columns.map(|c| floor_centre(bounds(c))).collect()
+}
+
+fn bounds(c: &Column) -> (DVec3, DVec3) {
+    let points = c.meshes.iter().flatten();
+    points.fold((DVec3::MAX, DVec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)))
+}
+
+fn floor_centre((lo, hi): (DVec3, DVec3)) -> DVec3 {
+    (lo + hi) * 0.5 * DVec3::new(1.0, 0.0, 1.0)
+}
+
+/// How far the figure travels across the floor over the scene's columns (the farthest a
+/// column's bounding-box centre gets from the first's), as a multiple of the figure's largest
+/// size: a capture walking across the room travels several times its size, a clip played in
+/// place a fraction.
+fn travel(scene: &Scene) -> f64 {
+    let centres = floor_centres(scene);
+    let Some(&first) = centres.first() else {
+        return 0.0;
+    };
+    let columns = scene.bands.iter().flat_map(|(_, c)| c);
+    let size = (columns.map(bounds))
+        .map(|(lo, hi)| (hi - lo).length())
+        .fold(0.0, f64::max);
+    let far = centres
+        .iter()
+        .map(|c| c.distance(first))
+        .fold(0.0, f64::max);
+    if size > 0.0 {
+        far / size
+    } else {
+        0.0
+    }
+}
+
+/// Follow the figure: each column moved across the floor so that its bounding-box centre
+/// stays where the first column's is.
+fn follow(scene: &mut Scene) {
+    let Some(&first) = floor_centres(scene).first() else {
+        return;
+    };
+    for (_, cols) in &mut scene.bands {
+        for c in cols {
+            let shift = first - floor_centre(bounds(c));
+            c.meshes.iter_mut().flatten().for_each(|p| *p += shift);
+        }
+    }
+}
+
+/// What a sheet draws.
+enum Source {
+    /// A morph mesh's frames, a band per tween method (or the file's own).
+    Morph(Document, Vec<MorphMesh>, Vec<Shown>),
+    /// A file without morph keys: a band per clip that moves its nodes.
+    Clips(Document),
+    /// A file without morph keys or such clips: its meshes at rest.
+    Still,
+    /// A BVH motion capture: its bones.
+    Capture,
+}
+
+/// What `job` draws, the sheet's scene of it, and a note for the summary.
+fn source(job: &PreviewJob, base: &TweenOptions) -> Result<(Source, Scene, Option<String>)> {
+    if crate::blend::is_bvh(&job.input) {
+        let scene = bones::scene(&job.input, job.frames, false)?;
+        let note = "a BVH motion capture: its skeleton drawn as bones";
+        return Ok((Source::Capture, scene, Some(note.into())));
+    }
+    let doc = Document::open_with(&job.input, &job.access)?;
+    let has_targets = arr(&doc.json, "meshes").iter().any(|m| {
+        arr(m, "primitives")
+            .iter()
+            .any(|p| !arr(p, "targets").is_empty())
+    });
+    // A file whose morph targets hold no keys (a character's face shapes beside its skeletal
+    // clips) is drawn as one without targets, unless bands of tween methods were asked for.
+    if has_targets {
+        match morph_scene(job, &doc) {
+            Err(e) if e.is::<NoMorphKeys>() && job.shown.is_empty() => {}
+            found => {
+                let (meshes, shown) = found?;
+                let scene = scene(&doc, &meshes, &shown, base, job.frames, job.quiet)?;
+                return Ok((Source::Morph(doc, meshes, shown), scene, None));
+            }
+        }
+    }
+    if let Some((played, left)) = clips::scene(&doc, job.animation.as_deref(), job.frames, false)? {
+        let note = format!(
+            "no morph keys: the file's clips that move its nodes as they play, a band each{}",
+            match (played.bands.len(), left) {
+                (1, _) => String::new(),
+                (_, 0) => " (--animation NAME draws one)".into(),
+                (n, left) => format!(" (the first {n}; {left} more: --animation NAME draws any)"),
+            }
+        );
+        return Ok((Source::Clips(doc), played, Some(note)));
+    }
+    let note = "no morph keys and no clip that moves a node: the meshes as the file shows them (a skinned one in the pose its joints rest in)";
+    Ok((Source::Still, clips::still(&doc)?, Some(note.into())))
+}
+
 /// Run the preview job. Nothing is written unless every step succeeds.
 pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     let started = std::time::Instant::now();
@@ -519,51 +630,27 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
             bail!("--size must be between 16x16 and 16384x16384 pixels (got {w}x{h})");
         }
     }
-    let doc = Document::open_with(&job.input, &job.access)?;
-    let has_targets = arr(&doc.json, "meshes").iter().any(|m| {
-        arr(m, "primitives")
-            .iter()
-            .any(|p| !arr(p, "targets").is_empty())
-    });
-    let mut note = None;
     // The tween options every band starts from (its method set per band).
     let base = TweenOptions {
         wrap: job.looping != Some(false),
         extend: job.extend,
         ..TweenOptions::new(Method::default(), job.timing)
     };
-    // A file whose morph targets hold no keys (a character's face shapes beside its skeletal
-    // clips) is drawn as one without targets, unless bands of tween methods were asked for.
-    let morph = match has_targets {
-        true => match morph_scene(job, &doc) {
-            Err(e) if e.is::<NoMorphKeys>() && job.shown.is_empty() => None,
-            found => Some(found?),
-        },
-        false => None,
-    };
-    let played = match morph {
-        Some(_) => None,
-        None => clips::scene(&doc, job.animation.as_deref(), job.frames, false)?,
-    };
-    let (scene, meshes) = if let Some((meshes, shown)) = morph {
-        (
-            scene(&doc, &meshes, &shown, &base, job.frames, job.quiet)?,
-            Some((meshes, shown)),
-        )
-    } else if let Some((played, left)) = played {
-        note = Some(format!(
-            "no morph keys: the file's clips that move its nodes as they play, a band each{}",
-            match (played.bands.len(), left) {
-                (1, _) => String::new(),
-                (_, 0) => " (--animation NAME draws one)".into(),
-                (n, left) => format!(" (the first {n}; {left} more: --animation NAME draws any)"),
-            }
-        ));
-        (played, None)
-    } else {
-        note = Some("no morph keys and no clip that moves a node: the meshes as the file shows them (a skinned one in the pose its joints rest in)".into());
-        (clips::still(&doc)?, None)
-    };
+    let (source, mut scene, mut note) = source(job, &base)?;
+    // A character or capture that travels across the floor is followed (its frames are seen
+    // in the cells' middle, not as specks along its path); a morph mesh's motion is its own.
+    let travels = travel(&scene);
+    let follows = !matches!(source, Source::Morph(..)) && travels > FOLLOW_TRAVEL;
+    if follows {
+        follow(&mut scene);
+        let line = format!(
+            "the camera follows it across the floor (it travels {travels:.1} times its size)"
+        );
+        note = Some(match note {
+            Some(n) => format!("{n}; {line}"),
+            None => line,
+        });
+    }
     let columns = scene
         .bands
         .iter()
@@ -587,9 +674,10 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
             .flat_map(|c| c.meshes.iter())
             .flatten()
     };
+    let every_band = !matches!(source, Source::Morph(..));
     let view = job
         .view
-        .unwrap_or_else(|| auto_view(&scene, cell, meshes.is_none()));
+        .unwrap_or_else(|| auto_view(&scene, cell, every_band));
     let camera = Camera::fit(view, all_points(), cell.0, cell.1);
     let draw_start = std::time::Instant::now();
     let drawn = draw_bands(&scene, &camera, cell, job.shading);
@@ -603,10 +691,15 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     let mut files = Outputs::new();
     files.write(&job.output, &encode::png(&picture)?)?;
     let mut animation_frames = 0;
-    let animated = match (&job.animate, &meshes) {
-        (None, _) => None,
-        (Some(_), Some((meshes, shown))) => Some(scene_all(&doc, meshes, shown, &base, job.quiet)?),
-        (Some(_), None) => clips::scene(&doc, job.animation.as_deref(), 0, true)?.map(|s| s.0),
+    let animated = match (&job.animate, &source) {
+        (None, _) | (_, Source::Still) => None,
+        (Some(_), Source::Morph(doc, meshes, shown)) => {
+            Some(scene_all(doc, meshes, shown, &base, job.quiet)?)
+        }
+        (Some(_), Source::Clips(doc)) => {
+            clips::scene(doc, job.animation.as_deref(), 0, true)?.map(|s| s.0)
+        }
+        (Some(_), Source::Capture) => Some(bones::scene(&job.input, 0, true)?),
     };
     if let (Some(path), Some(kind), Some(animated)) = (&job.animate, &anim_kind, &animated) {
         let frames = animation(animated, &camera, cell, job.shading);
