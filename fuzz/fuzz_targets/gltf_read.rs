@@ -1,5 +1,6 @@
 //! The glTF/GLB reader: container, JSON, structure, buffers, and every accessor decoded; then
-//! the output's start (`gltf::begin`: the views copied, skin weights and rotation keys mended).
+//! the output's start (`gltf::begin`: the views copied, skin weights and rotation keys mended)
+//! and the preview's posing of the first clip (nodes sampled, meshes skinned).
 #![no_main]
 
 use inbetween::gltf::{begin, Access, Container, Document};
@@ -16,4 +17,5 @@ fuzz_target!(|data: &[u8]| {
         let _ = doc.read_indices(i);
     }
     let _ = begin(&doc, Container::Glb, Path::new("fuzz/out.glb"));
+    let _ = inbetween::preview::posed(&doc, "0", &[0.0, 0.5]);
 });

@@ -6,7 +6,7 @@ use super::by_name;
 use super::cycles::CycleMethod;
 use super::plan::{blend, gait, BlendOptions, Blended, Gait, Report};
 use super::rig::{self, Clip, Path, Rig};
-use crate::gltf::{self, listed, Access, Container, Document};
+use crate::gltf::{self, listed, listed_or_none, Access, Container, Document};
 use crate::output::{Format, Outputs};
 use anyhow::{bail, Result};
 use std::collections::BTreeSet;
@@ -109,11 +109,7 @@ fn find_clip<'a>(doc: &Document, clips: &'a [Clip], key: &str) -> Result<&'a Cli
     let names: Vec<String> = clips.iter().map(|c| format!("{:?}", c.name)).collect();
     bail!(doc.err(format!(
         "no animation named {key:?} (it has {})",
-        if names.is_empty() {
-            "none".to_string()
-        } else {
-            listed(&names)
-        }
+        listed_or_none(&names)
     )))
 }
 

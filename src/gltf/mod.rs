@@ -37,8 +37,8 @@ pub use encode::{
     exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,
 };
 pub use read::{
-    arr, at, listed, node_target, quoted_name, starts_like_bvh, weights_target, Document,
-    WeightsTarget,
+    arr, at, listed, listed_or_none, node_target, quoted_name, starts_like_bvh, weights_target,
+    Document, WeightsTarget,
 };
 pub use reorder::reorder;
 pub use skin::{Skeleton, Skinning};

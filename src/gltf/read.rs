@@ -47,6 +47,14 @@ pub fn listed(names: &[String]) -> String {
     }
 }
 
+/// [`listed`], or `none` for no names (a message saying which a file has).
+pub fn listed_or_none(names: &[String]) -> String {
+    match names.is_empty() {
+        true => "none".into(),
+        false => listed(names),
+    }
+}
+
 /// A part's `name` quoted for a message, or `fallback()` when it has none (`mesh 3`).
 pub fn quoted_name(part: &Value, fallback: impl FnOnce() -> String) -> String {
     part["name"]

@@ -11,7 +11,8 @@
 //! ```
 
 use super::{Column, Scene, MAX_ANIMATION_FRAMES};
-use crate::gltf::{arr, clip_name, local_at, node_parents, read_channels, rest_matrix};
+use crate::gltf::rest_matrix;
+use crate::gltf::{arr, clip_name, listed_or_none, local_at, node_parents, read_channels};
 use crate::gltf::{Document, Path, Skeleton, Skinning};
 use crate::tween::mesh_geometry;
 use anyhow::{bail, Result};
@@ -187,11 +188,7 @@ fn find(doc: &Document, name: &str) -> Result<ClipSpan> {
             let names: Vec<String> = clips.iter().map(|c| format!("{:?}", c.name)).collect();
             bail!(doc.err(format!(
                 "has no clip {name:?} that moves nodes (those that do: {})",
-                if names.is_empty() {
-                    "none".into()
-                } else {
-                    crate::gltf::listed(&names)
-                }
+                listed_or_none(&names)
             )))
         }
     }

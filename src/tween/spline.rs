@@ -478,20 +478,30 @@ pub fn is_loop(keys: &[Vec<DVec3>]) -> bool {
 
 /// The branch of log `r` (angle + 2 pi k about its axis) closest to `target`.
 fn closest_branch(r: DVec3, target: DVec3) -> DVec3 {
-    let angle = r.length();
-    // Below NO_TURN the axis is the noise of single-precision positions: any axis will do.
-    let axis = if angle > NO_TURN {
-        r / angle
-    } else {
-        target.try_normalize().unwrap_or(DVec3::X)
-    };
+    let axis = branch_axis(r, target);
     // |r + 2 pi k axis - target|^2 - |r - target|^2 = 4 pi k (pi k + axis . (r - target)): the
     // log's own branch (k = 0) is nearest by at least 4 pi 1e-6 (rad^2) while the two differ
     // along the axis by less than half a turn less 1e-6 rad, far beyond the sums' rounding; the
-    // value is the one the search below returns then, bit for bit.
+    // value is the one the search returns then, bit for bit.
     if axis.dot(r - target).abs() < PI - 1e-6 {
         return r + axis * (2.0 * PI * 0.0);
     }
+    nearest_of_branches(r, axis, target)
+}
+
+/// The axis whose whole turns give `r`'s branches.
+fn branch_axis(r: DVec3, target: DVec3) -> DVec3 {
+    let angle = r.length();
+    // Below NO_TURN the axis is the noise of single-precision positions: any axis will do.
+    if angle > NO_TURN {
+        r / angle
+    } else {
+        target.try_normalize().unwrap_or(DVec3::X)
+    }
+}
+
+/// The branch `r + 2 pi k axis` (k from -2 to 2, the first of equals) nearest `target`.
+fn nearest_of_branches(r: DVec3, axis: DVec3, target: DVec3) -> DVec3 {
     (-2..=2)
         .map(|k| r + axis * (2.0 * PI * k as f64))
         .min_by(|p, q| {
@@ -2242,22 +2252,7 @@ mod tests {
     /// turn apart too, and the search still decides past it.
     #[test]
     fn the_nearest_branch_is_the_search_s_bit_for_bit() {
-        let search = |r: DVec3, target: DVec3| {
-            let angle = r.length();
-            let axis = if angle > NO_TURN {
-                r / angle
-            } else {
-                target.try_normalize().unwrap_or(DVec3::X)
-            };
-            (-2..=2)
-                .map(|k| r + axis * (2.0 * PI * k as f64))
-                .min_by(|p, q| {
-                    (*p - target)
-                        .length_squared()
-                        .total_cmp(&(*q - target).length_squared())
-                })
-                .unwrap()
-        };
+        let search = |r, target| nearest_of_branches(r, branch_axis(r, target), target);
         let mut rng = crate::dev::synth::Lcg(11);
         let mut v =
             |scale: f64| DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5) * scale;
