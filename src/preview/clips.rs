@@ -6,7 +6,7 @@
 //! first key to its last), as a glTF viewer plays them.
 //!
 //! ```text
-//! let (scene, left_out) = clips::scene(&doc, Some("Walk"), 12, false)?.unwrap(); // None: no clip moves a node
+//! let (scene, left_out) = clips::scene(&doc, Some("Walk"), 12, false, quiet)?.unwrap(); // None: no clip moves a node
 //! let still = clips::still(&doc)?;
 //! ```
 
@@ -14,6 +14,7 @@ use super::{Column, Scene, MAX_ANIMATION_FRAMES};
 use crate::gltf::rest_matrix;
 use crate::gltf::{arr, clip_name, listed_or_none, local_at, node_parents, read_channels};
 use crate::gltf::{Document, Path, Skeleton, Skinning};
+use crate::progress::Progress;
 use crate::tween::mesh_geometry;
 use anyhow::{bail, Result};
 use glam::{DMat4, DVec3, Vec3};
@@ -215,6 +216,7 @@ pub fn scene(
     only: Option<&str>,
     count: usize,
     animate: bool,
+    quiet: bool,
 ) -> Result<Option<(Scene, usize)>> {
     let mut clips = match only {
         Some(name) => vec![find(doc, name)?],
@@ -245,6 +247,7 @@ pub fn scene(
     clips.truncate(bands);
     let mut triangles = Vec::new();
     let mut bands = Vec::new();
+    let progress = Progress::new(clips.len() as u64, "preview", quiet);
     for clip in &clips {
         let (a, b) = clip.span;
         let frames = match animate {
@@ -262,6 +265,8 @@ pub fn scene(
         let (tris, points) = pose(doc, &samples(doc, clip, &times)?, &times)?;
         triangles = tris;
         bands.push((clip.name.clone(), columns(points, &times)));
+        progress.inc();
     }
+    progress.finish();
     Ok(Some((Scene { triangles, bands }, left)))
 }

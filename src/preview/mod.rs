@@ -598,7 +598,9 @@ fn source(job: &PreviewJob, base: &TweenOptions) -> Result<(Source, Scene, Optio
             }
         }
     }
-    if let Some((played, left)) = clips::scene(&doc, job.animation.as_deref(), job.frames, false)? {
+    if let Some((played, left)) =
+        clips::scene(&doc, job.animation.as_deref(), job.frames, false, job.quiet)?
+    {
         let note = format!(
             "no morph keys: the file's clips that move its nodes as they play, a band each{}",
             match (played.bands.len(), left) {
@@ -697,7 +699,7 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
             Some(scene_all(doc, meshes, shown, &base, job.quiet)?)
         }
         (Some(_), Source::Clips(doc)) => {
-            clips::scene(doc, job.animation.as_deref(), 0, true)?.map(|s| s.0)
+            clips::scene(doc, job.animation.as_deref(), 0, true, job.quiet)?.map(|s| s.0)
         }
         (Some(_), Source::Capture) => Some(bones::scene(&job.input, 0, true)?),
     };
