@@ -45,7 +45,7 @@ impl Format {
 }
 
 /// An error naming `path` unless the folder it lies in exists.
-fn folder_exists(path: &Path) -> Result<()> {
+pub fn folder_exists(path: &Path) -> Result<()> {
     let dir = folder_of(path);
     if !dir.is_dir() {
         bail!(

@@ -763,6 +763,25 @@ fn bad_input_gives_one_line_exit_2_and_no_file() {
             "{err}"
         );
         assert!(!out.exists());
+    } // An output in a folder that is not there is told as such (it was told as an unknown
+      // extension, .gltf and .glb included).
+    for name in ["jog.glb", "jog.gltf", "jog.usda"] {
+        let out = dir.path().join("missing").join(name);
+        let o = inbetween(&[
+            "blend",
+            fox.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--clips",
+            "Walk",
+            "Run",
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("cannot write: directory") && err.contains("does not exist"),
+            "{err}"
+        );
     }
 }
 

@@ -337,6 +337,8 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
 /// A glTF character's two clips blended at every weight, appended as new animations: two
 /// clips of one file, or one clip of each of two files (the first file's character).
 fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
+    // A folder that is not there is told as such, whatever the extension.
+    crate::output::folder_exists(&job.output)?;
     let format = Format::of(&job.output).ok();
     let usd = format.filter(|f| matches!(f, Format::Usda | Format::Usdc | Format::Usdz));
     // A USD output is staged from the glTF the blends make, held as a .glb.
