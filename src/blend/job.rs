@@ -325,6 +325,14 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
         [a, b] if is_bvh(a) && is_bvh(b) => run_bvh(job, [a, b]),
         [input] if !is_bvh(input) => run_gltf(job, &[input]),
         [a, b] if !is_bvh(a) && !is_bvh(b) => run_gltf(job, &[a, b]),
+        [a, b] => {
+            let (capture, character) = if is_bvh(a) { (a, b) } else { (b, a) };
+            bail!(
+                "{}: a BVH capture is not blended with a glTF character ({}): blend two .bvh captures, or two .gltf/.glb files of one character",
+                capture.display(),
+                character.display()
+            )
+        }
         _ => bail!(
             "{}: blend takes one .gltf or .glb with --clips A B, two of them (a clip each), or two .bvh captures (got {} input{})",
             job.inputs[0].display(),
