@@ -783,6 +783,22 @@ fn bad_input_gives_one_line_exit_2_and_no_file() {
             "{err}"
         );
     }
+    // A capture beside a character: named, with what blends.
+    let walk = fx.join("bvh/kevinxie4c_walk.bvh");
+    let out = dir.path().join("mixed.glb");
+    let o = inbetween(&[
+        "blend",
+        fox.to_str().unwrap(),
+        walk.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    let named = "kevinxie4c_walk.bvh: a BVH capture is not blended with a glTF character";
+    assert!(err.contains(named), "{err}");
+    assert!(!out.exists());
 }
 
 /// `--cycles none` blends clips that do not walk anyway, whole, on normalised time; the report
