@@ -1,5 +1,5 @@
 //! The blends as a USD point cache: the output glTF (the input with the blends appended, and
-//! no other clip) read back and staged by [`crate::usd`] with the blends on its timeline one
+//! no other clip) made as a .glb in memory, read back and staged by [`crate::usd`] with the blends on its timeline one
 //! after the other, each sampled at its own frames; the skinned meshes baked at every sample
 //! ([`crate::usd`]'s `skin`), the nodes' transforms time-sampled.
 //!
@@ -8,7 +8,7 @@
 //! ```
 
 use crate::gltf::{
-    self, arr, clip_name, listed, quoted_name, read_channels, Access, Container, Document, Output,
+    self, arr, clip_name, listed, quoted_name, read_channels, Access, Document, Output,
     Path as Property,
 };
 use crate::output::{Format, Outputs};
@@ -34,12 +34,9 @@ pub fn write(
     let all = out.json["animations"].take();
     let kept: Vec<Value> = (clips.iter()).map(|(a, _)| all[*a].clone()).collect();
     out.json["animations"] = Value::Array(kept);
-    let glb = files.scratch(output, ".blend.glb");
-    let mut staged = Outputs::new();
-    gltf::stage(out, Container::Glb, &glb, &mut staged)?;
-    staged.commit()?;
-    let bytes = std::fs::read(&glb).map_err(|e| anyhow::anyhow!("{}: {e}", glb.display()))?;
+    let bytes = gltf::glb_bytes(out, output)?;
     let doc = Document::from_bytes(input, &bytes, access)?;
+    drop(bytes);
     // Time codes at the first blend's frame rate (its frames on whole codes), the blends one
     // frame apart.
     let rate = match &clips[0].1[..] {

@@ -43,4 +43,4 @@ pub use read::{
 pub use reorder::reorder;
 pub use skin::{Skeleton, Skinning};
 pub use uri::Access;
-pub use write::{begin, finish, stage, Container};
+pub use write::{begin, finish, glb_bytes, stage, Container};

@@ -171,12 +171,46 @@ pub fn stage(
     path: &Path,
     files: &mut Outputs,
 ) -> Result<u64> {
-    let fallback = if out.meshopt {
-        encode::meshopt(&mut out)
-    } else {
-        0
-    };
-    encode::clear_marks(&mut out);
+    let (bin, bin_name) = assemble(&mut out, container, path);
+    let mut bytes = 0;
+    match container {
+        Container::Glb => {
+            let (js, total) = glb_json(&out, &bin, path)?;
+            bytes += files.write_with(path, |w| write_glb(w, &js, &bin, total))?;
+        }
+        Container::Gltf => {
+            let js = serde_json::to_vec_pretty(&out.json)?;
+            if let Some(name) = bin_name.filter(|_| !bin.is_empty()) {
+                bytes += files.write(&path.with_file_name(name), &bin)?;
+            }
+            bytes += files.write(path, &js)?;
+        }
+    }
+    for (data, dst) in &out.copies {
+        if let Some(parent) = dst.parent() {
+            std::fs::create_dir_all(parent)
+                .map_err(|e| anyhow!("{}: cannot write: {e}", dst.display()))?;
+        }
+        bytes += files.write(dst, data)?;
+    }
+    Ok(bytes)
+}
+
+/// `out` as the bytes of a `.glb` held in memory (its images are embedded: nothing is copied
+/// beside it); `path` names the file in what is said. `blend` stages its USD point cache from it.
+pub fn glb_bytes(mut out: Output, path: &Path) -> Result<Vec<u8>> {
+    let (bin, _) = assemble(&mut out, Container::Glb, path);
+    let (js, total) = glb_json(&out, &bin, path)?;
+    let mut bytes = Vec::with_capacity(total as usize);
+    write_glb(&mut bytes, &js, &bin, total)?;
+    Ok(bytes)
+}
+
+/// Finish `out`'s JSON for writing: meshopt compression where asked, the views and buffers in
+/// place; returns the binary chunk (padded to 4 bytes) and, for a `.gltf`, the `.bin`'s name.
+fn assemble(out: &mut Output, container: Container, path: &Path) -> (Vec<u8>, Option<String>) {
+    let fallback = if out.meshopt { encode::meshopt(out) } else { 0 };
+    encode::clear_marks(out);
     let views = std::mem::take(&mut out.bin.views);
     let json = out.json.as_object_mut().unwrap();
     if views.is_empty() {
@@ -220,51 +254,40 @@ pub fn stage(
         }
         json.insert("buffers".into(), json!(buffers));
     }
-    let mut bytes = 0;
-    match container {
-        Container::Glb => {
-            let mut js = serde_json::to_vec(&out.json)?;
-            while js.len() % 4 != 0 {
-                js.push(b' ');
-            }
-            let total = 12 + 8 + js.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-            let total = u32::try_from(total).map_err(|_| {
-                anyhow!(
-                    "{}: cannot write: {total} bytes is more than a GLB can hold (4 GiB); write .gltf or a USD point cache",
-                    path.display()
-                )
-            })?;
-            bytes += files.write_with(path, |w| {
-                w.write_all(b"glTF")?;
-                w.write_all(&2u32.to_le_bytes())?;
-                w.write_all(&total.to_le_bytes())?;
-                w.write_all(&(js.len() as u32).to_le_bytes())?;
-                w.write_all(&0x4E4F_534Au32.to_le_bytes())?;
-                w.write_all(&js)?;
-                if !bin.is_empty() {
-                    w.write_all(&(bin.len() as u32).to_le_bytes())?;
-                    w.write_all(&0x004E_4942u32.to_le_bytes())?;
-                    w.write_all(&bin)?;
-                }
-                Ok(())
-            })?;
-        }
-        Container::Gltf => {
-            let js = serde_json::to_vec_pretty(&out.json)?;
-            if let Some(name) = bin_name.filter(|_| !bin.is_empty()) {
-                bytes += files.write(&path.with_file_name(name), &bin)?;
-            }
-            bytes += files.write(path, &js)?;
-        }
+    (bin, bin_name)
+}
+
+/// A `.glb`'s JSON chunk (padded with spaces to 4 bytes) and its total length, or an error
+/// where it would pass the 4 GiB a GLB's header can count.
+fn glb_json(out: &Output, bin: &[u8], path: &Path) -> Result<(Vec<u8>, u32)> {
+    let mut js = serde_json::to_vec(&out.json)?;
+    while js.len() % 4 != 0 {
+        js.push(b' ');
     }
-    for (data, dst) in &out.copies {
-        if let Some(parent) = dst.parent() {
-            std::fs::create_dir_all(parent)
-                .map_err(|e| anyhow!("{}: cannot write: {e}", dst.display()))?;
-        }
-        bytes += files.write(dst, data)?;
+    let total = 12 + 8 + js.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total = u32::try_from(total).map_err(|_| {
+        anyhow!(
+            "{}: cannot write: {total} bytes is more than a GLB can hold (4 GiB); write .gltf or a USD point cache",
+            path.display()
+        )
+    })?;
+    Ok((js, total))
+}
+
+/// The `.glb` container: header, JSON chunk, binary chunk (where there is one).
+fn write_glb(w: &mut impl Write, js: &[u8], bin: &[u8], total: u32) -> Result<()> {
+    w.write_all(b"glTF")?;
+    w.write_all(&2u32.to_le_bytes())?;
+    w.write_all(&total.to_le_bytes())?;
+    w.write_all(&(js.len() as u32).to_le_bytes())?;
+    w.write_all(&0x4E4F_534Au32.to_le_bytes())?;
+    w.write_all(js)?;
+    if !bin.is_empty() {
+        w.write_all(&(bin.len() as u32).to_le_bytes())?;
+        w.write_all(&0x004E_4942u32.to_le_bytes())?;
+        w.write_all(bin)?;
     }
-    Ok(bytes)
+    Ok(())
 }
 
 /// Minimal percent-encoding of a file name for a relative URI.
