@@ -204,7 +204,7 @@ pub struct TimingArgs {
     /// between two keys gets round(gap x RATE) - 1 evenly spaced frames, and keys already
     /// closer than 1/RATE s get none (a clip baked at 30 or 60 samples a second stays as it
     /// is). Keys on a 1/10, 1/15 or 1/30 s grid give frames exactly on the 30 per second grid.
-    #[arg(long, value_name = "RATE", conflicts_with_all = ["tweens", "fps"])]
+    #[arg(long, value_name = "RATE", conflicts_with_all = ["tweens", "fps"], allow_negative_numbers = true)]
     rate: Option<f64>,
     /// Instead: exactly N frames inserted evenly between each pair of consecutive keys.
     #[arg(long, value_name = "N", conflicts_with = "fps")]
@@ -212,7 +212,7 @@ pub struct TimingArgs {
     /// Instead: frames at this fixed rate (per second) from the first key over the keys' time
     /// span; the first and the last key are always frames, keys between them only where the
     /// grid meets them.
-    #[arg(long, value_name = "FPS")]
+    #[arg(long, value_name = "FPS", allow_negative_numbers = true)]
     fps: Option<f64>,
     /// Close every key sequence into a loop (append its first key after the last) and let
     /// `spline` wrap around it. Without it, tracks whose last key equals the first wrap.
@@ -222,10 +222,20 @@ pub struct TimingArgs {
     #[arg(long)]
     no_loop: bool,
     /// Seconds to continue the motion before the first key (the seed paper's exaggeration).
-    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     extend_before: f64,
     /// Seconds to continue the motion after the last key.
-    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     extend_after: f64,
 }
 
@@ -279,7 +289,7 @@ pub struct TweenArgs {
     /// With --compact or its parts: RMS deviation per frame (and primitive) allowed, relative
     /// to the bounding-box diagonal (no vertex more than 3x it; normals within 100x it; with
     /// meshopt, texture coordinates within 1x it of their values) [default: 1e-4].
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
     tolerance: Option<f64>,
     /// Basis targets: `auto` (as few as the tolerance allows; the default of --compact), a
     /// number (at most that many: engines that blend few targets at a time), or `off`.
@@ -509,7 +519,12 @@ pub struct BlendArgs {
     /// Weight of B: 0 gives A, 1 gives B. A list (0,0.25,0.5,0.75,1) writes one blend per
     /// weight on the same synchronised cycle, named "A+B@<weight>" (a 1-D blend space); BVH
     /// outputs then go to <output stem>@<weight>.bvh.
-    #[arg(long, default_value = "0.5", value_delimiter = ',')]
+    #[arg(
+        long,
+        default_value = "0.5",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
     weight: Vec<f64>,
     /// Name of the new animation (default "A+B"; "@<weight>" added for a list of weights).
     #[arg(long)]

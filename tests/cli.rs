@@ -972,6 +972,63 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     assert!(leftovers.is_empty());
 }
 
+/// Timing values a run cannot use are refused by `tween` and `preview` alike, in one line,
+/// before anything is read: a rate or frame rate of zero, below it or not a number, an
+/// extension before or after the keys below zero or not a number (a negative value reaches
+/// these checks rather than being taken for an option; `preview --fps 0` drew one frame, and
+/// `--extend-after nan` was taken as 0).
+#[test]
+fn timing_values_a_run_cannot_use_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("bar_twist.glb");
+    for (option, value, said) in [
+        (
+            "--rate",
+            "0",
+            "--fps and --rate must be positive numbers (got 0)",
+        ),
+        (
+            "--rate",
+            "-5",
+            "--fps and --rate must be positive numbers (got -5)",
+        ),
+        (
+            "--fps",
+            "nan",
+            "--fps and --rate must be positive numbers (got NaN)",
+        ),
+        (
+            "--extend-before",
+            "-1",
+            "--extend-before takes seconds, zero or more (got -1)",
+        ),
+        (
+            "--extend-after",
+            "nan",
+            "--extend-after takes seconds, zero or more (got NaN)",
+        ),
+        (
+            "--extend-after",
+            "inf",
+            "--extend-after takes seconds, zero or more (got inf)",
+        ),
+    ] {
+        for (command, out) in [("tween", "t.glb"), ("preview", "p.png")] {
+            let out = dir.path().join(out);
+            let r = inbetween(&[command, s(&input), "-o", s(&out), option, value]);
+            let err = String::from_utf8_lossy(&r.stderr);
+            assert_eq!(
+                r.status.code(),
+                Some(2),
+                "{command} {option} {value}: {err}"
+            );
+            assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+            assert!(err.contains(said), "{command} {option} {value}: {err}");
+            assert!(!out.exists());
+        }
+    }
+}
+
 #[test]
 fn usd_outputs_and_unknown_extensions_are_refused_cleanly() {
     let dir = tempfile::tempdir().unwrap();

@@ -627,6 +627,7 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     if job.frames == 0 {
         bail!("--frames must be at least 1");
     }
+    job.timing.check(job.extend)?;
     if let Some((w, h)) = job.size {
         if w < 16 || h < 16 || w > 16_384 || h > 16_384 {
             bail!("--size must be between 16x16 and 16384x16384 pixels (got {w}x{h})");

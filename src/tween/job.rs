@@ -499,12 +499,7 @@ const GIB: f64 = (1u64 << 30) as f64;
 pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let started = Instant::now();
     let format = Format::of(&job.output)?;
-    if let Timing::Fps(f) | Timing::Rate(f) = job.timing {
-        anyhow::ensure!(
-            f.is_finite() && f > 0.0,
-            "--fps and --rate must be positive numbers (got {f})"
-        );
-    }
+    job.timing.check(job.extend)?;
     let doc = Document::open_with(&job.input, &job.access)?;
     let mut meshes = find_morph_meshes(
         &doc,

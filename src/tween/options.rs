@@ -41,6 +41,27 @@ pub enum Timing {
     Fps(f64),
 }
 
+impl Timing {
+    /// An error unless the timing and the seconds the motion continues before the first key
+    /// and after the last (`--extend-before`, `--extend-after`) are numbers a run can use:
+    /// --fps and --rate positive, the extensions zero or positive (`tween` and `preview` ask).
+    pub fn check(self, extend: [f64; 2]) -> anyhow::Result<()> {
+        if let Timing::Fps(f) | Timing::Rate(f) = self {
+            anyhow::ensure!(
+                f.is_finite() && f > 0.0,
+                "--fps and --rate must be positive numbers (got {f})"
+            );
+        }
+        for (e, name) in extend.iter().zip(["--extend-before", "--extend-after"]) {
+            anyhow::ensure!(
+                e.is_finite() && *e >= 0.0,
+                "{name} takes seconds, zero or more (got {e})"
+            );
+        }
+        Ok(())
+    }
+}
+
 /// Frames per second of the default timing: what game and web pipelines play at.
 pub const DEFAULT_RATE: f64 = 30.0;
 
