@@ -783,6 +783,55 @@ fn bad_input_gives_one_line_exit_2_and_no_file() {
             "{err}"
         );
     }
+    // A blend's name taken already: a clip's (--name Walk), a blend made before (the default
+    // name on a blend's own output); an empty --name.
+    let first = dir.path().join("first.glb");
+    run_ok(&[
+        "blend",
+        fox.to_str().unwrap(),
+        "--clips",
+        "Walk",
+        "Run",
+        "-o",
+        first.to_str().unwrap(),
+        "-q",
+    ]);
+    for (input, extra, said) in [
+        (
+            &fox,
+            vec!["--name", "Walk"],
+            "already has an animation named \"Walk\" (--name names",
+        ),
+        (
+            &first,
+            vec![],
+            "already has an animation named \"Walk+Run\" (a blend made before?)",
+        ),
+        (
+            &fox,
+            vec!["--name", " "],
+            "--name names the new animation (got \" \")",
+        ),
+    ] {
+        let out = dir.path().join("named.glb");
+        let mut args = vec!["blend", input.to_str().unwrap(), "--clips", "Walk", "Run"];
+        args.extend(["-o", out.to_str().unwrap()]);
+        args.extend(extra);
+        let o = inbetween(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(said), "{err}");
+        assert!(!out.exists());
+    }
+    let again = dir.path().join("again.glb");
+    let o = inbetween(
+        &["blend", first.to_str().unwrap(), "--clips", "Walk", "Run"]
+            .into_iter()
+            .chain(["--name", "Jog", "-o", again.to_str().unwrap(), "-q"])
+            .collect::<Vec<_>>(),
+    );
+    assert!(o.status.success());
     // A capture beside a character: named, with what blends.
     let walk = fx.join("bvh/kevinxie4c_walk.bvh");
     let out = dir.path().join("mixed.glb");

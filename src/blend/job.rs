@@ -309,6 +309,12 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
     if job.weights.is_empty() {
         bail!("--weight needs at least one weight");
     }
+    if job.name.as_deref().is_some_and(|n| n.trim().is_empty()) {
+        bail!(
+            "--name names the new animation (got {:?})",
+            job.name.as_deref().unwrap_or("")
+        );
+    }
     if let Some(w) = job.weights.iter().find(|w| !(0.0..=1.0).contains(*w)) {
         bail!("--weight {w} is outside [0, 1]");
     }
@@ -340,6 +346,14 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
             if job.inputs.len() == 1 { "" } else { "s" }
         ),
     }
+}
+
+/// The names of `doc`'s animations (an unnamed one as `animation <index>`).
+fn clip_names(doc: &Document) -> Vec<String> {
+    let anims = gltf::arr(&doc.json, "animations");
+    (anims.iter().enumerate())
+        .map(|(a, anim)| gltf::clip_name(anim, a))
+        .collect()
 }
 
 /// A glTF character's two clips blended at every weight, appended as new animations: two
@@ -389,6 +403,16 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
             _ => unreachable!("one input comes with --clips, checked above"),
         };
         let name = job.name_at(w, [&names[0], &names[1]]);
+        // In a glTF output the blend sits beside the file's animations, which engines find by
+        // name: one of the same name (a blend made before, or --name naming a clip) is not
+        // shadowed.
+        if usd.is_none() && clip_names(&docs[0]).contains(&name) {
+            let hint = match job.name {
+                Some(_) => "(--name names the blend: one the file does not use)",
+                None => "(a blend made before?): --name NAME names this one otherwise",
+            };
+            bail!("{input}: already has an animation named {name:?} {hint}");
+        }
         let channels = super::write::channels(&rig, &blended.poses, &animated);
         let animation = super::write::append_animation(
             &mut out,
