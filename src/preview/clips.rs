@@ -87,6 +87,24 @@ fn samples(doc: &Document, clip: &ClipSpan, times: &[f64]) -> Result<Samples> {
         .collect())
 }
 
+/// Node `x`'s world transform: the `local` transforms of it and its ancestors, composed up
+/// the `parents` (a cycle in a broken file ends after as many steps as there are nodes).
+pub(super) fn world_of(
+    mut x: usize,
+    parents: &[Option<usize>],
+    local: impl Fn(usize) -> DMat4,
+) -> DMat4 {
+    let mut m = DMat4::IDENTITY;
+    for _ in 0..=parents.len() {
+        m = local(x) * m;
+        match parents[x] {
+            Some(p) => x = p,
+            None => break,
+        }
+    }
+    m
+}
+
 /// Every drawn mesh's world-space points at each of `times`, its nodes moved by `samples`
 /// (empty: at rest), and the triangles of each.
 fn pose(doc: &Document, samples: &Samples, times: &[f64]) -> Result<(Vec<Vec<[u32; 3]>>, Points)> {
@@ -94,24 +112,15 @@ fn pose(doc: &Document, samples: &Samples, times: &[f64]) -> Result<(Vec<Vec<[u3
     let nodes = arr(json, "nodes");
     let parents = node_parents(json);
     // A node's world transform at time t (the samples hold exactly the times drawn).
-    let world = |mut x: usize, t: f64| -> DMat4 {
-        let mut m = DMat4::IDENTITY;
-        // A cycle in a broken file ends after as many steps as there are nodes.
-        for _ in 0..=nodes.len() {
-            let local = samples
-                .get(&x)
+    let world = |x: usize, t: f64| -> DMat4 {
+        world_of(x, &parents, |x| {
+            (samples.get(&x))
                 .and_then(|s| s.iter().find(|(c, _)| *c == t))
                 .map_or_else(
                     || rest_matrix(&nodes[x]),
                     |(_, m)| DMat4::from_cols_array(m),
-                );
-            m = local * m;
-            match parents[x] {
-                Some(p) => x = p,
-                None => break,
-            }
-        }
-        m
+                )
+        })
     };
     let samples_of = |x: usize| samples.get(&x).cloned().unwrap_or_default();
     let mut triangles = Vec::new();

@@ -20,7 +20,7 @@ pub use camera::View;
 pub use clips::posed;
 pub use raster::{Picture, Shading, BACKGROUND};
 
-use crate::gltf::{arr, node_parents, Access, Document};
+use crate::gltf::{arr, node_parents, rest_matrix, Access, Document};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
@@ -29,7 +29,7 @@ use crate::tween::{
 };
 use anyhow::{bail, Result};
 use camera::Camera;
-use glam::{DMat4, DQuat, DVec3};
+use glam::{DMat4, DVec3};
 use raster::Drawn;
 use rayon::prelude::*;
 use serde_json::Value;
@@ -158,59 +158,18 @@ struct Scene {
     bands: Vec<(String, Vec<Column>)>,
 }
 
-/// World matrix of the first node that instances each mesh (identity when none does).
+/// World matrix of the first node that instances each mesh (identity when none does), every
+/// node at rest.
 fn mesh_worlds(json: &Value) -> Vec<DMat4> {
     let nodes = arr(json, "nodes");
-    let local = |n: &Value| -> DMat4 {
-        if let Some(m) = n["matrix"].as_array().filter(|m| m.len() == 16) {
-            let v: Vec<f64> = m.iter().map(|x| x.as_f64().unwrap_or(0.0)).collect();
-            return DMat4::from_cols_slice(&v);
-        }
-        let f = |k: &str, d: &[f64]| -> Vec<f64> {
-            n[k].as_array().map_or(d.to_vec(), |a| {
-                a.iter().map(|x| x.as_f64().unwrap_or(0.0)).collect()
-            })
-        };
-        let (t, r, s) = (
-            f("translation", &[0.0; 3]),
-            f("rotation", &[0.0, 0.0, 0.0, 1.0]),
-            f("scale", &[1.0; 3]),
-        );
-        if t.len() != 3 || r.len() != 4 || s.len() != 3 {
-            return DMat4::IDENTITY;
-        }
-        let q = DQuat::from_xyzw(r[0], r[1], r[2], r[3]);
-        let q = if q.length() > 0.0 {
-            q.normalize()
-        } else {
-            DQuat::IDENTITY
-        };
-        DMat4::from_scale_rotation_translation(
-            DVec3::new(s[0], s[1], s[2]),
-            q,
-            DVec3::new(t[0], t[1], t[2]),
-        )
-    };
-    let parent = node_parents(json);
-    let world = |mut i: usize| -> DMat4 {
-        let mut m = DMat4::IDENTITY;
-        // A cycle in a broken file ends after as many steps as there are nodes.
-        for _ in 0..=nodes.len() {
-            m = local(&nodes[i]) * m;
-            match parent[i] {
-                Some(p) => i = p,
-                None => break,
-            }
-        }
-        m
-    };
-    let meshes = arr(json, "meshes").len();
-    (0..meshes)
+    let parents = node_parents(json);
+    (0..arr(json, "meshes").len())
         .map(|mi| {
-            nodes
-                .iter()
+            (nodes.iter())
                 .position(|n| n["mesh"].as_u64() == Some(mi as u64))
-                .map_or(DMat4::IDENTITY, world)
+                .map_or(DMat4::IDENTITY, |x| {
+                    clips::world_of(x, &parents, |x| rest_matrix(&nodes[x]))
+                })
         })
         .collect()
 }
