@@ -763,91 +763,56 @@ fn bad_input_gives_one_line_exit_2_and_no_file() {
             "{err}"
         );
         assert!(!out.exists());
-    } // An output in a folder that is not there is told as such (it was told as an unknown
-      // extension, .gltf and .glb included).
+    }
+    // More mistakes, each `blend ARGS -o OUT` refused in one line holding `said`, no OUT: an
+    // output in a folder that is not there (it was told as an unknown extension, .glb and
+    // .gltf included); a capture beside a character; a blend's name taken already, a clip's
+    // (--name Walk) or a blend made before (the default name on a blend's own output); an
+    // empty --name.
+    let refused = |args: &[&str], out: &Path, said: &str| {
+        let o = inbetween(&[args, &["-o", out.to_str().unwrap()]].concat());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(said), "{args:?}: {err}");
+        assert!(!out.exists());
+    };
+    let (fox_s, walk) = (fox.to_str().unwrap(), fx.join("bvh/kevinxie4c_walk.bvh"));
+    let blend_fox = ["blend", fox_s, "--clips", "Walk", "Run"];
     for name in ["jog.glb", "jog.gltf", "jog.usda"] {
         let out = dir.path().join("missing").join(name);
-        let o = inbetween(&[
-            "blend",
-            fox.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--clips",
-            "Walk",
-            "Run",
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{err}");
-        assert!(
-            err.contains("cannot write: directory") && err.contains("does not exist"),
-            "{err}"
-        );
+        refused(&blend_fox, &out, "cannot write: directory");
     }
-    // A blend's name taken already: a clip's (--name Walk), a blend made before (the default
-    // name on a blend's own output); an empty --name.
+    let out = dir.path().join("refused.glb");
+    let mixed = ["blend", fox_s, walk.to_str().unwrap()];
+    let capture = "kevinxie4c_walk.bvh: a BVH capture is not blended with a glTF character";
+    refused(&mixed, &out, capture);
     let first = dir.path().join("first.glb");
-    run_ok(&[
-        "blend",
-        fox.to_str().unwrap(),
-        "--clips",
-        "Walk",
-        "Run",
-        "-o",
-        first.to_str().unwrap(),
-        "-q",
-    ]);
-    for (input, extra, said) in [
-        (
-            &fox,
-            vec!["--name", "Walk"],
-            "already has an animation named \"Walk\" (--name names",
-        ),
-        (
-            &first,
-            vec![],
-            "already has an animation named \"Walk+Run\" (a blend made before?)",
-        ),
-        (
-            &fox,
-            vec!["--name", " "],
-            "--name names the new animation (got \" \")",
-        ),
-    ] {
-        let out = dir.path().join("named.glb");
-        let mut args = vec!["blend", input.to_str().unwrap(), "--clips", "Walk", "Run"];
-        args.extend(["-o", out.to_str().unwrap()]);
-        args.extend(extra);
-        let o = inbetween(&args);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{err}");
-        assert_eq!(err.trim().lines().count(), 1, "{err}");
-        assert!(err.contains(said), "{err}");
-        assert!(!out.exists());
-    }
-    let again = dir.path().join("again.glb");
-    let o = inbetween(
-        &["blend", first.to_str().unwrap(), "--clips", "Walk", "Run"]
-            .into_iter()
-            .chain(["--name", "Jog", "-o", again.to_str().unwrap(), "-q"])
-            .collect::<Vec<_>>(),
+    run_ok(&[&blend_fox[..], &["-o", first.to_str().unwrap(), "-q"]].concat());
+    let again = ["blend", first.to_str().unwrap(), "--clips", "Walk", "Run"];
+    let named = |n: &str| format!("already has an animation named {n:?}");
+    refused(
+        &[&blend_fox[..], &["--name", "Walk"]].concat(),
+        &out,
+        &named("Walk"),
     );
-    assert!(o.status.success());
-    // A capture beside a character: named, with what blends.
-    let walk = fx.join("bvh/kevinxie4c_walk.bvh");
-    let out = dir.path().join("mixed.glb");
-    let o = inbetween(&[
-        "blend",
-        fox.to_str().unwrap(),
-        walk.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
-    let named = "kevinxie4c_walk.bvh: a BVH capture is not blended with a glTF character";
-    assert!(err.contains(named), "{err}");
-    assert!(!out.exists());
+    refused(
+        &again,
+        &out,
+        &(named("Walk+Run") + " (a blend made before?)"),
+    );
+    refused(
+        &[&blend_fox[..], &["--name", " "]].concat(),
+        &out,
+        "--name names the new",
+    );
+    run_ok(
+        &[
+            &again[..],
+            &["--name", "Jog", "-o", out.to_str().unwrap(), "-q"],
+        ]
+        .concat(),
+    );
 }
 
 /// `--cycles none` blends clips that do not walk anyway, whole, on normalised time; the report
