@@ -2,7 +2,7 @@
 //! or a USD point cache), summary. Every file of the run is written in one all-or-nothing step.
 
 use super::compact::CompactFigures;
-use super::compact::CompactOptions;
+use super::compact::{Basis, CompactOptions, MAX_FACTOR};
 use super::frames::{collect_mesh, tween_mesh, MeshStats, PrimitiveDelta};
 use super::keys::{
     find_morph_meshes, meshes_without_weights_animation, KeyOptions, KeySource, MorphMesh,
@@ -143,6 +143,21 @@ impl Summary {
                 c.max_deviation,
                 if c.normal_rms_deviation > 0.0 { format!(", normals {:.2e} RMS", c.normal_rms_deviation) } else { String::new() },
             );
+            // A capped basis (--basis N) keeps fewer directions than the tolerance asks for.
+            if let Some(opts) = (job.compact.as_ref()).filter(|o| {
+                c.rms_deviation > o.tolerance || c.max_deviation > MAX_FACTOR * o.tolerance
+            }) {
+                let why = match opts.basis {
+                    Basis::Count(k) => format!(
+                        ": --basis {k} caps the basis below what it asks for (--basis auto keeps the frames within it)"
+                    ),
+                    _ => String::new(),
+                };
+                out += &format!(
+                    "\nwarning: {mesh:?}'s frames are {:.2e} RMS ({:.2e} at a vertex) from the dense ones, beyond --tolerance {:.0e}{why}",
+                    c.rms_deviation, c.max_deviation, opts.tolerance
+                );
+            }
             if c.basis + c.authored > ACTIVE_TARGETS {
                 out += &format!(
                     "\nwarning: {mesh:?} plays {} targets at once; some engines blend at most {ACTIVE_TARGETS} (the glTF minimum, three.js on WebGL1): --basis N caps the basis",
