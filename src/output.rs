@@ -152,6 +152,15 @@ impl Outputs {
         fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
     ) -> Result<u64> {
         folder_exists(path)?;
+        // Two outputs of one run on one file (`-o out.glb --report out.glb`) would overwrite
+        // each other's temporary and fail at the rename with an error that names neither.
+        let whole = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        if self.staged.iter().any(|(_, t)| whole(t) == whole(path)) {
+            bail!(
+                "{}: two of the run's outputs name this file (-o and --report, or --animate)",
+                path.display()
+            );
+        }
         remove_stale(path);
         let tmp = temporary(path, "");
         let file = File::create(&tmp).map_err(|e| cannot_write(path, e))?;

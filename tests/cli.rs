@@ -1029,6 +1029,40 @@ fn timing_values_a_run_cannot_use_are_refused() {
     }
 }
 
+/// Two outputs of one run naming one file (`-o out.glb --report out.glb`, `--animate` on the
+/// sheet) are refused in one line naming it, nothing written (they overwrote each other's
+/// temporary and failed with "cannot write: No such file or directory").
+#[test]
+fn two_outputs_on_one_file_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("bar_twist.glb");
+    let out = dir.path().join("out.glb");
+    let sheet = dir.path().join("out.png");
+    let same = dir.path().join(".").join("out.glb");
+    for args in [
+        vec!["tween", s(&input), "-o", s(&out), "--report", s(&out)],
+        vec!["tween", s(&input), "-o", s(&out), "--report", s(&same)],
+        vec![
+            "preview",
+            s(&input),
+            "-o",
+            s(&sheet),
+            "--animate",
+            s(&sheet),
+        ],
+    ] {
+        let r = inbetween(&args);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(
+            err.contains("two of the run's outputs name this file"),
+            "{err}"
+        );
+        assert!(walk(dir.path()).is_empty(), "{:?}", walk(dir.path()));
+    }
+}
+
 #[test]
 fn usd_outputs_and_unknown_extensions_are_refused_cleanly() {
     let dir = tempfile::tempdir().unwrap();
