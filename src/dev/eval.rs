@@ -68,7 +68,7 @@ pub fn run_eval(
     let methods: Vec<&str> = methods.iter().map(String::as_str).collect();
     find_morph_meshes(&doc, &opts)?
         .iter()
-        .map(|m| evaluate(m, step, &methods))
+        .map(|m| evaluate(m, step, &methods).map_err(|e| doc.err(format!("{e:#}"))))
         .collect()
 }
 
