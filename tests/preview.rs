@@ -473,7 +473,7 @@ fn a_capture_is_drawn_as_bones_and_followed_across_the_floor() {
     let l = String::from_utf8_lossy(&r.stderr);
     // 19 joints and 5 end sites: 23 bones of 8 triangles.
     assert!(
-        l.contains("1 band (motion) x 8 frames of 184 triangles, Side view"),
+        l.contains("1 band (kevinxie4c_walk) x 8 frames of 184 triangles, Side view"),
         "{l}"
     );
     assert!(
@@ -495,7 +495,7 @@ fn a_capture_is_drawn_as_bones_and_followed_across_the_floor() {
     let r = run_ok(&["preview", s(&jog), "-o", s(&sheet)]);
     let l = String::from_utf8_lossy(&r.stderr);
     assert!(
-        l.contains("1 band (motion) x 12 frames of 184 triangles"),
+        l.contains("1 band (jog) x 12 frames of 184 triangles"),
         "{l}"
     );
 }

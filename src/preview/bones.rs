@@ -1,7 +1,7 @@
 //! Bones (the scene of a BVH motion capture, which has no mesh): its skeleton drawn as a
 //! viewer draws bones, an octahedron from each joint's parent to the joint (its widest
 //! [`WIDTH`] of its length, [`WAIST`] of the way along), posed at the frames' times (a Z-up
-//! capture stood up as `blend` reads it), one band labelled with the capture's name.
+//! capture stood up as `blend` reads it), one band labelled with the capture's file name.
 //!
 //! ```text
 //! let scene = bones::scene(Path::new("walk.bvh"), 12, false)?;
@@ -49,6 +49,12 @@ fn faces(o: u32) -> [[u32; 3]; 8] {
     })
 }
 
+/// The file's name without its extension.
+fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map_or_else(|| "capture".into(), |s| s.to_string_lossy().into_owned())
+}
+
 /// The capture at `path` as one band of `count` frames spread from its first frame to its
 /// last (`animate`: [`ANIMATION_RATE`] a second, at most [`MAX_ANIMATION_FRAMES`]).
 pub fn scene(path: &Path, count: usize, animate: bool) -> Result<Scene> {
@@ -91,6 +97,7 @@ pub fn scene(path: &Path, count: usize, animate: bool) -> Result<Scene> {
         .collect();
     Ok(Scene {
         triangles: vec![triangles],
-        bands: vec![(clip.name.clone(), columns)],
+        // Labelled as `blend` names a capture: by its file's stem (its motion has no name).
+        bands: vec![(stem(path), columns)],
     })
 }
