@@ -299,15 +299,15 @@ pub fn rest_matrix(node: &Value) -> DMat4 {
     })
 }
 
-/// Node `node`'s local transform at time `t` (seconds): its rest transform with the
-/// translation, rotation and scale `channels` (of one clip) sampled at `t` in their place;
-/// weights channels are passed over.
+/// A node's local transform at time `t` (seconds): its rest translation, rotation and scale
+/// (`rest`, from [`rest_trs`], read once per node) with those its `channels` (of one clip)
+/// key sampled at `t` in their place; weights channels are passed over.
 pub fn local_at<'c>(
-    node: &Value,
+    rest: (DVec3, DQuat, DVec3),
     channels: impl IntoIterator<Item = &'c Channel>,
     t: f64,
 ) -> DMat4 {
-    let (mut tr, mut r, mut s) = rest_trs(node);
+    let (mut tr, mut r, mut s) = rest;
     let mut buf = [0.0f64; 4];
     for c in channels {
         if c.path == Path::Weights || c.width > buf.len() {

@@ -11,8 +11,8 @@
 //! ```
 
 use super::{Column, Scene, MAX_ANIMATION_FRAMES};
-use crate::gltf::rest_matrix;
 use crate::gltf::{arr, clip_name, listed_or_none, local_at, node_parents, read_channels};
+use crate::gltf::{rest_matrix, rest_trs};
 use crate::gltf::{Document, Path, Skeleton, Skinning};
 use crate::progress::Progress;
 use crate::tween::mesh_geometry;
@@ -80,8 +80,8 @@ fn samples(doc: &Document, clip: &ClipSpan, times: &[f64]) -> Result<Samples> {
     Ok(by_node
         .into_iter()
         .map(|(node, chans)| {
-            let json = &doc.json["nodes"][node];
-            let at = |&t: &f64| (t, local_at(json, chans.iter().copied(), t).to_cols_array());
+            let rest = rest_trs(&doc.json["nodes"][node]);
+            let at = |&t: &f64| (t, local_at(rest, chans.iter().copied(), t).to_cols_array());
             (node, times.iter().map(at).collect())
         })
         .collect())

@@ -9,8 +9,8 @@
 //! Clips that move nodes but have no frames on the stage are named in a warning.
 
 use crate::gltf::{
-    arr, clip_name, close_keys, local_at, node_target, read_channels, Channel, Document, Interp,
-    Path,
+    arr, clip_name, close_keys, local_at, node_target, read_channels, rest_trs, Channel, Document,
+    Interp, Path,
 };
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
@@ -106,12 +106,13 @@ impl NodeMotion {
         let Some(moved) = self.by_node.get(&node) else {
             return Vec::new();
         };
+        let rest = rest_trs(json);
         let mut out: Vec<(f64, [f64; 16])> = Vec::new();
         for (k, channels) in moved {
             let clip = &self.clips[*k];
             for &code in &clip.codes {
                 let t = (code - clip.offset) / self.rate;
-                out.push((code, local_at(json, channels, t).to_cols_array()));
+                out.push((code, local_at(rest, channels, t).to_cols_array()));
             }
         }
         // Clips of different meshes may share codes: the first clip's sample stands.
