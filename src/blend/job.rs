@@ -390,6 +390,7 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
     let mut blends = Vec::new();
     // (animation, times) of each blend.
     let mut appended = Vec::new();
+    let taken = clip_names(&docs[0]);
     for &w in &job.weights {
         let opts = job.options(w);
         let BlendedClips {
@@ -406,7 +407,7 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
         // In a glTF output the blend sits beside the file's animations, which engines find by
         // name: one of the same name (a blend made before, or --name naming a clip) is not
         // shadowed.
-        if usd.is_none() && clip_names(&docs[0]).contains(&name) {
+        if usd.is_none() && taken.contains(&name) {
             let hint = match job.name {
                 Some(_) => "(--name names the blend: one the file does not use)",
                 None => "(a blend made before?): --name NAME names this one otherwise",

@@ -67,13 +67,16 @@ impl View {
     }
 }
 
+/// The least and greatest corners of `points`' bounding box (MAX and MIN for none).
+pub fn bounds<'a>(points: impl IntoIterator<Item = &'a DVec3>) -> (DVec3, DVec3) {
+    (points.into_iter()).fold((DVec3::MAX, DVec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)))
+}
+
 impl View {
     /// The view whose picture of `points` covers the largest bounding rectangle (a still: a
     /// character seen from the side rather than head-on). Ties keep the order front, side, top.
     pub fn widest(points: &[DVec3]) -> View {
-        let (lo, hi) = points
-            .iter()
-            .fold((DVec3::MAX, DVec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)));
+        let (lo, hi) = bounds(points);
         let e = (hi - lo).max(DVec3::ZERO);
         let candidates = [
             (View::Front, e.x * e.y),

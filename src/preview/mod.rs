@@ -473,9 +473,9 @@ fn floor_centres(scene: &Scene) -> Vec<DVec3> {
     columns.map(|c| floor_centre(bounds(c))).collect()
 }
 
+/// The bounding box of every point of a column.
 fn bounds(c: &Column) -> (DVec3, DVec3) {
-    let points = c.meshes.iter().flatten();
-    points.fold((DVec3::MAX, DVec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)))
+    camera::bounds(c.meshes.iter().flatten())
 }
 
 fn floor_centre((lo, hi): (DVec3, DVec3)) -> DVec3 {
