@@ -48,6 +48,8 @@ struct Column {
     start: usize,
     stride: usize,
     component: u64,
+    /// Bytes of one component.
+    size: usize,
 }
 
 impl Column {
@@ -83,23 +85,17 @@ impl Column {
         let view_end = view["byteOffset"]
             .as_u64()?
             .checked_add(view["byteLength"].as_u64()?)?;
-        let (start, stride) = (start as usize, stride as usize);
-        (stride >= 4 * size as usize && end <= view_end && end <= bin.bytes.len() as u64).then_some(
-            Column {
-                start,
-                stride,
-                component,
-            },
-        )
+        let (start, stride, size) = (start as usize, stride as usize, size as usize);
+        (stride >= 4 * size && end <= view_end && end <= bin.bytes.len() as u64).then_some(Column {
+            start,
+            stride,
+            component,
+            size,
+        })
     }
 
     fn at(&self, i: usize, c: usize) -> usize {
-        let size = match self.component {
-            5121 => 1,
-            5123 => 2,
-            _ => 4,
-        };
-        self.start + i * self.stride + c * size
+        self.start + i * self.stride + c * self.size
     }
 
     fn joint(&self, bytes: &[u8], i: usize, c: usize) -> u32 {
