@@ -18,6 +18,7 @@ use crate::progress::Progress;
 use crate::tween::mesh_geometry;
 use anyhow::{bail, Result};
 use glam::{DMat4, DVec3, Vec3};
+use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// Frames a second of a clip's animation (`--animate`).
@@ -36,6 +37,9 @@ type Samples = BTreeMap<usize, Vec<(f64, [f64; 16])>>;
 
 /// World-space points of every drawn primitive at every time: `[primitive][time][vertex]`.
 type Points = Vec<Vec<Vec<DVec3>>>;
+
+/// Each drawn primitive's triangles.
+type Triangles = Vec<Vec<[u32; 3]>>;
 
 /// A clip that moves nodes: its name, animation index and time span (first to last key).
 struct ClipSpan {
@@ -105,9 +109,43 @@ pub(super) fn world_of(
     m
 }
 
-/// Every drawn mesh's world-space points at each of `times`, its nodes moved by `samples`
-/// (empty: at rest), and the triangles of each.
-fn pose(doc: &Document, samples: &Samples, times: &[f64]) -> Result<(Vec<Vec<[u32; 3]>>, Points)> {
+/// A mesh drawn: the first node that instances it and its triangle primitives (their stored
+/// points and JSON), read once for every band.
+struct Drawn<'a> {
+    node: usize,
+    primitives: Vec<(Vec<[f32; 3]>, &'a Value)>,
+}
+
+/// The meshes drawn, and the triangles of each primitive (in the same order).
+fn drawn(doc: &Document) -> Result<(Vec<Drawn<'_>>, Triangles)> {
+    let json = &doc.json;
+    let nodes = arr(json, "nodes");
+    let (mut meshes, mut triangles) = (Vec::new(), Vec::new());
+    for mi in 0..arr(json, "meshes").len() {
+        let Some(node) = nodes
+            .iter()
+            .position(|n| n["mesh"].as_u64() == Some(mi as u64))
+        else {
+            continue;
+        };
+        let prims = (arr(&json["meshes"][mi], "primitives").iter())
+            .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4);
+        let mut primitives = Vec::new();
+        for ((base, tris), p) in mesh_geometry(doc, mi)?.into_iter().zip(prims) {
+            primitives.push((base.iter().map(|p| p.as_vec3().to_array()).collect(), p));
+            triangles.push(tris);
+        }
+        meshes.push(Drawn { node, primitives });
+    }
+    if triangles.is_empty() {
+        bail!(doc.err("has no triangle mesh to draw"));
+    }
+    Ok((meshes, triangles))
+}
+
+/// Every drawn primitive's world-space points at each of `times`, its nodes moved by
+/// `samples` (empty: at rest).
+fn pose(doc: &Document, meshes: &[Drawn], samples: &Samples, times: &[f64]) -> Result<Points> {
     let json = &doc.json;
     let nodes = arr(json, "nodes");
     let parents = node_parents(json);
@@ -123,26 +161,16 @@ fn pose(doc: &Document, samples: &Samples, times: &[f64]) -> Result<(Vec<Vec<[u3
         })
     };
     let samples_of = |x: usize| samples.get(&x).cloned().unwrap_or_default();
-    let mut triangles = Vec::new();
     let mut points: Points = Vec::new();
-    for mi in 0..arr(json, "meshes").len() {
-        // The node drawing the mesh: the first that instances it.
-        let Some(node) = nodes
-            .iter()
-            .position(|n| n["mesh"].as_u64() == Some(mi as u64))
-        else {
-            continue;
-        };
-        let drawn = (arr(&json["meshes"][mi], "primitives").iter())
-            .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4);
+    for Drawn { node, primitives } in meshes {
+        let node = *node;
         let skeleton = Skeleton::read(doc, node, &samples_of)?;
-        for ((base, tris), p) in mesh_geometry(doc, mi)?.into_iter().zip(drawn) {
+        for (stored, p) in primitives {
             let what = format!("node {node}'s mesh");
             let skin = match &skeleton {
-                Some(s) => Skinning::read(doc, s, p, base.len(), &what)?,
+                Some(s) => Skinning::read(doc, s, p, stored.len(), &what)?,
                 None => None,
             };
-            let stored: Vec<[f32; 3]> = base.iter().map(|p| p.as_vec3().to_array()).collect();
             let at = |&t: &f64| -> Vec<DVec3> {
                 let mut moved = stored.clone();
                 if let Some(skin) = &skin {
@@ -154,13 +182,9 @@ fn pose(doc: &Document, samples: &Samples, times: &[f64]) -> Result<(Vec<Vec<[u3
                     .collect()
             };
             points.push(times.iter().map(at).collect());
-            triangles.push(tris);
         }
     }
-    if triangles.is_empty() {
-        bail!(doc.err("has no triangle mesh to draw"));
-    }
-    Ok((triangles, points))
+    Ok(points)
 }
 
 /// The columns of `points` ([primitive][time]) at `times`.
@@ -185,7 +209,8 @@ fn columns(points: Points, times: &[f64]) -> Vec<Column> {
 /// as its first node places it), the vertices as stored.
 pub fn posed(doc: &Document, clip: &str, times: &[f64]) -> Result<Points> {
     let found = find(doc, clip)?;
-    Ok(pose(doc, &samples(doc, &found, times)?, times)?.1)
+    let (meshes, _) = drawn(doc)?;
+    pose(doc, &meshes, &samples(doc, &found, times)?, times)
 }
 
 /// The clip `name` (or index) among those that move nodes, or an error listing them.
@@ -206,7 +231,8 @@ fn find(doc: &Document, name: &str) -> Result<ClipSpan> {
 
 /// The file's meshes with no clip playing: one column, band `as stored`.
 pub fn still(doc: &Document) -> Result<Scene> {
-    let (triangles, points) = pose(doc, &Samples::new(), &[0.0])?;
+    let (meshes, triangles) = drawn(doc)?;
+    let points = pose(doc, &meshes, &Samples::new(), &[0.0])?;
     let mut cols = columns(points, &[0.0]);
     cols[0].key = true;
     Ok(Scene {
@@ -234,15 +260,10 @@ pub fn scene(
     if clips.is_empty() {
         return Ok(None);
     }
-    // Vertices posed a frame: every drawn primitive of each mesh's first instance.
-    let json = &doc.json;
-    let vertices: usize = (0..arr(json, "meshes").len())
-        .filter(|&mi| (arr(json, "nodes").iter()).any(|n| n["mesh"].as_u64() == Some(mi as u64)))
-        .flat_map(|mi| arr(&json["meshes"][mi], "primitives"))
-        .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4)
-        .filter_map(|p| p["attributes"]["POSITION"].as_u64())
-        .filter_map(|a| json["accessors"][a as usize]["count"].as_u64())
-        .map(|c| c as usize)
+    let (meshes, triangles) = drawn(doc)?;
+    // Vertices posed a frame.
+    let vertices: usize = (meshes.iter().flat_map(|m| &m.primitives))
+        .map(|(stored, _)| stored.len())
         .sum::<usize>()
         .max(1);
     let most_frames = (MAX_POINTS / vertices).max(2);
@@ -254,7 +275,6 @@ pub fn scene(
     let bands = (most_frames / wanted).clamp(1, MAX_BANDS);
     let left = clips.len().saturating_sub(bands);
     clips.truncate(bands);
-    let mut triangles = Vec::new();
     let mut bands = Vec::new();
     let progress = Progress::new(clips.len() as u64, "preview", quiet);
     for clip in &clips {
@@ -271,8 +291,7 @@ pub fn scene(
                 .map(|i| a + (b - a) * i as f64 / (frames - 1) as f64)
                 .collect(),
         };
-        let (tris, points) = pose(doc, &samples(doc, clip, &times)?, &times)?;
-        triangles = tris;
+        let points = pose(doc, &meshes, &samples(doc, clip, &times)?, &times)?;
         bands.push((clip.name.clone(), columns(points, &times)));
         progress.inc();
     }
