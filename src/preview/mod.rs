@@ -467,37 +467,33 @@ fn animation(
 /// camera follows it.
 pub const FOLLOW_TRAVEL: f64 = 0.5;
 
-/// Each column's bounding-box centre on the floor (x and z).
-fn floor_centres(scene: &Scene) -> Vec<DVec3> {
+/// Each column's bounding box, band after band.
+fn boxes(scene: &Scene) -> Vec<(DVec3, DVec3)> {
     let columns = scene.bands.iter().flat_map(|(_, c)| c);
-    columns.map(|c| floor_centre(bounds(c))).collect()
+    columns
+        .map(|c| camera::bounds(c.meshes.iter().flatten()))
+        .collect()
 }
 
-/// The bounding box of every point of a column.
-fn bounds(c: &Column) -> (DVec3, DVec3) {
-    camera::bounds(c.meshes.iter().flatten())
-}
-
+/// A bounding box's centre on the floor (x and z).
 fn floor_centre((lo, hi): (DVec3, DVec3)) -> DVec3 {
     (lo + hi) * 0.5 * DVec3::new(1.0, 0.0, 1.0)
 }
 
-/// How far the figure travels across the floor over the scene's columns (the farthest a
-/// column's bounding-box centre gets from the first's), as a multiple of the figure's largest
-/// size: a capture walking across the room travels several times its size, a clip played in
-/// place a fraction.
-fn travel(scene: &Scene) -> f64 {
-    let centres = floor_centres(scene);
-    let Some(&first) = centres.first() else {
+/// How far the figure travels across the floor over the columns whose bounding boxes are
+/// `boxes` (the farthest a box's centre gets from the first's), as a multiple of the figure's
+/// largest size: a capture walking across the room travels several times its size, a clip
+/// played in place a fraction.
+fn travel(boxes: &[(DVec3, DVec3)]) -> f64 {
+    let Some(&first) = boxes.first() else {
         return 0.0;
     };
-    let columns = scene.bands.iter().flat_map(|(_, c)| c);
-    let size = (columns.map(bounds))
-        .map(|(lo, hi)| (hi - lo).length())
+    let first = floor_centre(first);
+    let size = (boxes.iter())
+        .map(|(lo, hi)| (*hi - *lo).length())
         .fold(0.0, f64::max);
-    let far = centres
-        .iter()
-        .map(|c| c.distance(first))
+    let far = (boxes.iter())
+        .map(|&b| floor_centre(b).distance(first))
         .fold(0.0, f64::max);
     if size > 0.0 {
         far / size
@@ -506,17 +502,16 @@ fn travel(scene: &Scene) -> f64 {
     }
 }
 
-/// Follow the figure: each column moved across the floor so that its bounding-box centre
-/// stays where the first column's is.
-fn follow(scene: &mut Scene) {
-    let Some(&first) = floor_centres(scene).first() else {
+/// Follow the figure: each column of `scene` (its bounding boxes `boxes`) moved across the
+/// floor so that its box's centre stays where the first column's is.
+fn follow(scene: &mut Scene, boxes: &[(DVec3, DVec3)]) {
+    let Some(&first) = boxes.first() else {
         return;
     };
-    for (_, cols) in &mut scene.bands {
-        for c in cols {
-            let shift = first - floor_centre(bounds(c));
-            c.meshes.iter_mut().flatten().for_each(|p| *p += shift);
-        }
+    let columns = scene.bands.iter_mut().flat_map(|(_, c)| c);
+    for (c, &b) in columns.zip(boxes) {
+        let shift = floor_centre(first) - floor_centre(b);
+        c.meshes.iter_mut().flatten().for_each(|p| *p += shift);
     }
 }
 
@@ -601,10 +596,11 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     let (source, mut scene, mut note) = source(job, &base)?;
     // A character or capture that travels across the floor is followed (its frames are seen
     // in the cells' middle, not as specks along its path); a morph mesh's motion is its own.
-    let travels = travel(&scene);
+    let sheet_boxes = boxes(&scene);
+    let travels = travel(&sheet_boxes);
     let follows = !matches!(source, Source::Morph(..)) && travels > FOLLOW_TRAVEL;
     if follows {
-        follow(&mut scene);
+        follow(&mut scene, &sheet_boxes);
         let line = format!(
             "the camera follows it across the floor (it travels {travels:.1} times its size)"
         );
