@@ -490,6 +490,23 @@ fn a_capture_is_drawn_as_bones_and_followed_across_the_floor() {
         // The label and key bar take 32 of the 185 rows.
         assert!(rows > 110, "cell {c}: the figure spans {rows} rows");
     }
+    // The animation is followed as the sheet is: the whole figure in every frame.
+    let mut opts = gif::DecodeOptions::new();
+    opts.set_color_output(gif::ColorOutput::RGBA);
+    let mut d = opts.read_info(std::fs::File::open(&gif).unwrap()).unwrap();
+    let mut frames = 0;
+    while let Some(f) = d.read_next_frame().unwrap() {
+        let w = f.width as usize;
+        let rows = (f.buffer.chunks_exact(4 * w))
+            .filter(|row| row.chunks_exact(4).any(|c| c[..3] != BACKGROUND))
+            .count();
+        assert!(
+            rows > 110,
+            "animation frame {frames}: the figure spans {rows} rows"
+        );
+        frames += 1;
+    }
+    assert!(frames > 60, "{frames} frames");
     let jog = dir.path().join("jog.bvh");
     run_ok(&["blend", s(&walk), s(&run), "-o", s(&jog), "-q"]);
     let r = run_ok(&["preview", s(&jog), "-o", s(&sheet)]);

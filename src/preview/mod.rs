@@ -659,6 +659,14 @@ pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
         }
         (Some(_), Source::Capture) => Some(bones::scene(&job.input, 0, true)?),
     };
+    // Followed as the sheet is (the camera was fitted to the followed figure).
+    let animated = animated.map(|mut a| {
+        if follows {
+            let b = boxes(&a);
+            follow(&mut a, &b);
+        }
+        a
+    });
     if let (Some(path), Some(kind), Some(animated)) = (&job.animate, &anim_kind, &animated) {
         let frames = animation(animated, &camera, cell, job.shading);
         animation_frames = frames.len();
