@@ -7,8 +7,8 @@
 //! let scene = bones::scene(Path::new("walk.bvh"), 12, false)?;
 //! ```
 
-use super::clips::ANIMATION_RATE;
-use super::{Column, Scene, MAX_ANIMATION_FRAMES};
+use super::clips::band_times;
+use super::{Column, Scene};
 use crate::blend::{read_bvh, Rig};
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -56,20 +56,11 @@ fn stem(path: &Path) -> String {
 }
 
 /// The capture at `path` as one band of `count` frames spread from its first frame to its
-/// last (`animate`: [`ANIMATION_RATE`] a second, at most [`MAX_ANIMATION_FRAMES`]).
+/// last (`animate`: as a clip's, [`band_times`]).
 pub fn scene(path: &Path, count: usize, animate: bool) -> Result<Scene> {
     let (rig, clip) = read_bvh(path)?;
     let (a, b) = (clip.start, clip.end);
-    let frames = match animate {
-        true => (((b - a) * ANIMATION_RATE).round() as usize + 1).min(MAX_ANIMATION_FRAMES),
-        false => count.max(1),
-    };
-    let times: Vec<f64> = match frames {
-        1 => vec![a],
-        _ => (0..frames)
-            .map(|i| a + (b - a) * i as f64 / (frames - 1) as f64)
-            .collect(),
-    };
+    let times = band_times((a, b), count, animate, usize::MAX);
     let joints = |t: f64| -> Vec<DVec3> {
         let world = rig.world(&clip.pose(&rig, t));
         world.iter().map(|m| m.w_axis.truncate()).collect()

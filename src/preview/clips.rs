@@ -241,6 +241,23 @@ pub fn still(doc: &Document) -> Result<Scene> {
     })
 }
 
+/// The times a band draws over `(a, b)` (seconds, first key to last): `count` frames spread
+/// evenly, first and last included, or with `animate` [`ANIMATION_RATE`] a second (at most
+/// [`MAX_ANIMATION_FRAMES`]); at most `most` either way, and one (at `a`) for none.
+pub(super) fn band_times((a, b): (f64, f64), count: usize, animate: bool, most: usize) -> Vec<f64> {
+    let frames = match animate {
+        true => (((b - a) * ANIMATION_RATE).round() as usize + 1).min(MAX_ANIMATION_FRAMES),
+        false => count,
+    }
+    .min(most);
+    match frames {
+        0 | 1 => vec![a],
+        _ => (0..frames)
+            .map(|i| a + (b - a) * i as f64 / (frames - 1) as f64)
+            .collect(),
+    }
+}
+
 /// A band per clip that moves nodes (the first [`MAX_BANDS`], or only the one `only` names,
 /// by name or index), each of `count` frames spread over the clip's keys, first and last
 /// included (`animate`: frames [`ANIMATION_RATE`] a second, at most [`MAX_ANIMATION_FRAMES`]),
@@ -278,19 +295,7 @@ pub fn scene(
     let mut bands = Vec::new();
     let progress = Progress::new(clips.len() as u64, "preview", quiet);
     for clip in &clips {
-        let (a, b) = clip.span;
-        let frames = match animate {
-            true => (((b - a) * ANIMATION_RATE).round() as usize + 1).min(MAX_ANIMATION_FRAMES),
-            false => count,
-        }
-        .min(most_frames);
-        // `frames` times over the span, first and last included.
-        let times: Vec<f64> = match frames {
-            0 | 1 => vec![a],
-            _ => (0..frames)
-                .map(|i| a + (b - a) * i as f64 / (frames - 1) as f64)
-                .collect(),
-        };
+        let times = band_times(clip.span, count, animate, most_frames);
         let points = pose(doc, &meshes, &samples(doc, clip, &times)?, &times)?;
         bands.push((clip.name.clone(), columns(points, &times)));
         progress.inc();
