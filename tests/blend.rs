@@ -1603,3 +1603,41 @@ fn a_loop_baked_short_of_its_first_pose_is_closed() {
         assert!(rep["result"]["jerk_ratio"].as_f64().unwrap() <= 1.15, "{w}");
     }
 }
+
+/// A capture named otherwise (`walk.txt`, a download without its extension) is read as one by
+/// every command, known by its first word, HIERARCHY: `blend` and `preview` went by the
+/// extension alone and read it as glTF ("not a glTF file", or a .bvh output refused as if the
+/// inputs were characters), where `inspect` already looked inside. `tween` names it as a
+/// capture and the commands that read one.
+#[test]
+fn a_capture_is_known_by_its_first_word_whatever_its_name() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (walk, run) = cmu_walk_and_run(&fx);
+    let (w, r) = (dir.path().join("walk.txt"), dir.path().join("run"));
+    std::fs::copy(&walk, &w).unwrap();
+    std::fs::copy(&run, &r).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let (jog, renamed) = (dir.path().join("jog.bvh"), dir.path().join("jog_named.bvh"));
+    run_ok(&["blend", &s(&w), &s(&r), "-o", &s(&renamed), "-q"]);
+    run_ok(&["blend", &s(&walk), &s(&run), "-o", &s(&jog), "-q"]);
+    assert_eq!(
+        std::fs::read(&renamed).unwrap(),
+        std::fs::read(&jog).unwrap(),
+        "the renamed captures blend as the originals"
+    );
+    let png = dir.path().join("walk.png");
+    run_ok(&["preview", &s(&w), "-o", &s(&png), "-q"]);
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    let told = run_ok(&["inspect", &s(&r)]);
+    assert!(String::from_utf8_lossy(&told.stdout).contains("a BVH motion capture"));
+    let out = dir.path().join("t.glb");
+    let e = inbetween(&["tween", &s(&w), "-o", &s(&out)]);
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert_eq!(e.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("walk.txt: a BVH motion capture, not a glTF file (`inbetween blend`, `preview` and `inspect` read captures)"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

@@ -285,11 +285,25 @@ fn blend_on(
     })
 }
 
-/// Whether `p` names a BVH file (by its extension, any case).
+/// Whether `p` names a BVH file (by its extension, any case): what an output is written as.
 pub fn is_bvh(p: &std::path::Path) -> bool {
     p.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
+}
+
+/// Whether the input at `p` is a BVH capture: by its extension, or by its first word
+/// (HIERARCHY) whatever it is named (`walk.txt`, a download without its extension), so that
+/// every command reads a capture as one.
+pub fn is_capture(p: &std::path::Path) -> bool {
+    if is_bvh(p) {
+        return true;
+    }
+    let mut start = [0u8; 64];
+    let read = std::fs::File::open(p)
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut start))
+        .unwrap_or(0);
+    crate::gltf::starts_like_bvh(&start[..read])
 }
 
 /// The report file: one blend's report, or the list of them for several weights.
@@ -327,12 +341,13 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
             i + 1
         );
     }
-    match &job.inputs[..] {
-        [a, b] if is_bvh(a) && is_bvh(b) => run_bvh(job, [a, b]),
-        [input] if !is_bvh(input) => run_gltf(job, &[input]),
-        [a, b] if !is_bvh(a) && !is_bvh(b) => run_gltf(job, &[a, b]),
-        [a, b] => {
-            let (capture, character) = if is_bvh(a) { (a, b) } else { (b, a) };
+    let captures: Vec<bool> = job.inputs.iter().map(|p| is_capture(p)).collect();
+    match (&job.inputs[..], &captures[..]) {
+        ([a, b], [true, true]) => run_bvh(job, [a, b]),
+        ([input], [false]) => run_gltf(job, &[input]),
+        ([a, b], [false, false]) => run_gltf(job, &[a, b]),
+        ([a, b], [first, _]) => {
+            let (capture, character) = if *first { (a, b) } else { (b, a) };
             bail!(
                 "{}: a BVH capture is not blended with a glTF character ({}): blend two .bvh captures, or two .gltf/.glb files of one character",
                 capture.display(),
@@ -458,7 +473,7 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
 fn run_bvh(job: &BlendJob, inputs: [&PathBuf; 2]) -> Result<BlendSummary> {
     if !is_bvh(&job.output) {
         bail!(
-            "{}: two .bvh inputs are blended into a .bvh output",
+            "{}: two BVH captures are blended into a .bvh output",
             job.output.display()
         );
     }

@@ -30,8 +30,8 @@ pub use analyze::{analyze, Analysis, Character};
 pub use bvh::{load as load_bvh, parse as parse_bvh, read as read_bvh, Bvh};
 pub use cycles::{touchdowns, CycleMethod};
 pub use job::{
-    blend_clips, blend_files, clip_gaits, is_bvh, run_blend, BlendDone, BlendJob, BlendSummary,
-    BlendedClips,
+    blend_clips, blend_files, clip_gaits, is_bvh, is_capture, run_blend, BlendDone, BlendJob,
+    BlendSummary, BlendedClips,
 };
 pub use plan::{blend, gait, BlendOptions, Blended, Gait};
 pub use rig::{load_gltf, slerp, Clip, Path, Pose, Rig};

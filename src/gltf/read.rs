@@ -81,7 +81,7 @@ fn not_gltf(path: &Path, bytes: &[u8], e: serde_json::Error) -> anyhow::Error {
     if starts_like_bvh(bytes) {
         at(
             path,
-            "a BVH motion capture, not a glTF file (`inbetween blend` reads two captures)",
+            "a BVH motion capture, not a glTF file (`inbetween blend`, `preview` and `inspect` read captures)",
         )
     } else {
         at(

@@ -6,9 +6,7 @@
 //! required extensions with whether they are decoded. For a BVH
 //! capture, see [`bvh`]. Text, or JSON (`schemas/inspect.schema.json`).
 
-use crate::gltf::{
-    arr, listed, quoted_name, starts_like_bvh, weights_target, Access, Document, PASSED_THROUGH,
-};
+use crate::gltf::{arr, listed, quoted_name, weights_target, Access, Document, PASSED_THROUGH};
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, KeyOptions, KeySource, MorphMesh,
     TrackOrigin, TweenOptions,
@@ -34,11 +32,7 @@ pub enum Found {
 /// Inspect the file at `path`: a BVH capture (by its `.bvh` extension or its first word,
 /// HIERARCHY), else glTF.
 pub fn inspect(path: &Path, access: &Access) -> Result<Found> {
-    let mut start = [0u8; 64];
-    let read = std::fs::File::open(path)
-        .and_then(|mut f| std::io::Read::read(&mut f, &mut start))
-        .unwrap_or(0);
-    match crate::blend::is_bvh(path) || starts_like_bvh(&start[..read]) {
+    match crate::blend::is_capture(path) {
         true => bvh::inspect(path).map(Found::Bvh),
         false => inspect_gltf(path, access).map(Found::Gltf),
     }

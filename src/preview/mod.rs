@@ -529,7 +529,7 @@ enum Source {
 
 /// What `job` draws, the sheet's scene of it, and a note for the summary.
 fn source(job: &PreviewJob, base: &TweenOptions) -> Result<(Source, Scene, Option<String>)> {
-    if crate::blend::is_bvh(&job.input) {
+    if crate::blend::is_capture(&job.input) {
         let scene = bones::scene(&job.input, job.frames, false)?;
         let note = "a BVH motion capture: its skeleton drawn as bones";
         return Ok((Source::Capture, scene, Some(note.into())));
