@@ -22,6 +22,15 @@ const VARIANTS: &[(&str, &str, &[&str])] = &[
             "-i", "IN", "-o", "OUT", "-cc", "-af", "0", "-kn", "-km", "-ke",
         ],
     ),
+    // -vpf: float positions through the exponential filter, lossy: gltfpack declares the bounds
+    // of the values before it, which the output, written plain, must not keep.
+    (
+        "gltfpack -cc -vpf",
+        "gltfpack",
+        &[
+            "-i", "IN", "-o", "OUT", "-cc", "-vpf", "-af", "0", "-kn", "-km", "-ke",
+        ],
+    ),
     (
         "gltfpack -c -ce khr",
         "gltfpack",
