@@ -207,7 +207,12 @@ pub struct TimingArgs {
     #[arg(long, value_name = "RATE", conflicts_with_all = ["tweens", "fps"], allow_negative_numbers = true)]
     rate: Option<f64>,
     /// Instead: exactly N frames inserted evenly between each pair of consecutive keys.
-    #[arg(long, value_name = "N", conflicts_with = "fps")]
+    #[arg(
+        long,
+        value_name = "N",
+        conflicts_with = "fps",
+        allow_negative_numbers = true
+    )]
     tweens: Option<usize>,
     /// Instead: frames at this fixed rate (per second) from the first key over the keys' time
     /// span; the first and the last key are always frames, keys between them only where the
@@ -320,7 +325,7 @@ pub struct TweenArgs {
     #[arg(long, value_name = "NAME|INDEX")]
     animation: Option<String>,
     /// Worker threads for frames (default: all cores). Output is identical for any value.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// Also write per-frame shape figures (edge distortion, area and volume change,
     /// inverted triangles) to this JSON file (schema: schemas/report.schema.json).
@@ -404,7 +409,7 @@ pub struct PreviewArgs {
     methods: Vec<String>,
     /// Frames across, picked evenly over the frames the timing options give (first and last
     /// always).
-    #[arg(long, default_value_t = preview::DEFAULT_FRAMES)]
+    #[arg(long, default_value_t = preview::DEFAULT_FRAMES, allow_negative_numbers = true)]
     frames: usize,
     /// Size of the whole sheet in pixels, WxH (default: 160 x 160 per cell).
     #[arg(long, value_name = "WxH")]
@@ -432,7 +437,7 @@ pub struct PreviewArgs {
     #[arg(long, value_name = "FOLDER")]
     allow_external: Vec<PathBuf>,
     /// Worker threads (default: all cores). The picture is identical for any value.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// No progress bar, no summary.
     #[arg(short, long)]
@@ -628,7 +633,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 100_000)]
     pub peer_max_triangles: usize,
     /// Worker threads for the all-threads figure (default: all cores).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// Print the rows as JSON lines instead of a table.
     #[arg(long)]

@@ -44,6 +44,23 @@ impl Format {
     }
 }
 
+/// An error where the output `path` is a folder that exists (`-o renders/`), suggesting a file
+/// in it named after the `input` (`renders/walk_tween.glb` for `suffix` "_tween.glb"), where
+/// the output's missing extension was told instead.
+pub fn not_a_folder(path: &Path, input: &Path, suffix: &str) -> Result<()> {
+    if path.is_dir() {
+        let stem = input
+            .file_stem()
+            .map_or_else(|| "out".into(), |s| s.to_string_lossy());
+        bail!(
+            "{}: is a folder: name the file to write in it (e.g. {})",
+            path.display(),
+            path.join(format!("{stem}{suffix}")).display()
+        );
+    }
+    Ok(())
+}
+
 /// An error naming `path` unless the folder it lies in exists.
 pub fn folder_exists(path: &Path) -> Result<()> {
     let dir = folder_of(path);

@@ -1524,3 +1524,102 @@ fn constant_weight_animations_point_to_keys_targets() {
         a.json["animations"].as_array().unwrap().len() + 1
     );
 }
+
+/// An output that is a folder (`-o renders/`) is told as one, with a file in it to name, by
+/// every command, in one line, nothing written; it was "unknown output extension """ (tween),
+/// a list of the formats blend writes, or "the sheet must end in .png".
+#[test]
+fn an_output_that_is_a_folder_is_told_with_a_file_to_name_in_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("renders");
+    std::fs::create_dir(&folder).unwrap();
+    let input = sample("bar_twist.glb");
+    let sheet = dir.path().join("sheet.png");
+    let mut cases = vec![
+        (
+            vec!["tween", s(&input), "-o", s(&folder)],
+            "bar_twist_tween.glb",
+        ),
+        (
+            vec!["preview", s(&input), "-o", s(&folder)],
+            "bar_twist.png",
+        ),
+        (
+            vec![
+                "preview",
+                s(&input),
+                "-o",
+                s(&sheet),
+                "--animate",
+                s(&folder),
+            ],
+            "bar_twist.gif",
+        ),
+    ];
+    let fx = fixtures();
+    let (fox, walk) = match &fx {
+        Some(fx) => (
+            fx.join("skinned/Fox.glb"),
+            fx.join("bvh/kevinxie4c_walk.bvh"),
+        ),
+        None => Default::default(),
+    };
+    if fx.is_some() {
+        cases.push((
+            vec!["blend", s(&fox), "--clips", "Walk", "Run", "-o", s(&folder)],
+            "Fox_blend.glb",
+        ));
+        cases.push((
+            vec!["blend", s(&walk), s(&walk), "-o", s(&folder)],
+            "kevinxie4c_walk_blend.bvh",
+        ));
+    }
+    for (args, named) in cases {
+        let r = inbetween(&args);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        let said = format!(
+            "{}: is a folder: name the file to write in it (e.g. {})",
+            folder.display(),
+            folder.join(named).display()
+        );
+        assert!(err.contains(&said), "{args:?}: {err}");
+        assert!(!sheet.exists());
+        assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
+    }
+}
+
+/// A negative count (`--tweens -1`, `--frames -3`, `--threads -2`) is told as an invalid value
+/// of its option; it was taken for an unknown option, with the advice to pass it after `--`.
+#[test]
+fn a_negative_count_is_an_invalid_value_of_its_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("bar_twist.glb");
+    let (glb, png) = (dir.path().join("t.glb"), dir.path().join("p.png"));
+    for (args, option) in [
+        (
+            vec!["tween", s(&input), "-o", s(&glb), "--tweens", "-1"],
+            "--tweens <N>",
+        ),
+        (
+            vec!["tween", s(&input), "-o", s(&glb), "--threads", "-2"],
+            "--threads <THREADS>",
+        ),
+        (
+            vec!["preview", s(&input), "-o", s(&png), "--frames", "-3"],
+            "--frames <FRAMES>",
+        ),
+    ] {
+        let r = inbetween(&args);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{err}");
+        let value = args.last().unwrap();
+        assert!(
+            err.contains(&format!("invalid value '{value}' for '{option}'")),
+            "{err}"
+        );
+        assert!(!err.contains("unexpected argument"), "{err}");
+        assert!(!glb.exists() && !png.exists());
+    }
+}

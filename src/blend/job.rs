@@ -342,6 +342,14 @@ pub fn run_blend(job: &BlendJob) -> Result<BlendSummary> {
         );
     }
     let captures: Vec<bool> = job.inputs.iter().map(|p| is_capture(p)).collect();
+    if let Some(first) = job.inputs.first() {
+        let suffix = if captures[0] {
+            "_blend.bvh"
+        } else {
+            "_blend.glb"
+        };
+        crate::output::not_a_folder(&job.output, first, suffix)?;
+    }
     match (&job.inputs[..], &captures[..]) {
         ([a, b], [true, true]) => run_bvh(job, [a, b]),
         ([input], [false]) => run_gltf(job, &[input]),

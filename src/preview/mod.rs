@@ -572,11 +572,15 @@ fn source(job: &PreviewJob, base: &TweenOptions) -> Result<(Source, Scene, Optio
 /// Run the preview job. Nothing is written unless every step succeeds.
 pub fn run_preview(job: &PreviewJob) -> Result<PreviewSummary> {
     let started = std::time::Instant::now();
+    crate::output::not_a_folder(&job.output, &job.input, ".png")?;
     image_kind(&job.output, &["png"], "the sheet")?;
     let anim_kind = job
         .animate
         .as_deref()
-        .map(|a| image_kind(a, &["gif", "png", "apng"], "--animate"))
+        .map(|a| {
+            crate::output::not_a_folder(a, &job.input, ".gif")?;
+            image_kind(a, &["gif", "png", "apng"], "--animate")
+        })
         .transpose()?;
     if job.frames == 0 {
         bail!("--frames must be at least 1");

@@ -513,6 +513,7 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// Run the tween job. Nothing is written unless every step succeeds.
 pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let started = Instant::now();
+    crate::output::not_a_folder(&job.output, &job.input, "_tween.glb")?;
     let format = Format::of(&job.output)?;
     job.timing.check(job.extend)?;
     let doc = Document::open_with(&job.input, &job.access)?;
