@@ -10,6 +10,7 @@ use super::stage::{
 };
 use crate::output::{naming, Outputs};
 use anyhow::Result;
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -229,8 +230,6 @@ fn half_f32(x: f32) -> f32 {
     half::f16::from_f32(x).to_f32()
 }
 
-/// A float in its shortest round-trip form, in exponent notation when that is shorter
-/// (USD parses both back to the same f32).
 /// A double as USD text: Rust's shortest form, with an exponent from 1e15 on (USD reads a
 /// longer run of digits as an integer literal, out of range past 2^63).
 struct D(f64);
@@ -245,6 +244,8 @@ impl std::fmt::Display for D {
     }
 }
 
+/// A float in its shortest round-trip form, in exponent notation below 1e-4 and from 1e7 on
+/// (USD parses both back to the same f32).
 struct F(f32);
 
 impl std::fmt::Display for F {
@@ -258,15 +259,40 @@ impl std::fmt::Display for F {
     }
 }
 
+/// Elements of an array formatted as one part: larger arrays (a point cache's samples, 23
+/// frames of 500k points took 3.9 s of a 7.7 s run on one thread) are formatted in parts of
+/// this many on every thread and written in order, the same text.
+const TEXT_PART: usize = 16_384;
+
 fn write_vec3s(out: &mut dyn Write, v: &[[f32; 3]]) -> std::io::Result<()> {
     out.write_all(b"[")?;
+    if v.len() <= TEXT_PART {
+        vec3s_text(out, v, true)?;
+    } else {
+        let parts: Vec<Vec<u8>> = v
+            .par_chunks(TEXT_PART)
+            .enumerate()
+            .map(|(k, part)| {
+                let mut text = Vec::with_capacity(part.len() * 32);
+                vec3s_text(&mut text, part, k == 0).map(|()| text)
+            })
+            .collect::<std::io::Result<_>>()?;
+        for text in parts {
+            out.write_all(&text)?;
+        }
+    }
+    out.write_all(b"]")
+}
+
+/// `v` as `(x, y, z)` separated by commas, one before the first unless it is the `first`.
+fn vec3s_text<W: Write + ?Sized>(out: &mut W, v: &[[f32; 3]], first: bool) -> std::io::Result<()> {
     for (i, p) in v.iter().enumerate() {
-        if i > 0 {
+        if i > 0 || !first {
             out.write_all(b", ")?;
         }
         write!(out, "({}, {}, {})", F(p[0]), F(p[1]), F(p[2]))?;
     }
-    out.write_all(b"]")
+    Ok(())
 }
 
 fn write_mesh(
