@@ -1623,3 +1623,50 @@ fn a_negative_count_is_an_invalid_value_of_its_option() {
         assert!(!glb.exists() && !png.exists());
     }
 }
+
+/// A scene of many small morph meshes is tweened side by side, a mesh to a thread (where each
+/// spread its few triangles over every thread, most of the run spent handing work over):
+/// every mesh's frames are those it gets alone, and the output is the same for any number of
+/// threads, glTF and USD.
+#[test]
+fn many_small_meshes_tween_side_by_side_as_each_alone() {
+    use inbetween::synth::{bend, tube, KeyedMesh, KeyframeFile};
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = |i: usize| {
+        let s = tube(6, 8, 2.0, 0.3, 0.3);
+        let key = bend(&s.positions, 1.0, (20.0 + 3.0 * i as f64).to_radians(), 0.5);
+        KeyedMesh::new(&format!("prop{i}"), s, vec![key])
+    };
+    let file = |meshes: Vec<KeyedMesh>, name: &str| {
+        let path = out_in(&dir, name);
+        KeyframeFile {
+            meshes,
+            key_times: None,
+            key_weights: None,
+        }
+        .write(&path)
+        .unwrap();
+        path
+    };
+    let scene = file((0..40).map(mesh).collect(), "scene.glb");
+    for ext in ["glb", "usda"] {
+        let outputs: Vec<Vec<u8>> = ["1", "2", "3"]
+            .iter()
+            .map(|t| {
+                let out = out_in(&dir, &format!("scene_{t}.{ext}"));
+                tween_quietly(&scene, &out, &["--threads", t]);
+                std::fs::read(&out).unwrap()
+            })
+            .collect();
+        assert!(outputs.iter().all(|o| o == &outputs[0]), "{ext}");
+    }
+    let tweened = out_in(&dir, "scene_1.glb");
+    for i in [0, 17, 39] {
+        let alone = file(vec![mesh(i)], &format!("alone{i}.glb"));
+        let out = out_in(&dir, &format!("alone{i}_t.glb"));
+        tween_quietly(&alone, &out, &[]);
+        let (base, targets) = read_targets(&out, 0, 0);
+        assert!(targets.len() > 20, "{}", targets.len());
+        assert_eq!(read_targets(&tweened, i, 0), (base, targets), "mesh {i}");
+    }
+}
