@@ -1627,7 +1627,7 @@ fn a_negative_count_is_an_invalid_value_of_its_option() {
 /// A scene of many small morph meshes is tweened side by side, a mesh to a thread (where each
 /// spread its few triangles over every thread, most of the run spent handing work over):
 /// every mesh's frames are those it gets alone, and the output is the same for any number of
-/// threads, glTF and USD.
+/// threads, glTF, USD and `preview`'s sheet.
 #[test]
 fn many_small_meshes_tween_side_by_side_as_each_alone() {
     use inbetween::synth::{bend, tube, KeyedMesh, KeyframeFile};
@@ -1660,6 +1660,16 @@ fn many_small_meshes_tween_side_by_side_as_each_alone() {
             .collect();
         assert!(outputs.iter().all(|o| o == &outputs[0]), "{ext}");
     }
+    // `preview` draws them side by side too.
+    let sheets: Vec<Vec<u8>> = ["1", "2"]
+        .iter()
+        .map(|t| {
+            let png = out_in(&dir, &format!("scene_{t}.png"));
+            run_ok(&["preview", s(&scene), "-o", s(&png), "-q", "--threads", t]);
+            std::fs::read(&png).unwrap()
+        })
+        .collect();
+    assert_eq!(sheets[0], sheets[1]);
     let tweened = out_in(&dir, "scene_1.glb");
     for i in [0, 17, 39] {
         let alone = file(vec![mesh(i)], &format!("alone{i}.glb"));

@@ -24,8 +24,8 @@ use crate::gltf::{arr, node_parents, rest_matrix, Access, Document};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
-    close_loop, find_morph_meshes, frames_at, plan, FrameAt, KeyOptions, KeySource, Method,
-    MorphMesh, NoMorphKeys, Timing, TweenOptions,
+    close_loop, find_morph_meshes, frames_at, plan, side_by_side, FrameAt, KeyOptions, KeySource,
+    Method, MorphMesh, NoMorphKeys, Timing, TweenOptions,
 };
 use anyhow::{bail, Result};
 use camera::Camera;
@@ -254,10 +254,22 @@ fn scene(
     let mut bands = Vec::new();
     for (b, &s) in shown.iter().enumerate() {
         let mut cols: Vec<Column> = Vec::new();
-        for (mi, m) in meshes.iter().enumerate() {
+        let band = |m: &MorphMesh| {
             let picked = spread(available(m, s, base), count);
-            let (tris, c) = columns(m, s, base, &picked, &worlds[m.mesh])
-                .map_err(|e| doc.err(format!("{e:#}")))?;
+            let done = columns(m, s, base, &picked, &worlds[m.mesh]);
+            progress.inc();
+            done.map_err(|e| doc.err(format!("{e:#}")))
+        };
+        // Small meshes side by side, as `tween` runs them.
+        let mut done = Vec::with_capacity(meshes.len());
+        for run in side_by_side(meshes, base) {
+            match &meshes[run] {
+                [m] => done.push(band(m)),
+                run => done.extend(run.par_iter().map(band).collect::<Vec<_>>()),
+            }
+        }
+        for (mi, done) in done.into_iter().enumerate() {
+            let (tris, c) = done?;
             if b == 0 {
                 triangles.push(tris);
             }
@@ -268,7 +280,6 @@ fn scene(
                     _ => cols.push(c),
                 }
             }
-            progress.inc();
         }
         bands.push((s.label().to_string(), cols));
     }

@@ -211,7 +211,7 @@ const SIDE_BY_SIDE_POSITIONS: f64 = 4e6;
 
 /// `meshes` in runs tweened together: consecutive meshes whose frames together hold at most
 /// [`SIDE_BY_SIDE_POSITIONS`]; a mesh holding more is a run of its own.
-fn side_by_side(meshes: &[MorphMesh], opts: &TweenOptions) -> Vec<Range<usize>> {
+pub fn side_by_side(meshes: &[MorphMesh], opts: &TweenOptions) -> Vec<Range<usize>> {
     let held = |m: &MorphMesh| {
         let frames: f64 = m
             .tracks

@@ -33,7 +33,7 @@ mod weld;
 
 pub use compact::{Basis, CompactFigures, CompactOptions, DEFAULT_TOLERANCE};
 pub use frames::{frames_at, key_poses, track_frames_welded};
-pub use job::{run_tween, Summary, TweenJob};
+pub use job::{run_tween, side_by_side, Summary, TweenJob};
 pub use keys::{
     find_morph_meshes, mesh_geometry, skeletal_clips, KeyOptions, KeySource, MorphMesh,
     NoMorphKeys, Track, TrackOrigin,
