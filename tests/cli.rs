@@ -1680,3 +1680,42 @@ fn many_small_meshes_tween_side_by_side_as_each_alone() {
         assert_eq!(read_targets(&tweened, i, 0), (base, targets), "mesh {i}");
     }
 }
+
+/// A small mesh's segments are set up and solved side by side, a segment to a thread, where
+/// each spread its few triangles over every thread: the frames and the report's figures are
+/// those of one segment at a time (one thread), glTF and USD.
+#[test]
+fn a_small_mesh_s_segments_solved_side_by_side_are_those_of_one_at_a_time() {
+    use inbetween::synth::{bend, tube, KeyedMesh, KeyframeFile};
+    let dir = tempfile::tempdir().unwrap();
+    let arm = tube(12, 10, 3.0, 0.4, 0.4);
+    let keys: Vec<_> = (1..10)
+        .map(|k| bend(&arm.positions, 1.5, (15.0 * k as f64).to_radians(), 0.6))
+        .collect();
+    let input = out_in(&dir, "keys.glb");
+    KeyframeFile {
+        meshes: vec![KeyedMesh::new("arm", arm, keys)],
+        key_times: None,
+        key_weights: None,
+    }
+    .write(&input)
+    .unwrap();
+    for ext in ["glb", "usda"] {
+        let runs: Vec<(Vec<u8>, serde_json::Value)> = ["1", "2", "3"]
+            .iter()
+            .map(|t| {
+                let out = out_in(&dir, &format!("out.{ext}"));
+                let report = out_in(&dir, "report.json");
+                let args = ["--threads", t, "--fps", "24", "--report", s(&report)];
+                tween_quietly(&input, &out, &args);
+                let mut r: serde_json::Value =
+                    serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+                r.as_object_mut().unwrap().remove("output");
+                (std::fs::read(&out).unwrap(), r)
+            })
+            .collect();
+        let frames = runs[0].1["meshes"][0]["frames"].as_array().unwrap().len();
+        assert!(frames > 200, "{frames} frames");
+        assert!(runs.iter().all(|r| r == &runs[0]), "{ext}");
+    }
+}

@@ -56,6 +56,9 @@ pub struct MeshStats {
     pub frames: usize,
     pub setup: Duration,
     pub solve: Duration,
+    /// Whether its segments, or it beside other meshes, ran side by side (its set-up and
+    /// solve times are then the threads' summed).
+    pub side_by_side: bool,
 }
 
 /// Key poses of a track, in input vertex order.
@@ -282,18 +285,18 @@ impl<'a> MeshTween<'a> {
         sink: &mut dyn FnMut(usize, Vec<PrimitiveDelta>) -> Result<()>,
     ) -> Result<()> {
         let mut keys = self.keys(track, true);
-        let stats = &mut out.stats;
-        stats.keys += keys.welded.len();
+        out.stats.keys += keys.welded.len();
         let frames = plan(&track.times, self.opts);
         out.tracks.push(TrackFrames {
             origin: track.origin.clone(),
-            first: stats.frames,
+            first: out.stats.frames,
             frames: frames.clone(),
             keys: track.weights.clone(),
         });
         // Frames grouped by segment, each segment prepared once. A frame on a key is that key
         // as it is (nothing solved), and a segment whose frames are all keys is not prepared
         // (a track baked at 60 keys/s and written at 30 frames/s between keys).
+        let mut groups = Vec::new();
         let mut i = 0;
         while i < frames.len() {
             let (a, b) = (frames[i].key_a, frames[i].key_b);
@@ -301,85 +304,50 @@ impl<'a> MeshTween<'a> {
                 .iter()
                 .take_while(|f| f.key_a == a && f.key_b == b)
                 .count();
+            groups.push(i..j);
+            i = j;
+        }
+        let threads = rayon::current_num_threads().max(1);
+        if threads > 1
+            && groups.len() > 1
+            && self.welded.triangles.len() <= SEGMENTS_SIDE_BY_SIDE_TRIANGLES
+        {
+            return self.track_side_by_side(track, &frames, &groups, keys, out, progress, sink);
+        }
+        for r in &groups {
+            let (a, b) = (frames[r.start].key_a, frames[r.start].key_b);
             let t0 = Instant::now();
-            let on_keys = frames[i..j].iter().all(|f| f.key().is_some());
+            let on_keys = frames[r.clone()].iter().all(|f| f.key().is_some());
             // Keys played by their authored weights alone, unmeasured, read nothing.
             if !on_keys || self.key_deltas || self.shape.is_some() {
                 let count = keys.welded.len();
                 self.hold(track, &mut keys, &keys_read(self.opts.method, count, a, b));
             }
-            let segment = match on_keys {
-                true => None,
-                false => Some(self.key_track(track, &keys).segment(
-                    self.opts.method,
-                    self.opts.wrap,
-                    a,
-                    b,
-                )?),
-            };
-            stats.setup += t0.elapsed();
+            let segment = self.set_up(track, &keys, &frames[r.clone()])?;
+            out.stats.setup += t0.elapsed();
             // A large mesh's set-up temporaries, freed on the worker threads, back to the system
             // before the frames allocate theirs (see `release_freed_memory`).
             let large = (self.pattern.as_ref()).is_some_and(|p| p.n >= RELEASE_MIN_VERTICES);
             if large && segment.is_some() {
                 crate::memory::release_freed_memory();
             }
-            let threads = rayon::current_num_threads().max(1);
-            let block = segment.as_ref().map_or(1, |s| s.block(j - i, threads));
+            let block = segment.as_ref().map_or(1, |s| s.block(r.len(), threads));
             // Two frames a thread at a time, or one block a thread.
             let chunk = threads * if block > 1 { block } else { 2 };
-            for start in (i..j).step_by(chunk) {
+            for start in r.clone().step_by(chunk) {
                 let t0 = Instant::now();
-                let end = (start + chunk).min(j);
+                let end = (start + chunk).min(r.end);
                 // A last, shorter chunk is shared out over the threads too.
                 let block = segment
                     .as_ref()
                     .map_or(1, |s| block.min(s.block(end - start, threads)));
-                let computed: Vec<Vec<(Vec<PrimitiveDelta>, Option<FrameReport>)>> = frames
-                    [start..end]
+                let computed: Vec<Vec<Computed>> = frames[start..end]
                     .par_chunks(block)
-                    .map(|fs| {
-                        let ts: Vec<f64> = (fs.iter())
-                            .filter(|f| f.key().is_none())
-                            .map(|f| f.t)
-                            .collect();
-                        let mut solved = match &segment {
-                            Some(s) if !ts.is_empty() => s.frames(&ts),
-                            _ => Vec::new(),
-                        }
-                        .into_iter();
-                        fs.iter()
-                            .map(|f| {
-                                let w = match f.key() {
-                                    Some(k) => keys.welded[k].clone(),
-                                    None => solved.next().expect("a frame for each time"),
-                                };
-                                let done = self.frame(&keys, f, w);
-                                progress();
-                                done
-                            })
-                            .collect()
-                    })
+                    .map(|fs| self.compute(&keys, segment.as_ref(), fs, progress))
                     .collect();
-                let computed = computed.into_iter().flatten();
-                stats.solve += t0.elapsed();
-                for (frame, figures) in computed {
-                    // Key poses far beyond float32 (or slivers at that scale) can overflow a
-                    // solve: refused in a line rather than written as NaN.
-                    let finite = |v: &Vec<[f32; 3]>| v.iter().flatten().all(|x| x.is_finite());
-                    if !frame
-                        .iter()
-                        .all(|p| finite(&p.positions) && p.normals.as_ref().is_none_or(finite))
-                    {
-                        bail!(not_finite(self.mesh, track, (a, b)));
-                    }
-                    if let (Some(r), Some(mut fig)) = (out.report.as_mut(), figures) {
-                        fig.frame = stats.frames;
-                        r.frames.push(fig);
-                    }
-                    sink(stats.frames, frame)?;
-                    stats.frames += 1;
-                }
+                out.stats.solve += t0.elapsed();
+                let computed = computed.into_iter().flatten().collect();
+                self.hand_on(track, (a, b), computed, out, sink)?;
             }
             if let Some(segment) = segment {
                 segment.recycle(self.pattern.as_ref());
@@ -387,11 +355,186 @@ impl<'a> MeshTween<'a> {
                     crate::memory::release_freed_memory();
                 }
             }
-            i = j;
+        }
+        Ok(())
+    }
+
+    /// The segment of `track` over frames `fs` (from `fs[0].key_a` to its `key_b`) set up from
+    /// the held `keys`; none where every frame is on a key.
+    fn set_up(&self, track: &Track, keys: &TrackKeys, fs: &[FrameAt]) -> Result<Option<Segment>> {
+        if fs.iter().all(|f| f.key().is_some()) {
+            return Ok(None);
+        }
+        let (a, b) = (fs[0].key_a, fs[0].key_b);
+        let track = self.key_track(track, keys);
+        Ok(Some(track.segment(
+            self.opts.method,
+            self.opts.wrap,
+            a,
+            b,
+        )?))
+    }
+
+    /// Frames `fs` of `segment` (their solves sharing passes over its factor), each a key's
+    /// own pose where it lies on one.
+    fn compute(
+        &self,
+        keys: &TrackKeys,
+        segment: Option<&Segment>,
+        fs: &[FrameAt],
+        progress: &(dyn Fn() + Sync),
+    ) -> Vec<Computed> {
+        let ts: Vec<f64> = (fs.iter())
+            .filter(|f| f.key().is_none())
+            .map(|f| f.t)
+            .collect();
+        let mut solved = match segment {
+            Some(s) if !ts.is_empty() => s.frames(&ts),
+            _ => Vec::new(),
+        }
+        .into_iter();
+        fs.iter()
+            .map(|f| {
+                let w = match f.key() {
+                    Some(k) => keys.welded[k].clone(),
+                    None => solved.next().expect("a frame for each time"),
+                };
+                let done = self.frame(keys, f, w);
+                progress();
+                done
+            })
+            .collect()
+    }
+
+    /// [`MeshTween::track`] for a small mesh: its segments set up and solved side by side, a
+    /// segment to a thread, in runs whose frames hold at most [`SIDE_BY_SIDE_POSITIONS`], each
+    /// run's keys held together and its frames handed on in order (the same frames: a
+    /// segment's do not depend on what else is solved, nor on how many are solved at once).
+    #[allow(clippy::too_many_arguments)]
+    fn track_side_by_side(
+        &self,
+        track: &'a Track,
+        frames: &[FrameAt],
+        groups: &[std::ops::Range<usize>],
+        mut keys: TrackKeys,
+        out: &mut MeshFrames,
+        progress: &(dyn Fn() + Sync),
+        sink: &mut dyn FnMut(usize, Vec<PrimitiveDelta>) -> Result<()>,
+    ) -> Result<()> {
+        let per_frame = self.mesh.vertex_count().max(1);
+        let count = keys.welded.len();
+        out.stats.side_by_side = true;
+        let mut g = 0;
+        while g < groups.len() {
+            let mut h = g + 1;
+            let mut held = groups[g].len() * per_frame;
+            while h < groups.len() && held + groups[h].len() * per_frame <= SIDE_BY_SIDE_POSITIONS {
+                held += groups[h].len() * per_frame;
+                h += 1;
+            }
+            let run = &groups[g..h];
+            let t0 = Instant::now();
+            // The keys the run's segments read (keys played by their authored weights alone,
+            // unmeasured, read nothing).
+            let mut need: Vec<usize> = (run.iter())
+                .filter(|r| {
+                    let on_keys = frames[(*r).clone()].iter().all(|f| f.key().is_some());
+                    !on_keys || self.key_deltas || self.shape.is_some()
+                })
+                .flat_map(|r| {
+                    let f = &frames[r.start];
+                    keys_read(self.opts.method, count, f.key_a, f.key_b)
+                })
+                .collect();
+            need.sort_unstable();
+            need.dedup();
+            if !need.is_empty() {
+                self.hold(track, &mut keys, &need);
+            }
+            out.stats.setup += t0.elapsed();
+            let done: Vec<Result<Solved>> = (run.par_iter())
+                .map(|r| self.segment_frames(track, &keys, &frames[r.clone()], progress))
+                .collect();
+            for (r, done) in run.iter().zip(done) {
+                let (computed, setup, solve) = done?;
+                out.stats.setup += setup;
+                out.stats.solve += solve;
+                let f = &frames[r.start];
+                self.hand_on(track, (f.key_a, f.key_b), computed, out, sink)?;
+            }
+            g = h;
+        }
+        Ok(())
+    }
+
+    /// Segment `fs[0].key_a` to `fs[0].key_b` of `track` set up (unless every frame is on a
+    /// key) and its frames `fs` computed, with the set-up's and the frames' times.
+    fn segment_frames(
+        &self,
+        track: &Track,
+        keys: &TrackKeys,
+        fs: &[FrameAt],
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<Solved> {
+        let t0 = Instant::now();
+        let segment = self.set_up(track, keys, fs)?;
+        let setup = t0.elapsed();
+        let t0 = Instant::now();
+        let computed = self.compute(keys, segment.as_ref(), fs, progress);
+        if let Some(segment) = segment {
+            segment.recycle(self.pattern.as_ref());
+        }
+        Ok((computed, setup, t0.elapsed()))
+    }
+
+    /// The computed frames of segment `(a, b)` of `track` checked, measured and handed to
+    /// `sink` in order.
+    fn hand_on(
+        &self,
+        track: &Track,
+        (a, b): (usize, usize),
+        computed: Vec<Computed>,
+        out: &mut MeshFrames,
+        sink: &mut dyn FnMut(usize, Vec<PrimitiveDelta>) -> Result<()>,
+    ) -> Result<()> {
+        for (frame, figures) in computed {
+            // Key poses far beyond float32 (or slivers at that scale) can overflow a solve:
+            // refused in a line rather than written as NaN.
+            let finite = |v: &Vec<[f32; 3]>| v.iter().flatten().all(|x| x.is_finite());
+            if !frame
+                .iter()
+                .all(|p| finite(&p.positions) && p.normals.as_ref().is_none_or(finite))
+            {
+                bail!(not_finite(self.mesh, track, (a, b)));
+            }
+            if let (Some(r), Some(mut fig)) = (out.report.as_mut(), figures) {
+                fig.frame = out.stats.frames;
+                r.frames.push(fig);
+            }
+            sink(out.stats.frames, frame)?;
+            out.stats.frames += 1;
         }
         Ok(())
     }
 }
+
+/// A frame's per-primitive deltas and its figures (with a report).
+type Computed = (Vec<PrimitiveDelta>, Option<FrameReport>);
+
+/// A segment's frames, its set-up's time and its frames'.
+type Solved = (Vec<Computed>, Duration, Duration);
+
+/// Meshes of at most this many welded triangles set up and solve their segments side by side,
+/// a segment to a thread (see [`MeshTween::track_side_by_side`]): where a segment's work is a
+/// few milliseconds, spreading it over the threads costs more in hand-offs than it saves
+/// (MorphStressTest, 2,412 triangles, 531 keys written at 120 frames a second: 2.68 s on one
+/// thread, 2.50 s on two, a segment at a time). A segment's set-up of 20,000 triangles holds
+/// about 20 MB.
+const SEGMENTS_SIDE_BY_SIDE_TRIANGLES: usize = 20_000;
+
+/// Most vertex positions (vertices times frames) the frames of segments solved side by side
+/// hold together before they are handed on (about 48 MB as deltas).
+const SIDE_BY_SIDE_POSITIONS: usize = 4_000_000;
 
 /// Compute every frame of every track of `mesh` and hand each to `sink` in order (frame index,
 /// per-primitive deltas), so a writer can stream them; without `key_deltas`, a frame on a key

@@ -110,7 +110,7 @@ impl Summary {
         };
         let growth = self.output_bytes as f64 / self.input_bytes.max(1) as f64;
         let mut out = format!(
-            "{}: {} mesh{} ({} triangles), {} keys -> {} frames ({timing}) by the {} method; {} -> {} ({growth:.1}x); {:.3} s (set-up {:.3} s{}, frames {:.3} s), peak memory {:.0} MiB",
+            "{}: {} mesh{} ({} triangles), {} keys -> {} frames ({timing}) by the {} method; {} -> {} ({growth:.1}x); {:.3} s (set-up {:.3} s{}, frames {:.3} s{}), peak memory {:.0} MiB",
             job.output.display(),
             self.meshes.len(),
             if self.meshes.len() == 1 { "" } else { "es" },
@@ -133,6 +133,10 @@ impl Summary {
                 false => String::new(),
             },
             solve,
+            match self.meshes.iter().any(|m| m.side_by_side) {
+                true => ", summed over the threads that ran side by side",
+                false => "",
+            },
             self.peak_rss_mib,
         );
         for (mesh, c) in &self.compacted {
@@ -303,7 +307,9 @@ impl Run<'_> {
             };
             // The computation's own failures (the solve, the factorization) name the input.
             for d in done {
-                results.push(d.map_err(|e| self.doc.err(format!("{e:#}")))?);
+                let mut d = d.map_err(|e| self.doc.err(format!("{e:#}")))?;
+                d.stats.side_by_side |= meshes.len() > 1;
+                results.push(d);
             }
         }
         self.progress.finish();
@@ -453,7 +459,10 @@ impl Run<'_> {
                         for (f, deltas) in frames {
                             sink(k, f, &usd_deltas(&deltas))?;
                         }
-                        stats.push(done.stats);
+                        stats.push(MeshStats {
+                            side_by_side: true,
+                            ..done.stats
+                        });
                         reports.extend(done.report);
                     }
                 }
