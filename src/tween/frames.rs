@@ -423,12 +423,16 @@ impl<'a> MeshTween<'a> {
     ) -> Result<()> {
         let per_frame = self.mesh.vertex_count().max(1);
         let count = keys.welded.len();
+        let most = SEGMENTS_A_THREAD * rayon::current_num_threads().max(1);
         out.stats.side_by_side = true;
         let mut g = 0;
         while g < groups.len() {
             let mut h = g + 1;
             let mut held = groups[g].len() * per_frame;
-            while h < groups.len() && held + groups[h].len() * per_frame <= SIDE_BY_SIDE_POSITIONS {
+            while h < groups.len()
+                && h - g < most
+                && held + groups[h].len() * per_frame <= SIDE_BY_SIDE_POSITIONS
+            {
                 held += groups[h].len() * per_frame;
                 h += 1;
             }
@@ -535,6 +539,12 @@ const SEGMENTS_SIDE_BY_SIDE_TRIANGLES: usize = 20_000;
 /// Most vertex positions (vertices times frames) the frames of segments solved side by side
 /// hold together before they are handed on (about 48 MB as deltas).
 const SIDE_BY_SIDE_POSITIONS: usize = 4_000_000;
+
+/// Most segments a thread is given in a run solved side by side: the run's keys are held
+/// together, so a long track of keys baked close together holds a few keys a thread, not
+/// thousands (a face rig of 1,681 vertices baked at 60 keys a second for two minutes, runs
+/// bounded by their frames alone: 25 -> 498 MB to .usdc).
+const SEGMENTS_A_THREAD: usize = 4;
 
 /// Compute every frame of every track of `mesh` and hand each to `sink` in order (frame index,
 /// per-primitive deltas), so a writer can stream them; without `key_deltas`, a frame on a key
