@@ -308,11 +308,13 @@ impl<'a> MeshTween<'a> {
             i = j;
         }
         let threads = rayon::current_num_threads().max(1);
-        if threads > 1
-            && groups.len() > 1
-            && self.welded.triangles.len() <= SEGMENTS_SIDE_BY_SIDE_TRIANGLES
-        {
-            return self.track_side_by_side(track, &frames, &groups, keys, out, progress, sink);
+        // Segments in flight at once: as many as the triangles allow, a few a thread.
+        let triangles = self.welded.triangles.len().max(1);
+        let in_flight = (SIDE_BY_SIDE_TRIANGLES / triangles).min(SEGMENTS_A_THREAD * threads);
+        if threads > 1 && groups.len() > 1 && in_flight > 1 {
+            return self.track_side_by_side(
+                track, &frames, &groups, in_flight, keys, out, progress, sink,
+            );
         }
         for r in &groups {
             let (a, b) = (frames[r.start].key_a, frames[r.start].key_b);
@@ -407,7 +409,8 @@ impl<'a> MeshTween<'a> {
     }
 
     /// [`MeshTween::track`] for a small mesh: its segments set up and solved side by side, a
-    /// segment to a thread, in runs whose frames hold at most [`SIDE_BY_SIDE_POSITIONS`], each
+    /// segment to a thread, in runs of at most `in_flight` segments (see
+    /// [`SIDE_BY_SIDE_TRIANGLES`]) whose frames hold at most [`SIDE_BY_SIDE_POSITIONS`], each
     /// run's keys held together and its frames handed on in order (the same frames: a
     /// segment's do not depend on what else is solved, nor on how many are solved at once).
     #[allow(clippy::too_many_arguments)]
@@ -416,6 +419,7 @@ impl<'a> MeshTween<'a> {
         track: &'a Track,
         frames: &[FrameAt],
         groups: &[std::ops::Range<usize>],
+        in_flight: usize,
         mut keys: TrackKeys,
         out: &mut MeshFrames,
         progress: &(dyn Fn() + Sync),
@@ -423,14 +427,13 @@ impl<'a> MeshTween<'a> {
     ) -> Result<()> {
         let per_frame = self.mesh.vertex_count().max(1);
         let count = keys.welded.len();
-        let most = SEGMENTS_A_THREAD * rayon::current_num_threads().max(1);
         out.stats.side_by_side = true;
         let mut g = 0;
         while g < groups.len() {
             let mut h = g + 1;
             let mut held = groups[g].len() * per_frame;
             while h < groups.len()
-                && h - g < most
+                && h - g < in_flight
                 && held + groups[h].len() * per_frame <= SIDE_BY_SIDE_POSITIONS
             {
                 held += groups[h].len() * per_frame;
@@ -528,13 +531,17 @@ type Computed = (Vec<PrimitiveDelta>, Option<FrameReport>);
 /// A segment's frames, its set-up's time and its frames'.
 type Solved = (Vec<Computed>, Duration, Duration);
 
-/// Meshes of at most this many welded triangles set up and solve their segments side by side,
-/// a segment to a thread (see [`MeshTween::track_side_by_side`]): where a segment's work is a
-/// few milliseconds, spreading it over the threads costs more in hand-offs than it saves
-/// (MorphStressTest, 2,412 triangles, 531 keys written at 120 frames a second: 2.68 s on one
-/// thread, 2.50 s on two, a segment at a time). A segment's set-up of 20,000 triangles holds
-/// about 20 MB.
-const SEGMENTS_SIDE_BY_SIDE_TRIANGLES: usize = 20_000;
+/// Most welded triangles of segments set up side by side, a segment to a thread (see
+/// [`MeshTween::track_side_by_side`]): a mesh of a few thousand triangles spent more in
+/// hand-offs than it saved spreading one segment at a time over the threads (MorphStressTest,
+/// 2,412 triangles, 531 keys written at 120 frames a second: 2.68 s on one thread, 2.50 s on
+/// two), and side by side still gains at 60,000 (a bent tube's 20 keys at 10 frames a second,
+/// 2 threads: 1.82-1.97 -> 1.51-1.69 s, peak 226-228 -> 272-275 MB). A set-up holds about 1.2
+/// kilobytes a triangle, so this bounds what side by side adds to the peak to about 250 MB;
+/// meshes of more than half this many triangles set up one segment at a time on every thread
+/// (a 200,000-triangle tube, two at once: 2.24-2.31 -> 1.60-1.74 s but 338-368 -> 586-589 MB;
+/// the 1M-triangle bench tube's peak stays what it was).
+const SIDE_BY_SIDE_TRIANGLES: usize = 200_000;
 
 /// Most vertex positions (vertices times frames) the frames of segments solved side by side
 /// hold together before they are handed on (about 48 MB as deltas).
