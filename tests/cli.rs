@@ -1545,14 +1545,11 @@ fn an_output_that_is_a_folder_is_told_with_a_file_to_name_in_it() {
             "bar_twist.png",
         ),
         (
-            vec![
-                "preview",
-                s(&input),
-                "-o",
-                s(&sheet),
-                "--animate",
-                s(&folder),
-            ],
+            [
+                &["preview", s(&input), "-o", s(&sheet)][..],
+                &["--animate", s(&folder)],
+            ]
+            .concat(),
             "bar_twist.gif",
         ),
     ];
