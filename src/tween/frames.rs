@@ -319,9 +319,7 @@ impl<'a> MeshTween<'a> {
         for r in &groups {
             let (a, b) = (frames[r.start].key_a, frames[r.start].key_b);
             let t0 = Instant::now();
-            let on_keys = frames[r.clone()].iter().all(|f| f.key().is_some());
-            // Keys played by their authored weights alone, unmeasured, read nothing.
-            if !on_keys || self.key_deltas || self.shape.is_some() {
+            if self.reads_keys(&frames[r.clone()]) {
                 let count = keys.welded.len();
                 self.hold(track, &mut keys, &keys_read(self.opts.method, count, a, b));
             }
@@ -359,6 +357,13 @@ impl<'a> MeshTween<'a> {
             }
         }
         Ok(())
+    }
+
+    /// Whether the segment over frames `fs` reads its keys: keys played by their authored
+    /// weights alone, unmeasured, read nothing.
+    fn reads_keys(&self, fs: &[FrameAt]) -> bool {
+        let on_keys = fs.iter().all(|f| f.key().is_some());
+        !on_keys || self.key_deltas || self.shape.is_some()
     }
 
     /// The segment of `track` over frames `fs` (from `fs[0].key_a` to its `key_b`) set up from
@@ -441,13 +446,9 @@ impl<'a> MeshTween<'a> {
             }
             let run = &groups[g..h];
             let t0 = Instant::now();
-            // The keys the run's segments read (keys played by their authored weights alone,
-            // unmeasured, read nothing).
+            // The keys the run's segments read.
             let mut need: Vec<usize> = (run.iter())
-                .filter(|r| {
-                    let on_keys = frames[(*r).clone()].iter().all(|f| f.key().is_some());
-                    !on_keys || self.key_deltas || self.shape.is_some()
-                })
+                .filter(|r| self.reads_keys(&frames[(*r).clone()]))
                 .flat_map(|r| {
                     let f = &frames[r.start];
                     keys_read(self.opts.method, count, f.key_a, f.key_b)
