@@ -317,43 +317,58 @@ impl<'a> MeshTween<'a> {
             );
         }
         for r in &groups {
-            let (a, b) = (frames[r.start].key_a, frames[r.start].key_b);
+            self.segment_streamed(track, &frames[r.clone()], &mut keys, out, progress, sink)?;
+        }
+        Ok(())
+    }
+
+    /// The segment over frames `fs` of `track` set up on every thread and its frames solved in
+    /// chunks of a few a thread, each chunk handed on before the next is solved.
+    fn segment_streamed(
+        &self,
+        track: &Track,
+        fs: &[FrameAt],
+        keys: &mut TrackKeys,
+        out: &mut MeshFrames,
+        progress: &(dyn Fn() + Sync),
+        sink: &mut dyn FnMut(usize, Vec<PrimitiveDelta>) -> Result<()>,
+    ) -> Result<()> {
+        let (a, b) = (fs[0].key_a, fs[0].key_b);
+        let t0 = Instant::now();
+        if self.reads_keys(fs) {
+            let count = keys.welded.len();
+            self.hold(track, keys, &keys_read(self.opts.method, count, a, b));
+        }
+        let segment = self.set_up(track, keys, fs)?;
+        out.stats.setup += t0.elapsed();
+        // A large mesh's set-up temporaries, freed on the worker threads, back to the system
+        // before the frames allocate theirs (see `release_freed_memory`).
+        let large = (self.pattern.as_ref()).is_some_and(|p| p.n >= RELEASE_MIN_VERTICES);
+        if large && segment.is_some() {
+            crate::memory::release_freed_memory();
+        }
+        let threads = rayon::current_num_threads().max(1);
+        let block = segment.as_ref().map_or(1, |s| s.block(fs.len(), threads));
+        // Two frames a thread at a time, or one block a thread.
+        let chunk = threads * if block > 1 { block } else { 2 };
+        for part in fs.chunks(chunk) {
             let t0 = Instant::now();
-            if self.reads_keys(&frames[r.clone()]) {
-                let count = keys.welded.len();
-                self.hold(track, &mut keys, &keys_read(self.opts.method, count, a, b));
-            }
-            let segment = self.set_up(track, &keys, &frames[r.clone()])?;
-            out.stats.setup += t0.elapsed();
-            // A large mesh's set-up temporaries, freed on the worker threads, back to the system
-            // before the frames allocate theirs (see `release_freed_memory`).
-            let large = (self.pattern.as_ref()).is_some_and(|p| p.n >= RELEASE_MIN_VERTICES);
-            if large && segment.is_some() {
+            // A last, shorter chunk is shared out over the threads too.
+            let block = segment
+                .as_ref()
+                .map_or(1, |s| block.min(s.block(part.len(), threads)));
+            let computed: Vec<Vec<Computed>> = part
+                .par_chunks(block)
+                .map(|fs| self.compute(keys, segment.as_ref(), fs, progress))
+                .collect();
+            out.stats.solve += t0.elapsed();
+            let computed = computed.into_iter().flatten().collect();
+            self.hand_on(track, (a, b), computed, out, sink)?;
+        }
+        if let Some(segment) = segment {
+            segment.recycle(self.pattern.as_ref());
+            if large {
                 crate::memory::release_freed_memory();
-            }
-            let block = segment.as_ref().map_or(1, |s| s.block(r.len(), threads));
-            // Two frames a thread at a time, or one block a thread.
-            let chunk = threads * if block > 1 { block } else { 2 };
-            for start in r.clone().step_by(chunk) {
-                let t0 = Instant::now();
-                let end = (start + chunk).min(r.end);
-                // A last, shorter chunk is shared out over the threads too.
-                let block = segment
-                    .as_ref()
-                    .map_or(1, |s| block.min(s.block(end - start, threads)));
-                let computed: Vec<Vec<Computed>> = frames[start..end]
-                    .par_chunks(block)
-                    .map(|fs| self.compute(&keys, segment.as_ref(), fs, progress))
-                    .collect();
-                out.stats.solve += t0.elapsed();
-                let computed = computed.into_iter().flatten().collect();
-                self.hand_on(track, (a, b), computed, out, sink)?;
-            }
-            if let Some(segment) = segment {
-                segment.recycle(self.pattern.as_ref());
-                if large {
-                    crate::memory::release_freed_memory();
-                }
             }
         }
         Ok(())
@@ -432,7 +447,6 @@ impl<'a> MeshTween<'a> {
     ) -> Result<()> {
         let per_frame = self.mesh.vertex_count().max(1);
         let count = keys.welded.len();
-        out.stats.side_by_side = true;
         let mut g = 0;
         while g < groups.len() {
             let mut h = g + 1;
@@ -445,6 +459,13 @@ impl<'a> MeshTween<'a> {
                 h += 1;
             }
             let run = &groups[g..h];
+            if let [r] = run {
+                // A segment alone (its frames more than a run holds) is streamed.
+                self.segment_streamed(track, &frames[r.clone()], &mut keys, out, progress, sink)?;
+                g = h;
+                continue;
+            }
+            out.stats.side_by_side = true;
             let t0 = Instant::now();
             // The keys the run's segments read.
             let mut need: Vec<usize> = (run.iter())
