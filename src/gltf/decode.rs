@@ -235,18 +235,21 @@ fn rebound_filtered(json: &mut Value, bytes: &[u8], views: &[usize]) {
         let stride = view["byteStride"]
             .as_u64()
             .map_or(size * ncomp, |s| s as usize);
-        let start = (view["byteOffset"].as_u64().unwrap_or(0)
-            + a["byteOffset"].as_u64().unwrap_or(0)) as usize;
+        let width = size * ncomp;
         let count = a["count"].as_u64().unwrap_or(0) as usize;
-        let end = count
-            .checked_sub(1)
-            .map(|last| start + last * stride + size * ncomp);
-        let Some(element) = end
-            .filter(|&e| e <= bytes.len())
-            .map(|_| |i: usize| &bytes[start + i * stride..start + i * stride + size * ncomp])
-        else {
+        // Where the last element ends, in checked arithmetic (the numbers are the file's).
+        let start = (view["byteOffset"].as_u64().unwrap_or(0))
+            .checked_add(a["byteOffset"].as_u64().unwrap_or(0))
+            .and_then(|s| usize::try_from(s).ok());
+        let end = start.zip(count.checked_sub(1)).and_then(|(start, last)| {
+            last.checked_mul(stride)?
+                .checked_add(start)?
+                .checked_add(width)
+        });
+        let (Some(start), Some(_)) = (start, end.filter(|&e| e <= bytes.len())) else {
             continue;
         };
+        let element = |i: usize| &bytes[start + i * stride..start + i * stride + width];
         let stored: Vec<f64> = (0..count)
             .flat_map(|i| element(i).chunks_exact(size).map(|c| stored_value(c, ty)))
             .collect();
@@ -533,6 +536,48 @@ fn remove_extensions(json: &mut Value) {
             if o.is_empty() {
                 b.as_object_mut().map(|v| v.remove("extensions"));
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounds_come_from_the_decoded_values_and_hostile_numbers_are_passed_over() {
+        // View 0 decoded through a filter: two VEC3 floats and two normalized shorts after them.
+        let mut bytes = Vec::new();
+        for x in [1.5f32, -2.0, 3.0, -4.5, 5.0, 0.25] {
+            bytes.extend(x.to_le_bytes());
+        }
+        for x in [-300i16, 7, 12, 900, -5, 0] {
+            bytes.extend(x.to_le_bytes());
+        }
+        let stale = json!([0, 0, 0]);
+        let mut j = json!({
+            "bufferViews": [{ "buffer": 1, "byteOffset": 0, "byteLength": bytes.len() }],
+            "accessors": [
+                { "bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3",
+                  "min": stale, "max": stale },
+                { "bufferView": 0, "byteOffset": 24, "componentType": 5122, "normalized": true,
+                  "count": 2, "type": "VEC3", "min": stale, "max": stale },
+                // Past the data, overflowing counts and offsets: left as declared.
+                { "bufferView": 0, "componentType": 5126, "count": 5, "type": "VEC3",
+                  "min": stale, "max": stale },
+                { "bufferView": 0, "componentType": 5126, "count": u64::MAX, "type": "VEC3",
+                  "min": stale, "max": stale },
+                { "bufferView": 0, "byteOffset": u64::MAX, "componentType": 5126, "count": 1,
+                  "type": "VEC3", "min": stale, "max": stale },
+            ]
+        });
+        rebound_filtered(&mut j, &bytes, &[0]);
+        assert_eq!(j["accessors"][0]["min"], json!([-4.5, -2.0, 0.25]));
+        assert_eq!(j["accessors"][0]["max"], json!([1.5, 5.0, 3.0]));
+        assert_eq!(j["accessors"][1]["min"], json!([-300.0, -5.0, 0.0]));
+        assert_eq!(j["accessors"][1]["max"], json!([900.0, 7.0, 12.0]));
+        for a in 2..5 {
+            assert_eq!(j["accessors"][a]["min"], stale, "accessor {a}");
         }
     }
 }
