@@ -563,7 +563,7 @@ type Solved = (Vec<Computed>, Duration, Duration);
 /// meshes of more than half this many triangles set up one segment at a time on every thread
 /// (a 200,000-triangle tube, two at once: 2.24-2.31 -> 1.60-1.74 s but 338-368 -> 586-589 MB;
 /// the 1M-triangle bench tube's peak stays what it was).
-const SIDE_BY_SIDE_TRIANGLES: usize = 200_000;
+pub const SIDE_BY_SIDE_TRIANGLES: usize = 200_000;
 
 /// Most vertex positions (vertices times frames) the frames of segments solved side by side
 /// hold together before they are handed on (about 48 MB as deltas).

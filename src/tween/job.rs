@@ -3,7 +3,9 @@
 
 use super::compact::CompactFigures;
 use super::compact::{Basis, CompactOptions, MAX_FACTOR};
-use super::frames::{collect_mesh, tween_mesh, MeshFrames, MeshStats, PrimitiveDelta};
+use super::frames::{
+    collect_mesh, tween_mesh, MeshFrames, MeshStats, PrimitiveDelta, SIDE_BY_SIDE_TRIANGLES,
+};
 use super::keys::{
     find_morph_meshes, meshes_without_weights_animation, KeyOptions, KeySource, MorphMesh,
     TrackOrigin,
@@ -214,7 +216,8 @@ impl Summary {
 const SIDE_BY_SIDE_POSITIONS: f64 = 4e6;
 
 /// `meshes` in runs tweened together: consecutive meshes whose frames together hold at most
-/// [`SIDE_BY_SIDE_POSITIONS`]; a mesh holding more is a run of its own.
+/// [`SIDE_BY_SIDE_POSITIONS`] and whose set-ups together at most [`SIDE_BY_SIDE_TRIANGLES`]
+/// triangles; a mesh holding more is a run of its own.
 pub fn side_by_side(meshes: &[MorphMesh], opts: &TweenOptions) -> Vec<Range<usize>> {
     let held = |m: &MorphMesh| {
         let frames: f64 = m
@@ -222,17 +225,21 @@ pub fn side_by_side(meshes: &[MorphMesh], opts: &TweenOptions) -> Vec<Range<usiz
             .iter()
             .map(|t| frame_estimate(&t.times, opts))
             .sum();
-        m.vertex_count() as f64 * frames
+        let triangles: usize = m.primitives.iter().map(|p| p.triangles.len()).sum();
+        (m.vertex_count() as f64 * frames, triangles)
     };
     let mut runs = Vec::new();
-    let (mut start, mut total) = (0, 0.0);
+    let (mut start, mut positions, mut triangles) = (0, 0.0, 0);
     for (i, m) in meshes.iter().enumerate() {
-        let h = held(m);
-        if i > start && total + h > SIDE_BY_SIDE_POSITIONS {
+        let (p, t) = held(m);
+        if i > start
+            && (positions + p > SIDE_BY_SIDE_POSITIONS || triangles + t > SIDE_BY_SIDE_TRIANGLES)
+        {
             runs.push(start..i);
-            (start, total) = (i, 0.0);
+            (start, positions, triangles) = (i, 0.0, 0);
         }
-        total += h;
+        positions += p;
+        triangles += t;
     }
     if start < meshes.len() {
         runs.push(start..meshes.len());
