@@ -1644,3 +1644,37 @@ fn a_capture_is_known_by_its_first_word_whatever_its_name() {
     );
     assert!(!out.exists());
 }
+
+/// A long capture's cycles are told as their range in `inspect`'s line (a 25-minute session
+/// listed each of its hundreds of periods), every one still in `--json`.
+#[test]
+fn a_long_capture_s_cycles_are_told_as_their_range() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(fx.join("bvh/kevinxie4c_walk.bvh")).unwrap();
+    let (head, motion) = text.split_once("MOTION").unwrap();
+    let lines: Vec<&str> = motion.trim().lines().collect();
+    let frames: Vec<&str> = lines[2..]
+        .iter()
+        .copied()
+        .filter(|l| !l.trim().is_empty())
+        .collect();
+    let repeated: Vec<&str> = (0..20).flat_map(|_| frames.iter().copied()).collect();
+    let long = dir.path().join("long.bvh");
+    let body = format!(
+        "{head}MOTION\nFrames: {}\n{}\n{}\n",
+        repeated.len(),
+        lines[1],
+        repeated.join("\n")
+    );
+    std::fs::write(&long, body).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let told = String::from_utf8(run_ok(&["inspect", &s(&long)]).stdout).unwrap();
+    let gait = told.lines().find(|l| l.starts_with("blend:")).unwrap();
+    assert!(gait.contains("40 cycles of 0.9"), "{gait}");
+    assert!(gait.contains(" (mean 1.0"), "{gait}");
+    assert!(gait.len() < 200, "{gait}");
+    let v: Value =
+        serde_json::from_slice(&run_ok(&["inspect", &s(&long), "--json"]).stdout).unwrap();
+    assert_eq!(v["blend"]["cycles"].as_array().unwrap().len(), 40);
+}

@@ -165,16 +165,34 @@ fn gait_line(g: &GaitInfo) -> String {
         return format!("refuses it alone: {why}");
     }
     let feet: Vec<String> = g.feet.iter().map(|f| format!("{f:?}")).collect();
-    let periods: Vec<String> = g.cycles.iter().map(|c| format!("{:.3}", c[1])).collect();
+    let periods: Vec<f64> = g.cycles.iter().map(|c| c[1]).collect();
+    // A long capture's hundreds of cycles as their range (`--json` lists every one).
+    let of = match periods.len() {
+        0..=LISTED_CYCLES => {
+            let each: Vec<String> = periods.iter().map(|p| format!("{p:.3}")).collect();
+            each.join(", ")
+        }
+        _ => {
+            let (lo, hi) = periods
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &p| {
+                    (l.min(p), h.max(p))
+                });
+            let mean = periods.iter().sum::<f64>() / periods.len() as f64;
+            format!("{lo:.3} to {hi:.3} (mean {mean:.3})")
+        }
+    };
     format!(
-        "feet {}, stride {:.2} leg lengths, {} cycle{} of {} s",
+        "feet {}, stride {:.2} leg lengths, {} cycle{} of {of} s",
         feet.join(", "),
         g.stride,
         g.cycles.len(),
         if g.cycles.len() == 1 { "" } else { "s" },
-        periods.join(", ")
     )
 }
+
+/// Most cycle periods a gait's line lists one by one.
+const LISTED_CYCLES: usize = 8;
 
 /// Inspect the file at `path`.
 fn inspect_gltf(path: &Path, access: &Access) -> Result<Inspection> {
