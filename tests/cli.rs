@@ -1683,20 +1683,8 @@ fn many_small_meshes_tween_side_by_side_as_each_alone() {
 /// those of one segment at a time (one thread), glTF and USD.
 #[test]
 fn a_small_mesh_s_segments_solved_side_by_side_are_those_of_one_at_a_time() {
-    use inbetween::synth::{bend, tube, KeyedMesh, KeyframeFile};
     let dir = tempfile::tempdir().unwrap();
-    let arm = tube(12, 10, 3.0, 0.4, 0.4);
-    let keys: Vec<_> = (1..10)
-        .map(|k| bend(&arm.positions, 1.5, (15.0 * k as f64).to_radians(), 0.6))
-        .collect();
-    let input = out_in(&dir, "keys.glb");
-    KeyframeFile {
-        meshes: vec![KeyedMesh::new("arm", arm, keys)],
-        key_times: None,
-        key_weights: None,
-    }
-    .write(&input)
-    .unwrap();
+    let input = bent_arm(&dir, (12, 10), 10, 15.0);
     for ext in ["glb", "usda"] {
         let runs: Vec<(Vec<u8>, serde_json::Value)> = ["1", "2", "3"]
             .iter()
@@ -1722,29 +1710,36 @@ fn a_small_mesh_s_segments_solved_side_by_side_are_those_of_one_at_a_time() {
 /// keys peaked at 105 MiB when such a segment was solved whole on one thread (18 MiB so).
 #[test]
 fn a_segment_of_many_frames_is_streamed_whatever_the_mesh() {
-    use inbetween::synth::{bend, tube, KeyedMesh, KeyframeFile};
     let dir = tempfile::tempdir().unwrap();
-    let arm = tube(50, 40, 3.0, 0.4, 0.4);
-    let keys: Vec<_> = (1..3)
-        .map(|k| bend(&arm.positions, 1.5, (40.0 * k as f64).to_radians(), 0.6))
+    let input = bent_arm(&dir, (50, 40), 3, 40.0);
+    let out = out_in(&dir, "out.usdc");
+    let r = run_ok(&["tween", s(&input), "-o", s(&out), "--fps", "1300"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("-> 2601 frames"), "{err}");
+    let peak = summary_peak_mib(&err);
+    assert!(peak < 60.0, "peak {peak} MiB: {err}");
+}
+
+/// A tube of `(rings, segments)` 3 long with `keys` keys one second apart (the base and its
+/// targets), each bent `step` degrees more than the one before at its middle, written in `dir`.
+fn bent_arm(
+    dir: &tempfile::TempDir,
+    (rings, segments): (usize, usize),
+    keys: usize,
+    step: f64,
+) -> PathBuf {
+    use inbetween::synth::{bend, tube, KeyedMesh, KeyframeFile};
+    let arm = tube(rings, segments, 3.0, 0.4, 0.4);
+    let targets: Vec<_> = (1..keys)
+        .map(|k| bend(&arm.positions, 1.5, (step * k as f64).to_radians(), 0.6))
         .collect();
-    let input = out_in(&dir, "keys.glb");
+    let input = out_in(dir, "keys.glb");
     KeyframeFile {
-        meshes: vec![KeyedMesh::new("arm", arm, keys)],
+        meshes: vec![KeyedMesh::new("arm", arm, targets)],
         key_times: None,
         key_weights: None,
     }
     .write(&input)
     .unwrap();
-    let out = out_in(&dir, "out.usdc");
-    let r = run_ok(&["tween", s(&input), "-o", s(&out), "--fps", "1300"]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert!(err.contains("-> 2601 frames"), "{err}");
-    let peak: f64 = err
-        .split("peak memory ")
-        .nth(1)
-        .and_then(|rest| rest.split(" MiB").next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("no peak memory in {err}"));
-    assert!(peak < 60.0, "peak {peak} MiB: {err}");
+    input
 }

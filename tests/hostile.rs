@@ -569,11 +569,6 @@ fn a_long_baked_face_rig_is_written_in_little_memory() {
     // A few keys held at a time, also where segments are solved side by side (runs of them
     // holding every key they read: 498 MB, until a run was bounded to a few segments a
     // thread). The summary tells the peak.
-    let peak: f64 = err
-        .split("peak memory ")
-        .nth(1)
-        .and_then(|rest| rest.split(" MiB").next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("no peak memory in {err}"));
+    let peak = summary_peak_mib(&err);
     assert!(peak < 150.0, "peak {peak} MiB: {err}");
 }

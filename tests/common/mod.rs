@@ -802,3 +802,13 @@ pub fn bpy_result(
         .unwrap_or_else(|| panic!("{what}: no result from bpy: {stdout}"));
     serde_json::from_str(line).unwrap()
 }
+
+/// The peak memory (MiB) a command's summary line tells.
+pub fn summary_peak_mib(summary: &str) -> f64 {
+    summary
+        .split("peak memory ")
+        .nth(1)
+        .and_then(|rest| rest.split(" MiB").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no peak memory in {summary}"))
+}
