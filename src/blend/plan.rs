@@ -569,12 +569,14 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     }
     let spans = [cycles_used(a, an_a), cycles_used(b, an_b)];
     let phase = phase(a, b, [an_a, an_b], [&spans[0], &spans[1]], w);
-    let src = sources(rig, [a, b], [an_a, an_b], &phase);
-    let mut frames: Vec<Pose> = src.poses[0]
-        .iter()
-        .zip(&src.poses[1])
+    let mut src = sources(rig, [a, b], [an_a, an_b], &phase);
+    // The sources' poses are mixed, then let go (the clean-up and the figures read their
+    // positions): two copies of every frame fewer held through the clean-up.
+    let [poses_a, poses_b] = std::mem::take(&mut src.poses);
+    let mut frames: Vec<Pose> = (poses_a.iter().zip(&poses_b))
         .map(|(x, y)| mix(x, y, w))
         .collect();
+    drop((poses_a, poses_b));
     let dt = 1.0 / phase.fps;
     let before = positions_track(rig, &frames, dt, false);
     let before_loop = track_of(before.pos.clone(), dt, phase.looping, rig.root);
