@@ -13,7 +13,7 @@
 use super::{Column, Scene, MAX_ANIMATION_FRAMES};
 use crate::gltf::{arr, clip_name, listed_or_none, local_at, node_parents, read_channels};
 use crate::gltf::{rest_matrix, rest_trs};
-use crate::gltf::{Document, Path, Skeleton, Skinning};
+use crate::gltf::{Channel, Document, Path, Skeleton, Skinning};
 use crate::progress::Progress;
 use crate::tween::mesh_geometry;
 use anyhow::{bail, Result};
@@ -41,11 +41,13 @@ type Points = Vec<Vec<Vec<DVec3>>>;
 /// Each drawn primitive's triangles.
 type Triangles = Vec<Vec<[u32; 3]>>;
 
-/// A clip that moves nodes: its name, animation index and time span (first to last key).
+/// A clip that moves nodes: its name, animation index, time span (first to last key) and
+/// the channels that move them (read once, for its span and its samples).
 struct ClipSpan {
     name: String,
     animation: usize,
     span: (f64, f64),
+    channels: Vec<Channel>,
 }
 
 /// The clips of `doc` that move nodes (translation, rotation or scale channels).
@@ -54,10 +56,9 @@ fn moving_clips(doc: &Document) -> Result<Vec<ClipSpan>> {
     let mut out = Vec::new();
     for (a, anim) in arr(&doc.json, "animations").iter().enumerate() {
         let name = clip_name(anim, a);
-        let channels = read_channels(doc, &name, anim, nodes)?;
-        let times = (channels.iter())
-            .filter(|c| c.path != Path::Weights)
-            .flat_map(|c| c.times.iter().copied());
+        let mut channels = read_channels(doc, &name, anim, nodes)?;
+        channels.retain(|c| c.path != Path::Weights);
+        let times = channels.iter().flat_map(|c| c.times.iter().copied());
         let span = times.fold(None, |s: Option<(f64, f64)>, t| {
             Some(s.map_or((t, t), |(a, b)| (a.min(t), b.max(t))))
         });
@@ -66,29 +67,27 @@ fn moving_clips(doc: &Document) -> Result<Vec<ClipSpan>> {
                 name,
                 animation: a,
                 span,
+                channels,
             });
         }
     }
     Ok(out)
 }
 
-/// The local transforms clip `animation` gives the nodes it moves, at each of `times`.
-fn samples(doc: &Document, clip: &ClipSpan, times: &[f64]) -> Result<Samples> {
-    let anim = &doc.json["animations"][clip.animation];
-    let nodes = arr(&doc.json, "nodes").len();
-    let channels = read_channels(doc, &clip.name, anim, nodes)?;
+/// The local transforms `clip` gives the nodes it moves, at each of `times`.
+fn samples(doc: &Document, clip: &ClipSpan, times: &[f64]) -> Samples {
     let mut by_node: BTreeMap<usize, Vec<_>> = BTreeMap::new();
-    for c in channels.iter().filter(|c| c.path != Path::Weights) {
+    for c in &clip.channels {
         by_node.entry(c.node).or_default().push(c);
     }
-    Ok(by_node
+    by_node
         .into_iter()
         .map(|(node, chans)| {
             let rest = rest_trs(&doc.json["nodes"][node]);
             let at = |&t: &f64| (t, local_at(rest, chans.iter().copied(), t).to_cols_array());
             (node, times.iter().map(at).collect())
         })
-        .collect())
+        .collect()
 }
 
 /// Node `x`'s world transform: the `local` transforms of it and its ancestors, composed up
@@ -210,7 +209,7 @@ fn columns(points: Points, times: &[f64]) -> Vec<Column> {
 pub fn posed(doc: &Document, clip: &str, times: &[f64]) -> Result<Points> {
     let found = find(doc, clip)?;
     let (meshes, _) = drawn(doc)?;
-    pose(doc, &meshes, &samples(doc, &found, times)?, times)
+    pose(doc, &meshes, &samples(doc, &found, times), times)
 }
 
 /// The clip `name` (or index) among those that move nodes, or an error listing them.
@@ -296,7 +295,7 @@ pub fn scene(
     let progress = Progress::new(clips.len() as u64, "preview", quiet);
     for clip in &clips {
         let times = band_times(clip.span, count, animate, most_frames);
-        let points = pose(doc, &meshes, &samples(doc, clip, &times)?, &times)?;
+        let points = pose(doc, &meshes, &samples(doc, clip, &times), &times)?;
         bands.push((clip.name.clone(), columns(points, &times)));
         progress.inc();
     }
