@@ -170,15 +170,16 @@ pub fn compact(out: &mut Output, candidates: &BTreeSet<usize>) {
         let s = v["byteOffset"].as_u64().unwrap_or(0) as usize;
         (s, s + v["byteLength"].as_u64().unwrap_or(0) as usize)
     };
+    // Where each kept view's data goes, in view order.
     let mut places = Vec::new();
-    let (mut end, mut in_order) = (0usize, true);
+    let (mut end, mut in_order, mut last_end) = (0usize, true, 0usize);
     for (i, v) in out.bin.views.iter().enumerate() {
         if view_used[i] {
             let (s, e) = span(v);
             let at = end.next_multiple_of(4);
-            in_order &= at <= s && places.last().is_none_or(|&(_, _, last)| last <= s);
-            places.push((i, at, e));
-            end = at + (e - s);
+            in_order &= at <= s && last_end <= s;
+            places.push(at);
+            (end, last_end) = (at + (e - s), e);
         }
     }
     let mut bytes = match in_order {
@@ -187,11 +188,10 @@ pub fn compact(out: &mut Output, candidates: &BTreeSet<usize>) {
     };
     let mut new_views = Vec::new();
     let mut vremap = vec![usize::MAX; views];
-    let old_views = std::mem::take(&mut out.bin.views);
-    let mut old_views: Vec<Option<Value>> = old_views.into_iter().map(Some).collect();
+    let kept =
+        (std::mem::take(&mut out.bin.views).into_iter().enumerate()).filter(|(i, _)| view_used[*i]);
     let mut packed = 0;
-    for &(i, at, _) in &places {
-        let mut nv = old_views[i].take().expect("each view placed once");
+    for ((i, mut nv), &at) in kept.zip(&places) {
         let (s, e) = span(&nv);
         match in_order {
             true => {
