@@ -32,13 +32,13 @@ pub use channel::{
     clip_name, close_keys, local_at, node_parents, push_key, read_channels, rest_matrix, rest_trs,
     slerp, Channel, Interp, Path, MIN_QUATERNION,
 };
-pub(crate) use compact::{compact, drop_channels, PASSED_THROUGH};
+pub(crate) use compact::{compact, drop_channels, AccessorRefs, PASSED_THROUGH};
 pub use encode::{
     exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,
 };
 pub use read::{
-    arr, at, listed, listed_or_none, node_target, quoted_name, starts_like_bvh, weights_target,
-    Document, WeightsTarget,
+    arr, at, listed, listed_or_none, mesh_nodes, node_target, quoted_name, starts_like_bvh,
+    weights_target, Document, WeightsTarget,
 };
 pub use reorder::reorder;
 pub use skin::{Skeleton, Skinning};

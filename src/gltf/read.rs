@@ -406,6 +406,19 @@ pub fn arr<'a>(v: &'a Value, key: &str) -> &'a [Value] {
         .unwrap_or(&[])
 }
 
+/// The nodes instancing each mesh, in node order (`mesh_nodes(json)[m]`), found in one pass
+/// over the nodes; a node naming a mesh the file lacks is left out. (A scan of the nodes for
+/// each mesh took 10 of the 10.2 s of a preview of 30,000 one-triangle morph meshes.)
+pub fn mesh_nodes(json: &Value) -> Vec<Vec<usize>> {
+    let mut out = vec![Vec::new(); arr(json, "meshes").len()];
+    for (i, n) in arr(json, "nodes").iter().enumerate() {
+        if let Some(list) = n["mesh"].as_u64().and_then(|m| out.get_mut(m as usize)) {
+            list.push(i);
+        }
+    }
+    out
+}
+
 fn split_glb<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a [u8], Option<&'a [u8]>)> {
     let word = |at: usize| -> Option<u32> {
         bytes
@@ -465,8 +478,19 @@ fn decode_data_uri(uri: &str) -> Option<Vec<u8>> {
 
 #[cfg(test)]
 mod tests {
-    use super::{weights_target, WeightsTarget};
+    use super::{mesh_nodes, weights_target, WeightsTarget};
     use serde_json::json;
+
+    /// Each mesh's nodes in node order; a node naming a mesh the file lacks, or none, is passed.
+    #[test]
+    fn the_nodes_of_each_mesh_in_node_order() {
+        let json = json!({
+            "meshes": [{}, {}, {}],
+            "nodes": [{"mesh": 1}, {}, {"mesh": 0}, {"mesh": 1}, {"mesh": 7}, {"mesh": "x"}],
+        });
+        assert_eq!(mesh_nodes(&json), vec![vec![2], vec![0, 3], vec![]]);
+        assert!(mesh_nodes(&json!({"nodes": [{"mesh": 0}]})).is_empty());
+    }
 
     #[test]
     fn weights_targets_by_path_and_by_pointer() {

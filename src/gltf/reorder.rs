@@ -16,15 +16,22 @@
 
 use super::accessor::{comp_size, components, read_uint};
 use super::build::Output;
-use super::compact::visit_accessor_refs;
+use super::compact::{visit_mesh_refs, AccessorRefs};
 use super::encode::{ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK};
 use serde_json::{json, Value};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Reorder primitive `prim` of mesh `mesh` in `out`: new accessors for its indices and every
-/// vertex accessor, the old ones added to `replaced` (for the compact stage to drop). Returns
-/// whether it was reordered.
-pub fn reorder(out: &mut Output, mesh: usize, prim: usize, replaced: &mut BTreeSet<usize>) -> bool {
+/// vertex accessor, the old ones added to `replaced` (for the compact stage to drop). `outside`
+/// counts the references from outside the mesh (the mesh left out, see [`AccessorRefs`]).
+/// Returns whether it was reordered.
+pub fn reorder(
+    out: &mut Output,
+    mesh: usize,
+    prim: usize,
+    outside: &AccessorRefs,
+    replaced: &mut BTreeSet<usize>,
+) -> bool {
     let p = out.json["meshes"][mesh]["primitives"][prim].clone();
     if p["mode"].as_u64().unwrap_or(4) != 4
         || p.get("extensions")
@@ -70,11 +77,11 @@ pub fn reorder(out: &mut Output, mesh: usize, prim: usize, replaced: &mut BTreeS
     refs.retain(|r| acc(r.1).get("bufferView").is_some() || acc(r.1).get("sparse").is_some());
     // Vertex data used anywhere else would be renumbered under the other user too.
     let mine: BTreeSet<usize> = refs.iter().map(|r| r.1).collect();
-    let mut elsewhere = 0usize;
-    let mut json = std::mem::take(&mut out.json);
-    visit_accessor_refs(&mut json, &mut |a| elsewhere += mine.contains(a) as usize);
-    out.json = json;
-    if elsewhere != refs.len() {
+    let mut users: usize = mine.iter().map(|&a| outside.outside(a)).sum();
+    visit_mesh_refs(&mut out.json["meshes"][mesh], &mut |a| {
+        users += mine.contains(a) as usize
+    });
+    if users != refs.len() {
         return false;
     }
     let Some(mut indices) = read_indices(out, index_acc) else {
@@ -377,7 +384,9 @@ mod tests {
                         "values": { "bufferView": sv } },
         }));
         let mut replaced = BTreeSet::new();
-        assert!(reorder(&mut out, 0, 0, &mut replaced));
+        let mut refs = AccessorRefs::of(&mut out.json);
+        refs.leave_out(&mut out.json, 0);
+        assert!(reorder(&mut out, 0, 0, &refs, &mut replaced));
         assert_eq!(replaced.len(), 5);
         let p = out.json["meshes"][0]["primitives"][0].clone();
         // An attribute whose name a JSON pointer must escape follows its accessor too.

@@ -11,8 +11,8 @@
 //! ```
 
 use super::{Column, Scene, MAX_ANIMATION_FRAMES};
-use crate::gltf::{arr, clip_name, listed_or_none, local_at, node_parents, read_channels};
-use crate::gltf::{rest_matrix, rest_trs};
+use crate::gltf::{arr, clip_name, listed_or_none, local_at, mesh_nodes, node_parents};
+use crate::gltf::{read_channels, rest_matrix, rest_trs};
 use crate::gltf::{Channel, Document, Path, Skeleton, Skinning};
 use crate::progress::Progress;
 use crate::tween::mesh_geometry;
@@ -118,13 +118,9 @@ struct Drawn<'a> {
 /// The meshes drawn, and the triangles of each primitive (in the same order).
 fn drawn(doc: &Document) -> Result<(Vec<Drawn<'_>>, Triangles)> {
     let json = &doc.json;
-    let nodes = arr(json, "nodes");
     let (mut meshes, mut triangles) = (Vec::new(), Vec::new());
-    for mi in 0..arr(json, "meshes").len() {
-        let Some(node) = nodes
-            .iter()
-            .position(|n| n["mesh"].as_u64() == Some(mi as u64))
-        else {
+    for (mi, carriers) in mesh_nodes(json).iter().enumerate() {
+        let Some(&node) = carriers.first() else {
             continue;
         };
         let prims = (arr(&json["meshes"][mi], "primitives").iter())

@@ -20,7 +20,7 @@ pub use camera::View;
 pub use clips::posed;
 pub use raster::{Picture, Shading, BACKGROUND};
 
-use crate::gltf::{arr, node_parents, rest_matrix, Access, Document};
+use crate::gltf::{arr, mesh_nodes, node_parents, rest_matrix, Access, Document};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
@@ -163,13 +163,11 @@ struct Scene {
 fn mesh_worlds(json: &Value) -> Vec<DMat4> {
     let nodes = arr(json, "nodes");
     let parents = node_parents(json);
-    (0..arr(json, "meshes").len())
-        .map(|mi| {
-            (nodes.iter())
-                .position(|n| n["mesh"].as_u64() == Some(mi as u64))
-                .map_or(DMat4::IDENTITY, |x| {
-                    clips::world_of(x, &parents, |x| rest_matrix(&nodes[x]))
-                })
+    (mesh_nodes(json).iter())
+        .map(|carriers| {
+            carriers.first().map_or(DMat4::IDENTITY, |&x| {
+                clips::world_of(x, &parents, |x| rest_matrix(&nodes[x]))
+            })
         })
         .collect()
 }

@@ -379,13 +379,7 @@ impl Run<'_> {
                 });
             }
         }
-        // The nodes carrying each mesh, found in one pass over the nodes.
-        let mut carriers: HashMap<usize, Vec<usize>> = HashMap::new();
-        for (i, n) in gltf::arr(&self.doc.json, "nodes").iter().enumerate() {
-            if let Some(m) = n["mesh"].as_u64() {
-                carriers.entry(m as usize).or_default().push(i);
-            }
-        }
+        let carriers = gltf::mesh_nodes(&self.doc.json);
         let plans: Vec<MeshPlan> = (self.meshes.iter().zip(&times).zip(codes))
             .map(|((m, times), codes)| MeshPlan {
                 mesh: m.mesh,
@@ -393,7 +387,7 @@ impl Run<'_> {
                 played: played_by_node(
                     &self.doc.json,
                     m,
-                    carriers.get(&m.mesh).map_or(&[], Vec::as_slice),
+                    carriers.get(m.mesh).map_or(&[], Vec::as_slice),
                     times,
                 ),
             })

@@ -6,8 +6,8 @@
 
 use super::timegrid::snap;
 use crate::gltf::{
-    arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3,
-    weights_target, Document, WeightsTarget,
+    arr, listed, mesh_nodes, quoted_name, read_attribute, read_attribute3, read_triangles,
+    read_vec3, weights_target, Document, WeightsTarget,
 };
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -239,7 +239,7 @@ pub fn meshes_without_weights_animation(doc: &Document) -> Vec<usize> {
                 .any(|p| !arr(p, "targets").is_empty())
         })
         .filter(|(mi, _)| {
-            let nodes = users.nodes.get(mi).map_or(&[][..], Vec::as_slice);
+            let nodes = users.nodes.get(*mi).map_or(&[][..], Vec::as_slice);
             users.channels(nodes).is_empty()
         })
         .map(|(mi, _)| mi)
@@ -273,7 +273,7 @@ fn morph_mesh(
     for (pi, p) in prims.iter().enumerate() {
         primitives.push(read_primitive(doc, &name, pi, p, target_count)?);
     }
-    let nodes = users.nodes.get(&mi).cloned().unwrap_or_default();
+    let nodes = users.nodes.get(mi).cloned().unwrap_or_default();
     let channels = users.channels(&nodes);
     let use_animation = match opts.source {
         KeySource::Targets => false,
@@ -311,26 +311,21 @@ fn morph_mesh(
 /// animated by its own channel took 5 s to inspect).
 struct MeshUsers {
     /// Mesh -> the nodes carrying it, in node order.
-    nodes: HashMap<usize, Vec<usize>>,
+    nodes: Vec<Vec<usize>>,
     /// Node -> its weights channels: (animation, channel, sampler), in file order.
     channels: HashMap<usize, Vec<(usize, usize, usize)>>,
 }
 
 impl MeshUsers {
     fn of(json: &Value) -> MeshUsers {
-        let mut nodes: HashMap<usize, Vec<usize>> = HashMap::new();
-        for (i, n) in arr(json, "nodes").iter().enumerate() {
-            if let Some(m) = n["mesh"].as_u64() {
-                nodes.entry(m as usize).or_default().push(i);
-            }
-        }
+        let nodes = mesh_nodes(json);
         let mut channels: HashMap<usize, Vec<(usize, usize, usize)>> = HashMap::new();
         for (ai, anim) in arr(json, "animations").iter().enumerate() {
             for (ci, ch) in arr(anim, "channels").iter().enumerate() {
                 let sampler = ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize;
                 let aimed: &[usize] = match weights_target(&ch["target"]) {
                     Some(WeightsTarget::Node(n)) => &[n],
-                    Some(WeightsTarget::Mesh(m)) => nodes.get(&m).map_or(&[], Vec::as_slice),
+                    Some(WeightsTarget::Mesh(m)) => nodes.get(m).map_or(&[], Vec::as_slice),
                     None => &[],
                 };
                 for &node in aimed {

@@ -189,6 +189,9 @@ pub fn apply_frames(
     // Set first: the writers below decide sparse accessors by it, as the compaction did.
     out.meshopt = compact_opts.is_some_and(|o| o.meshopt);
     let shifts = ClipShifts::of(frames, loops);
+    let carriers = gltf::mesh_nodes(&out.json);
+    // Whose accessors the reorder stage may renumber (with meshopt): counted once.
+    let mut refs = out.meshopt.then(|| gltf::AccessorRefs::of(&mut out.json));
     let mut edits = Edits::default();
     let mut dropped: Vec<(usize, usize)> = Vec::new();
     for (m, mesh) in frames.iter().zip(meshes) {
@@ -221,16 +224,22 @@ pub fn apply_frames(
             let first = m.primitives.first().map_or(0, |p| p.index);
             applied.most_targets = Some((mesh.name.clone(), first, count));
         }
+        if let Some(refs) = &mut refs {
+            refs.leave_out(&mut out.json, m.mesh);
+        }
         set_targets(out, &w, &plays, &mut edits.replaced);
-        if let (Some(c), Some(opts @ CompactOptions { meshopt: true, .. })) =
-            (&w.compact, compact_opts)
+        if let (Some(c), Some(opts @ CompactOptions { meshopt: true, .. }), Some(refs)) =
+            (&w.compact, compact_opts, &mut refs)
         {
             base::reencode(out, doc, m, &c.base, opts.tolerance, &mut edits.replaced)?;
             for p in &m.primitives {
-                gltf::reorder(out, m.mesh, p.index, &mut edits.replaced);
+                gltf::reorder(out, m.mesh, p.index, refs, &mut edits.replaced);
             }
         }
-        name_targets(out, &w, &plays, new, &shifts);
+        if let Some(refs) = &mut refs {
+            refs.put_back(&mut out.json, m.mesh);
+        }
+        name_targets(out, &w, &plays, new, &shifts, &carriers[m.mesh]);
         let outputs = push_weights(out, &w, &plays, new);
         for (track, output) in m.tracks.iter().zip(outputs) {
             animate_track(out, track, output, shifts.of_track(track), &mut edits);
@@ -649,7 +658,7 @@ fn reencode_authored(
     targets
 }
 
-/// The mesh's default weights (and its nodes' overrides) padded for the new targets (frame 0
+/// The mesh's default weights (and the overrides of its nodes, `carriers`) padded for the new targets (frame 0
 /// in the frames layout), and the targets' names in `extras.targetNames`: the authored names
 /// kept, each new target named after its frame (`f0007_t0.2917`: frame 7 at 0.2917 s).
 fn name_targets(
@@ -658,6 +667,7 @@ fn name_targets(
     plays: &[Vec<Played>],
     new: usize,
     shifts: &ClipShifts,
+    carriers: &[usize],
 ) {
     let m = w.frames;
     let kept = w.kept();
@@ -699,11 +709,10 @@ fn name_targets(
         mesh["extras"] = json!({});
     }
     mesh["extras"]["targetNames"] = json!(names);
-    if let Some(nodes) = out.json.get_mut("nodes").and_then(Value::as_array_mut) {
-        for n in nodes.iter_mut() {
-            if n["mesh"].as_u64() == Some(m.mesh as u64) && n.get("weights").is_some() {
-                n["weights"] = pad(n);
-            }
+    for &i in carriers {
+        let n = &mut out.json["nodes"][i];
+        if n.get("weights").is_some() {
+            n["weights"] = pad(n);
         }
     }
 }
