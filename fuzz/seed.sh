@@ -33,6 +33,9 @@ if [ -x $B/gltfpack ] && [ -d $F ]; then
   tmp=$(mktemp -d)
   $B/gltfpack -i $F/morph-keyframes/Flamingo.glb -o $tmp/cc.glb -cc >/dev/null 2>&1 || true
   $B/gltf-transform draco $F/morph-keyframes/Flamingo.glb $tmp/draco.glb >/dev/null 2>&1 || true
+  # WebP textures (the USD stage writes them as PNG).
+  $B/gltf-transform webp $F/morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf \
+    corpus/usd_stage/webp.glb >/dev/null 2>&1 || true
   cp $tmp/*.glb corpus/gltf_read/ 2>/dev/null || true
   # Raw streams with a 4-byte header choosing the decoder (see fuzz_targets/decoders.rs).
   python3 - "$tmp" corpus/decoders <<'PY'

@@ -24,8 +24,9 @@
 //! Every texture reads `primvars:st` (TEXCOORD_0; `st1`, ... for other sets) through a
 //! `UsdPrimvarReader_float2`, with the sampler's wrap modes (`repeat`, `mirror`, `clamp`) and
 //! `KHR_texture_transform` as a `UsdTransform2d` (in USD's flipped V: see [`transform_2d`]).
-//! Image files are carried as they are (PNG, JPEG); KTX2, WebP and AVIF cannot be read by USD:
-//! those textures are left out and named in [`Look::left_out`].
+//! Image files are carried as they are (PNG, JPEG); WebP images are written as PNG (decoded by
+//! `image-webp`, stored losslessly); KTX2 and AVIF cannot be read by USD: those textures are
+//! left out and named in [`Look::left_out`].
 
 use super::stage::identifier;
 use crate::gltf::{arr, Document};
@@ -446,10 +447,12 @@ impl<'a> LookBuilder<'a> {
         Ok(Some(name.to_owned()))
     }
 
-    /// The file name of the image texture `texture` shows (its PNG or JPEG source; KHR_texture_basisu,
-    /// EXT_texture_webp and EXT_texture_avif sources are left out, with a line in `left_out`).
+    /// The file name of the image texture `texture` shows (its PNG or JPEG source, or its
+    /// EXT_texture_webp source as PNG; KHR_texture_basisu and EXT_texture_avif sources are left
+    /// out, with a line in `left_out`).
     fn image_file(&mut self, texture: &Json, what: &str) -> Result<Option<String>> {
-        let extension_source = ["KHR_texture_basisu", "EXT_texture_webp", "EXT_texture_avif"]
+        // WebP first: of the three, the one we can write for USD.
+        let extension_source = ["EXT_texture_webp", "KHR_texture_basisu", "EXT_texture_avif"]
             .iter()
             .find_map(|e| texture["extensions"][*e]["source"].as_u64());
         let Some(i) = texture["source"].as_u64().or(extension_source) else {
@@ -476,11 +479,25 @@ impl<'a> LookBuilder<'a> {
         // An image named after its file: "uv_texture.jpg" gives uv_texture.
         let label = match label.rsplit_once('.') {
             Some((stem, ext))
-                if ["png", "jpg", "jpeg"].contains(&ext.to_ascii_lowercase().as_str()) =>
+                if ["png", "jpg", "jpeg", "webp"].contains(&ext.to_ascii_lowercase().as_str()) =>
             {
                 stem.to_owned()
             }
             _ => label,
+        };
+        // WebP (EXT_texture_webp, what `gltf-transform webp` writes) as PNG, which USD reads.
+        let (data, mime) = match mime {
+            Some("image/webp") => match webp_to_png(&data) {
+                Ok(png) => (png, Some("image/png")),
+                Err(why) => {
+                    self.look.left_out.push(format!(
+                        "{what}: image {i} {label:?} is a WebP image that cannot be read ({why}), left out"
+                    ));
+                    self.files.insert(i, None);
+                    return Ok(None);
+                }
+            },
+            _ => (data, mime),
         };
         let file = match mime {
             Some("image/png") | Some("image/jpeg") => {
@@ -505,7 +522,7 @@ impl<'a> LookBuilder<'a> {
             other => {
                 let kind = other.map_or("an unknown format", |m| m.trim_start_matches("image/"));
                 self.look.left_out.push(format!(
-                    "{what}: image {i} {label:?} is {} (USD reads PNG and JPEG), left out",
+                    "{what}: image {i} {label:?} is {} (USD reads PNG and JPEG, and WebP is written as PNG), left out",
                     kind.to_uppercase()
                 ));
                 None
@@ -514,6 +531,38 @@ impl<'a> LookBuilder<'a> {
         self.files.insert(i, file.clone());
         Ok(file)
     }
+}
+
+/// Most bytes a WebP image may decode to for [`webp_to_png`] (a 16,384-pixel square RGBA
+/// texture): a header asking for more is refused rather than allocated.
+const MAX_WEBP_BYTES: usize = 1 << 30;
+
+/// A WebP image as a PNG file: decoded (the first frame of an animated one) and stored
+/// losslessly, RGB or RGBA as the image has alpha; `Err` says why it cannot be read.
+fn webp_to_png(data: &[u8]) -> Result<Vec<u8>, String> {
+    let mut decoder =
+        image_webp::WebPDecoder::new(std::io::Cursor::new(data)).map_err(|e| e.to_string())?;
+    let (width, height) = decoder.dimensions();
+    let size = (decoder.output_buffer_size())
+        .filter(|&n| n <= MAX_WEBP_BYTES)
+        .ok_or_else(|| format!("{width} x {height} pixels"))?;
+    decoder.set_memory_limit(MAX_WEBP_BYTES);
+    let mut pixels = vec![0u8; size];
+    decoder.read_image(&mut pixels).map_err(|e| e.to_string())?;
+    let mut out = Vec::new();
+    let mut png = png::Encoder::new(&mut out, width, height);
+    png.set_color(if decoder.has_alpha() {
+        png::ColorType::Rgba
+    } else {
+        png::ColorType::Rgb
+    });
+    png.set_depth(png::BitDepth::Eight);
+    let mut writer = png.write_header().map_err(|e| e.to_string())?;
+    writer
+        .write_image_data(&pixels)
+        .map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    Ok(out)
 }
 
 /// A material's surface inputs and the shaders they read, as they are built.
