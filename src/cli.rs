@@ -654,6 +654,10 @@ pub struct BenchArgs {
     /// With --preview: the bands (comma-separated methods).
     #[arg(long, default_value = "linear")]
     pub preview_methods: String,
+    /// Instead: write a scene of this many small morph meshes (a node each) and time `tween`
+    /// (.glb, --meshopt, .usdc) and `preview` on it, each in a child process (e.g. 30000).
+    #[arg(long, value_name = "MESHES")]
+    pub scene: Option<usize>,
     /// With --end-to-end: more `tween` options for the timed run (e.g. --e2e-arg=--compact).
     #[arg(long = "e2e-arg", value_name = "ARG", allow_hyphen_values = true)]
     pub e2e_args: Vec<String>,

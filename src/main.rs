@@ -103,6 +103,11 @@ fn run_bench(args: BenchArgs) -> ExitCode {
             println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
         });
     }
+    if let Some(meshes) = args.scene {
+        return finish(bench::scene(meshes), |r| {
+            println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
+        });
+    }
     if let Some(triangles) = args.end_to_end {
         let r = bench::end_to_end(triangles, args.e2e_tweens, &args.e2e_format, &args.e2e_args);
         return finish(r, |r| {

@@ -400,31 +400,13 @@ pub fn end_to_end(
     })?;
     let output = dir.join(format!("tween.{format}"));
     let frames = 2 * (tweens + 1) + 1;
-    let exe = std::env::current_exe()?;
+    let count = tweens.to_string();
     let run = |more: &[&str]| -> Result<(f64, String)> {
-        let start = Instant::now();
-        let out = std::process::Command::new(&exe)
-            .args([
-                "tween",
-                input.to_str().unwrap_or(""),
-                "-o",
-                output.to_str().unwrap_or(""),
-                "--tweens",
-                &tweens.to_string(),
-            ])
-            .args(extra)
-            .args(more)
-            .output()?;
-        let wall_s = start.elapsed().as_secs_f64();
-        anyhow::ensure!(
-            out.status.success(),
-            "tween failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        Ok((
-            wall_s,
-            String::from_utf8_lossy(&out.stderr).trim().to_string(),
-        ))
+        let mut args = vec!["tween", input.to_str().unwrap_or(""), "-o"];
+        args.extend([output.to_str().unwrap_or(""), "--tweens", &count]);
+        args.extend(extra.iter().map(String::as_str));
+        args.extend(more);
+        child(&args)
     };
     // The same input by `--method linear` (no set-up, no solve: reading and writing), one after
     // the other, unless the options name a method.
@@ -454,6 +436,89 @@ pub fn end_to_end(
     };
     let _ = std::fs::remove_dir_all(&dir);
     Ok(r)
+}
+
+/// This program run as a child with `args`, timed: (wall seconds, its standard error).
+fn child(args: &[&str]) -> Result<(f64, String)> {
+    let start = Instant::now();
+    let out = std::process::Command::new(std::env::current_exe()?)
+        .args(args)
+        .output()?;
+    let wall_s = start.elapsed().as_secs_f64();
+    anyhow::ensure!(
+        out.status.success(),
+        "{} failed: {}",
+        args.first().unwrap_or(&""),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr).trim().to_string();
+    Ok((wall_s, stderr))
+}
+
+/// A scene of many small morph meshes, each command timed on it in a child process
+/// (`inbetween bench --scene N`): what grows with the number of meshes, nodes and accessors
+/// rather than with triangles.
+#[derive(Debug, Serialize)]
+pub struct SceneBench {
+    pub meshes: usize,
+    pub input_mib: f64,
+    /// (command line after the input, wall seconds), in order.
+    pub runs: Vec<(String, f64)>,
+}
+
+/// Write `meshes` small tubes (8 triangles, one bent key each, a node each) to one .glb and
+/// time on it `tween` to .glb, .glb with --meshopt, .usdc, and `preview`. Each mesh or
+/// primitive scanning the whole file made these quadratic: at 30,000 meshes `tween` to .glb
+/// took 50 s and `preview` 19 s (now about 10 and 1 s on 2 cores).
+///
+/// ```text
+/// inbetween bench --scene 30000
+/// ```
+pub fn scene(meshes: usize) -> Result<SceneBench> {
+    let dir = std::env::temp_dir().join(format!("inbetween-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let input = dir.join("scene.glb");
+    let each = |i: usize| {
+        let mut s = synth::tube(2, 4, 1.0, 0.2, 0.2);
+        let at = DVec3::new((i % 200) as f64 * 1.5, (i / 200) as f64 * 1.5, 0.0);
+        s.positions.iter_mut().for_each(|p| *p += at);
+        let key = synth::bend(&s.positions, at.x + 0.5, 0.5, 0.5);
+        synth::KeyedMesh::new(&format!("prop{i}"), s, vec![key])
+    };
+    synth::KeyframeFile {
+        meshes: (0..meshes).map(each).collect(),
+        key_times: None,
+        key_weights: None,
+    }
+    .write(&input)?;
+    let path = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let input_s = path("scene.glb");
+    let cases = [
+        ("tween", path("out.glb"), ""),
+        ("tween", path("meshopt.glb"), "--meshopt"),
+        ("tween", path("out.usdc"), ""),
+        ("preview", path("sheet.png"), ""),
+    ];
+    let mut runs = Vec::new();
+    for (command, output, more) in &cases {
+        let mut args = vec![*command, &input_s, "-o", output, "-q"];
+        args.extend(more.split_whitespace());
+        let (wall_s, _) = child(&args)?;
+        let name = std::path::Path::new(output).file_name().unwrap_or_default();
+        runs.push((
+            format!("{command} -o {} {more}", name.to_string_lossy())
+                .trim()
+                .to_string(),
+            wall_s,
+        ));
+    }
+    let input_mib = std::fs::metadata(&input)?.len() as f64 / 1048576.0;
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(SceneBench {
+        meshes,
+        input_mib,
+        runs,
+    })
 }
 
 /// `inbetween preview` timed on a bent tube of `triangles` (two keys) drawn by `methods`
