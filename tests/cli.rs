@@ -1743,3 +1743,36 @@ fn bent_arm(
     .unwrap();
     input
 }
+
+/// `bench --end-to-end` and `bench --scene` run their commands in child processes and print
+/// what they timed as JSON: every run there, each with its wall time, the summary of the timed
+/// tween (and its linear twin) beside it.
+#[test]
+fn bench_times_whole_commands_in_child_processes() {
+    let json = |args: &[&str]| -> serde_json::Value {
+        let out = run_ok(args);
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let e2e = json(&["bench", "--end-to-end", "2000", "--e2e-tweens", "3"]);
+    assert!(e2e["wall_s"].as_f64().unwrap() > 0.0, "{e2e}");
+    assert!(e2e["linear_wall_s"].as_f64().unwrap() > 0.0, "{e2e}");
+    let summary = e2e["summary"].as_str().unwrap();
+    assert!(summary.contains("3 keys -> 9 frames"), "{summary}");
+    let scene = json(&["bench", "--scene", "12"]);
+    assert_eq!(scene["meshes"], 12);
+    let runs: Vec<&str> = (scene["runs"].as_array().unwrap().iter())
+        .map(|r| {
+            assert!(r[1].as_f64().unwrap() > 0.0, "{r}");
+            r[0].as_str().unwrap()
+        })
+        .collect();
+    assert_eq!(
+        runs,
+        [
+            "tween -o out.glb",
+            "tween -o meshopt.glb --meshopt",
+            "tween -o out.usdc",
+            "preview -o sheet.png"
+        ]
+    );
+}
