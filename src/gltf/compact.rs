@@ -288,26 +288,24 @@ fn visit_index(v: &mut Value, f: &mut dyn FnMut(&mut usize)) {
     }
 }
 
-/// `f` on every accessor index of a mesh's primitives (indices, attributes, morph targets).
-pub(super) fn visit_mesh_refs(mesh: &mut Value, f: &mut dyn FnMut(&mut usize)) {
-    for p in mesh
-        .get_mut("primitives")
+/// The items of the array `v[key]` (none where it is not an array).
+fn items_mut<'a>(v: &'a mut Value, key: &str) -> impl Iterator<Item = &'a mut Value> {
+    v.get_mut(key)
         .and_then(Value::as_array_mut)
         .into_iter()
         .flatten()
-    {
+}
+
+/// `f` on every accessor index of a mesh's primitives (indices, attributes, morph targets).
+pub(super) fn visit_mesh_refs(mesh: &mut Value, f: &mut dyn FnMut(&mut usize)) {
+    for p in items_mut(mesh, "primitives") {
         if let Some(i) = p.get_mut("indices") {
             visit_index(i, f);
         }
         if let Some(a) = p.get_mut("attributes").and_then(Value::as_object_mut) {
             a.values_mut().for_each(|v| visit_index(v, f));
         }
-        let targets = p.get_mut("targets").and_then(Value::as_array_mut);
-        for t in targets
-            .into_iter()
-            .flatten()
-            .filter_map(Value::as_object_mut)
-        {
+        for t in items_mut(p, "targets").filter_map(Value::as_object_mut) {
             t.values_mut().for_each(|v| visit_index(v, f));
         }
     }
@@ -315,36 +313,16 @@ pub(super) fn visit_mesh_refs(mesh: &mut Value, f: &mut dyn FnMut(&mut usize)) {
 
 /// Call `f` on every accessor index the core spec (and EXT_mesh_gpu_instancing) refers to.
 pub(super) fn visit_accessor_refs(json: &mut Value, f: &mut dyn FnMut(&mut usize)) {
-    for m in json
-        .get_mut("meshes")
-        .and_then(Value::as_array_mut)
-        .into_iter()
-        .flatten()
-    {
+    for m in items_mut(json, "meshes") {
         visit_mesh_refs(m, f);
     }
-    for s in json
-        .get_mut("skins")
-        .and_then(Value::as_array_mut)
-        .into_iter()
-        .flatten()
-    {
+    for s in items_mut(json, "skins") {
         if let Some(i) = s.get_mut("inverseBindMatrices") {
             visit_index(i, f);
         }
     }
-    for a in json
-        .get_mut("animations")
-        .and_then(Value::as_array_mut)
-        .into_iter()
-        .flatten()
-    {
-        for s in a
-            .get_mut("samplers")
-            .and_then(Value::as_array_mut)
-            .into_iter()
-            .flatten()
-        {
+    for a in items_mut(json, "animations") {
+        for s in items_mut(a, "samplers") {
             for k in ["input", "output"] {
                 if let Some(i) = s.get_mut(k) {
                     visit_index(i, f);
@@ -352,12 +330,7 @@ pub(super) fn visit_accessor_refs(json: &mut Value, f: &mut dyn FnMut(&mut usize
             }
         }
     }
-    for n in json
-        .get_mut("nodes")
-        .and_then(Value::as_array_mut)
-        .into_iter()
-        .flatten()
-    {
+    for n in items_mut(json, "nodes") {
         if let Some(a) = n
             .pointer_mut("/extensions/EXT_mesh_gpu_instancing/attributes")
             .and_then(Value::as_object_mut)
