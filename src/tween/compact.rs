@@ -234,6 +234,11 @@ struct Rows<'a> {
     mesh: &'a MorphMesh,
     /// Authored weights of each frame (empty rows in the frames layout).
     authored: Vec<Vec<f64>>,
+    /// Frames played by their authored weights alone (keys in the rig layout): the output plays
+    /// them as the authored targets blend, so their rows are zero (where the frames' own values
+    /// were taken, a key's normalized normals against the authored blend a player normalizes
+    /// asked for basis targets no key plays).
+    exact: Vec<bool>,
     blocks: Vec<Block>,
 }
 
@@ -261,6 +266,10 @@ impl Rows<'_> {
 
     /// Row `f` of block `b` over vertices `v0..v1` (3 columns each), weighted, into `out`.
     fn fill(&self, b: &Block, f: usize, v0: usize, v1: usize, out: &mut [f64]) {
+        if self.exact[f] {
+            out.fill(0.0);
+            return;
+        }
         let p = &self.frames.primitives[b.prim];
         let values = Self::frame_values(p, b.attr, f).expect("block of a present attribute");
         for (o, d) in out.chunks_exact_mut(3).zip(&values[v0..v1]) {
@@ -507,10 +516,15 @@ pub fn compact(
     }
     let vertices: usize = mesh.primitives.iter().map(|p| p.base.len()).sum();
     let (base, base_error) = base_rounding(mesh, &blocks, restorable, opts, (tol, ntol));
+    let mut exact = vec![rig; count];
+    for &f in &own {
+        exact[f] = false;
+    }
     let mut rows = Rows {
         frames,
         mesh,
         authored,
+        exact,
         blocks,
     };
     // Frames between keys: the authored targets at the weights that come nearest the frame (least
