@@ -351,8 +351,13 @@ fn factor(rows: &Rows) -> Result<Factors> {
     if values < n {
         return factor_by_values(rows, values);
     }
-    let mut gram = Mat::<f64>::zeros(n, n);
+    // Frames played by their authored weights alone have zero rows: left out of the Gram matrix
+    // (faer's eigensolver did not converge on MorphStressTest resampled by gltf-transform, its
+    // keys' zero block beside the frames between) and given zero weights.
+    let live: Vec<usize> = (0..n).filter(|&f| !rows.exact[f]).collect();
+    let mut gram = Mat::<f64>::zeros(live.len(), live.len());
     rows.chunks(&mut |_, _, m| {
+        let m = Mat::from_fn(live.len(), m.ncols(), |r, c| m[(live[r], c)]);
         matmul(
             gram.as_mut(),
             Accum::Add,
@@ -362,7 +367,11 @@ fn factor(rows: &Rows) -> Result<Factors> {
             Par::rayon(0),
         );
     });
-    let (u, sigma) = singular(&gram)?;
+    let (live_u, sigma) = singular(&gram)?;
+    let mut u = Mat::<f64>::zeros(n, sigma.len());
+    for (r, &f) in live.iter().enumerate() {
+        u.row_mut(f).copy_from(live_u.row(r));
+    }
     Ok(Factors::Svd { u, sigma })
 }
 
