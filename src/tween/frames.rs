@@ -565,9 +565,11 @@ type Solved = (Vec<Computed>, Duration, Duration);
 /// the 1M-triangle bench tube's peak stays what it was).
 pub const SIDE_BY_SIDE_TRIANGLES: usize = 200_000;
 
-/// Most vertex positions (vertices times frames) the frames of segments solved side by side
-/// hold together before they are handed on (about 48 MB as deltas).
-const SIDE_BY_SIDE_POSITIONS: usize = 4_000_000;
+/// Most vertex positions (vertices times frames, over all primitives) that work done side by
+/// side holds together before it is handed on, about 48 MB as deltas: the frames of a mesh's
+/// segments solved side by side, and those of small meshes tweened side by side
+/// (`tween::job::side_by_side`).
+pub const SIDE_BY_SIDE_POSITIONS: usize = 4_000_000;
 
 /// Most segments a thread is given in a run solved side by side: the run's keys are held
 /// together, so a long track of keys baked close together holds a few keys a thread, not

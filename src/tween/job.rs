@@ -4,7 +4,8 @@
 use super::compact::CompactFigures;
 use super::compact::{Basis, CompactOptions, MAX_FACTOR};
 use super::frames::{
-    collect_mesh, tween_mesh, MeshFrames, MeshStats, PrimitiveDelta, SIDE_BY_SIDE_TRIANGLES,
+    collect_mesh, tween_mesh, MeshFrames, MeshStats, PrimitiveDelta, SIDE_BY_SIDE_POSITIONS,
+    SIDE_BY_SIDE_TRIANGLES,
 };
 use super::keys::{
     find_morph_meshes, meshes_without_weights_animation, KeyOptions, KeySource, MorphMesh,
@@ -206,18 +207,14 @@ impl Summary {
     }
 }
 
-/// Most vertex positions (vertices times frames, over all primitives) that meshes tweened side
-/// by side hold together, about 48 MB of them: several small meshes (a scene's props, a
-/// crowd's faces) are each set up and solved on a thread of their own, where a mesh at a
+/// `meshes` in runs tweened together: consecutive meshes whose frames together hold at most
+/// [`SIDE_BY_SIDE_POSITIONS`] and whose set-ups together at most [`SIDE_BY_SIDE_TRIANGLES`]
+/// triangles; a mesh holding more is a run of its own. Several small meshes (a scene's props,
+/// a crowd's faces) are each set up and solved on a thread of their own, where a mesh at a
 /// time spread its few triangles over every thread, and the threads spent longer handing the
 /// work over than doing it (3,000 meshes of 8 triangles, 2 threads: 2.9 s, 2.1 s of it in
 /// the kernel, against 1.5 s and 0.2 s side by side). A larger mesh is tweened alone, on every
 /// thread, its frames streamed.
-const SIDE_BY_SIDE_POSITIONS: f64 = 4e6;
-
-/// `meshes` in runs tweened together: consecutive meshes whose frames together hold at most
-/// [`SIDE_BY_SIDE_POSITIONS`] and whose set-ups together at most [`SIDE_BY_SIDE_TRIANGLES`]
-/// triangles; a mesh holding more is a run of its own.
 pub fn side_by_side(meshes: &[MorphMesh], opts: &TweenOptions) -> Vec<Range<usize>> {
     let held = |m: &MorphMesh| {
         let frames: f64 = m
@@ -233,7 +230,8 @@ pub fn side_by_side(meshes: &[MorphMesh], opts: &TweenOptions) -> Vec<Range<usiz
     for (i, m) in meshes.iter().enumerate() {
         let (p, t) = held(m);
         if i > start
-            && (positions + p > SIDE_BY_SIDE_POSITIONS || triangles + t > SIDE_BY_SIDE_TRIANGLES)
+            && (positions + p > SIDE_BY_SIDE_POSITIONS as f64
+                || triangles + t > SIDE_BY_SIDE_TRIANGLES)
         {
             runs.push(start..i);
             (start, positions, triangles) = (i, 0.0, 0);
