@@ -240,12 +240,7 @@ impl Accessor {
         self.comp_size() * self.ncomp
     }
     fn decode(&self, b: &[u8], at: usize) -> f64 {
-        let raw = match self.ty {
-            5126 => return f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64,
-            5120 => b[at] as i8 as f64,
-            5122 => i16::from_le_bytes([b[at], b[at + 1]]) as f64,
-            _ => read_uint(b, at, self.ty) as f64,
-        };
+        let raw = raw_component(b, at, self.ty);
         if !self.normalized {
             return raw;
         }
@@ -267,6 +262,17 @@ pub(super) fn comp_size(ty: u32) -> Option<usize> {
         5122 | 5123 => Some(2),
         5125 | 5126 => Some(4),
         _ => None,
+    }
+}
+
+/// The component of type `ty` at `at` in `b` as stored (little-endian): a float's value, a
+/// normalized integer's raw integer (what min and max state).
+pub(super) fn raw_component(b: &[u8], at: usize, ty: u32) -> f64 {
+    match ty {
+        5126 => f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64,
+        5120 => b[at] as i8 as f64,
+        5122 => i16::from_le_bytes([b[at], b[at + 1]]) as f64,
+        _ => read_uint(b, at, ty) as f64,
     }
 }
 

@@ -12,7 +12,7 @@
 //! Sizes are checked before decoding: a view decodes to at most its declared length, and all
 //! decoded data together to at most [`MAX_DECODED`] bytes.
 
-use super::accessor::components;
+use super::accessor::{components, raw_component};
 use super::read::arr;
 use serde_json::{json, Value};
 
@@ -251,22 +251,9 @@ fn rebound_filtered(json: &mut Value, bytes: &[u8], views: &[usize]) {
         };
         let element = |i: usize| &bytes[start + i * stride..start + i * stride + width];
         let stored: Vec<f64> = (0..count)
-            .flat_map(|i| element(i).chunks_exact(size).map(|c| stored_value(c, ty)))
+            .flat_map(|i| (0..ncomp).map(move |c| raw_component(element(i), c * size, ty)))
             .collect();
         declare_bounds(json, acc, &stored, ncomp);
-    }
-}
-
-/// One component of type `ty` as stored (little-endian `c`), as min and max state it: the raw
-/// integer of a normalized type, not its value.
-fn stored_value(c: &[u8], ty: u32) -> f64 {
-    match ty {
-        5120 => c[0] as i8 as f64,
-        5121 => c[0] as f64,
-        5122 => i16::from_le_bytes([c[0], c[1]]) as f64,
-        5123 => u16::from_le_bytes([c[0], c[1]]) as f64,
-        5125 => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64,
-        _ => f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64,
     }
 }
 
