@@ -1324,6 +1324,78 @@ fn hard_edges_stay_hard_and_key_normals_are_kept() {
     }
 }
 
+/// Targets that move positions only, beside base normals: the glTF rig layout plays a key by its
+/// authored weights, so each target is given the normals of its shape and every frame, keys
+/// and the frames between them, shades as its surface (without them, a key of the 90-degree
+/// bend below shows the straight tube's normals, between frames that follow the bend).
+#[test]
+fn position_only_targets_shade_through_their_keys() {
+    use inbetween::synth::{bend, smooth_normals, tube, KeyedMesh, KeyframeFile};
+    let mut s = tube(31, 16, 6.0, 0.4, 0.4);
+    s.normals = Some(smooth_normals(&s.positions, &s.triangles));
+    let up = bend(&s.positions, 3.0, 90f64.to_radians(), 0.5);
+    let down = bend(&s.positions, 3.0, -90f64.to_radians(), 0.5);
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("bends.glb");
+    KeyframeFile {
+        meshes: vec![KeyedMesh::new("bends", s, vec![up, down])],
+        key_times: Some(vec![0.0, 1.0, 2.0, 3.0]),
+        key_weights: Some(vec![
+            vec![0.0, 0.0],
+            vec![1.0, 0.0],
+            vec![0.0, 1.0],
+            vec![0.0, 0.0],
+        ]),
+    }
+    .write(&input)
+    .unwrap();
+    let (_, authored) = read_targets(&input, 0, 0);
+    // (--compact keeps the normals within its tolerance of these: compact_table's face rig.)
+    let out = dir.path().join("out.glb");
+    tween_quietly(&input, &out, &["--tweens", "3"]);
+    assert_no_new_issues(&input, &out);
+    // The authored positions as they were, each target with normals now.
+    let (_, targets) = read_targets(&out, 0, 0);
+    assert_eq!(targets[..2], authored[..]);
+    let doc = Document::open(&out).unwrap();
+    for t in doc.json["meshes"][0]["primitives"][0]["targets"]
+        .as_array()
+        .unwrap()
+    {
+        assert!(t["NORMAL"].is_u64(), "{t}");
+    }
+    let p = played(&out, 0, 0, 0);
+    assert_eq!(p.times.len(), 13);
+    {
+        let (doc, buffers, _) = gltf::import(&out).unwrap();
+        let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+        let indices: Vec<u32> = (prim.reader(|b| Some(&buffers[b.index()])))
+            .read_indices()
+            .unwrap()
+            .into_u32()
+            .collect();
+        let triangles: Vec<[u32; 3]> = indices.chunks(3).map(|t| [t[0], t[1], t[2]]).collect();
+        for (f, (pos, nrm)) in p
+            .positions
+            .iter()
+            .zip(p.normals.as_ref().unwrap())
+            .enumerate()
+        {
+            let v = |a: &[f32; 3]| DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+            let pos: Vec<DVec3> = pos.iter().map(v).collect();
+            let surface = smooth_normals(&pos, &triangles);
+            let worst = (nrm.iter().zip(&surface))
+                .map(|(n, s)| v(n).angle_between(*s).to_degrees())
+                .fold(0.0f64, f64::max);
+            assert!(
+                worst < 0.1,
+                "frame {f} (t {}): a normal {worst:.2} degrees off its surface",
+                p.times[f]
+            );
+        }
+    }
+}
+
 #[test]
 fn loop_closes_the_motion_and_extension_adds_frames() {
     let dir = tempfile::tempdir().unwrap();

@@ -94,7 +94,9 @@ fn a_baked_face_rig_keeps_its_targets_and_grows_little() {
             file_bytes(&input),
             file_bytes(&out)
         );
-        assert!(growth <= if tweens == 0 { 1.1 } else { 2.5 }, "{growth}");
+        // With frames between keys the 52 position-only shapes are given the normals of their
+        // shapes (target_normals): 2.44x without them, 2.71x with.
+        assert!(growth <= if tweens == 0 { 1.1 } else { 2.8 }, "{growth}");
     }
 }
 

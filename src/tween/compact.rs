@@ -55,6 +55,10 @@ pub const NORMAL_FACTOR: f64 = 100.0;
 /// diagonal at the default; the issue allowed 10x, but a vertex 1e-3 off shows on a close-up).
 pub const MAX_FACTOR: f64 = 3.0;
 
+/// More basis targets a compaction may take to store its authored normals in bytes rather than
+/// shorts (see `Plan::byte_normals`).
+const BYTE_NORMALS_EXTRA: usize = 3;
+
 /// Share of the tolerance the basis truncation may take ...
 pub const TRUNCATION_SHARE: f64 = 0.7;
 /// ... and the rounding of the stored values (quantization, the exponential filter); the
@@ -656,15 +660,15 @@ impl Plan<'_> {
         let exp_bits = self.opts.meshopt.then_some(0);
         let mut quantize = self.opts.quantize;
         loop {
-            let out = self.encode(factors.as_ref(), k, quantize, exp_bits)?;
-            let f = &out.figures;
-            let fits = f.rms_deviation <= self.opts.tolerance
-                && f.max_deviation <= MAX_FACTOR * self.opts.tolerance
-                && f.normal_rms_deviation <= self.ntol;
+            let out = self.encode(factors.as_ref(), k, quantize, exp_bits, false)?;
+            let fits = self.fits(&out.figures);
             let more = factors.as_ref().is_some_and(|fs| {
                 k < fs.rank() && !matches!(self.opts.basis, Basis::Count(c) if k >= c)
             });
-            if fits || (!more && !quantize) {
+            if fits {
+                return self.byte_normals(factors.as_ref(), k, exp_bits, out);
+            }
+            if !more && !quantize {
                 return Ok(out);
             }
             if more {
@@ -675,13 +679,58 @@ impl Plan<'_> {
         }
     }
 
+    /// The compaction `fitted` (`k` basis targets, within the tolerances), or one whose authored
+    /// normals and tangents are normalized bytes where the bound gave them shorts, when that
+    /// still fits with at most [`BYTE_NORMALS_EXTRA`] more basis targets: the bound takes every
+    /// target at full weight at once, and authored normals are as many values as their
+    /// positions (a face rig of 52 position-only targets given the normals of their shapes:
+    /// 343 KB with shorts, 254 KB with bytes and two more basis targets).
+    fn byte_normals(
+        &self,
+        factors: Option<&Factors>,
+        k: usize,
+        exp_bits: Option<i32>,
+        fitted: Compacted,
+    ) -> Result<Compacted> {
+        let shorts = fitted.authored.is_some_and(|a| a.normal == Storage::Short);
+        if !shorts {
+            return Ok(fitted);
+        }
+        let rank = factors.map_or(k, Factors::rank);
+        let cap = match self.opts.basis {
+            Basis::Count(c) => c.min(rank),
+            Basis::Off => k,
+            Basis::Auto => rank,
+        };
+        for k in k..=(k + BYTE_NORMALS_EXTRA).min(cap) {
+            let out = self.encode(factors, k, true, exp_bits, true)?;
+            if self.fits(&out.figures) {
+                return Ok(out);
+            }
+        }
+        Ok(fitted)
+    }
+
+    /// Whether figures are within the tolerances.
+    fn fits(&self, f: &CompactFigures) -> bool {
+        f.rms_deviation <= self.opts.tolerance
+            && f.max_deviation <= MAX_FACTOR * self.opts.tolerance
+            && f.normal_rms_deviation <= self.ntol
+    }
+
     /// How the authored targets are stored, their positions and (apart) their normals and
     /// tangents: normalized BYTE or SHORT when `quantize` and every component lies in [-1, 1] (a
     /// unit vector's change mostly does, and a character's shapes in metres; the target keeps
     /// its meaning at weight 1, no scale needed) and the integer step at the largest authored
     /// weight is within the step (`q_pos`, `q_nrm`); else floats through the exponential filter
     /// at the fewest mantissa bits whose rounding at that weight is within it.
-    fn authored_storage(&self, q_pos: f64, q_nrm: f64, quantize: bool) -> AuthoredStorage {
+    fn authored_storage(
+        &self,
+        q_pos: f64,
+        q_nrm: f64,
+        quantize: bool,
+        byte_normals: bool,
+    ) -> AuthoredStorage {
         let rows = self.rows;
         let weight = rows
             .authored
@@ -722,7 +771,10 @@ impl Plan<'_> {
         };
         AuthoredStorage {
             position: store(lp, q_pos),
-            normal: store(ln, q_nrm),
+            normal: match byte_normals && quantize && ln.is_some_and(|l| l <= 1.0) {
+                true => Storage::Byte,
+                false => store(ln, q_nrm),
+            },
         }
     }
 
@@ -733,6 +785,7 @@ impl Plan<'_> {
         k: usize,
         quantize: bool,
         exp_bits: Option<i32>,
+        byte_normals: bool,
     ) -> Result<Compacted> {
         let rows = self.rows;
         let n = rows.count();
@@ -821,7 +874,7 @@ impl Plan<'_> {
         }
         let authored = exp_bits
             .filter(|_| self.rig)
-            .map(|_| self.authored_storage(q_pos, q_nrm, quantize));
+            .map(|_| self.authored_storage(q_pos, q_nrm, quantize, byte_normals));
         let weights: Vec<Vec<f32>> = weights
             .iter()
             .map(|w| w.iter().map(|&x| x as f32).collect())

@@ -3,7 +3,7 @@
 //! handed on as per-primitive deltas from the base (streamed to the writer, or collected).
 
 use super::keys::{MorphMesh, Track, TrackOrigin};
-use super::normals::{arc, carry, Smoothing};
+use super::normals::{arc, carry, tangent_delta, Smoothing};
 use super::options::{Method, TweenOptions};
 use super::report::{FrameReport, MeshReport, Shape};
 use super::schedule::{plan, FrameAt};
@@ -699,14 +699,7 @@ fn frame_deltas(
                     nf.iter()
                         .zip(bn)
                         .zip(tan)
-                        .map(|((nf, nb), t)| {
-                            let t3 = DVec3::new(t[0], t[1], t[2]);
-                            let rotated = arc(nb.normalize_or_zero(), *nf) * t3;
-                            let ortho = (rotated - *nf * nf.dot(rotated))
-                                .try_normalize()
-                                .unwrap_or(rotated);
-                            (ortho * t3.length() - t3).as_vec3().to_array()
-                        })
+                        .map(|((nf, nb), t)| tangent_delta(*nb, *nf, *t).as_vec3().to_array())
                         .collect(),
                 ),
                 _ => None,

@@ -15,6 +15,7 @@ use super::morph_targets::{apply_frames, Applied, MostTargets};
 use super::options::{Layout, Method, Timing, TweenOptions};
 use super::report::{CompactMesh, CompactReport, MeshReport, Report};
 use super::schedule::{close_loop, frame_estimate, plan, MAX_FRAMES};
+use super::target_normals;
 use super::timegrid::timeline;
 use crate::gltf::{self, Access, Container, Document};
 use crate::memory::{memory_available, peak_rss_mib};
@@ -630,6 +631,9 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
     let total = check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
     let mut warnings = held_keys(&doc, &meshes);
     warnings.extend(left_as_authored(&doc, &meshes, job.keys));
+    if let (Some(_), Layout::Rig) = (Container::of(format), opts.layout) {
+        warnings.extend(shape_normals(&doc, &mut meshes, &opts));
+    }
     let mut run = Run {
         job,
         doc,
@@ -660,6 +664,40 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         setup_parts: super::clock::seconds(),
         warnings: run.warnings,
         input_compressed: run.doc.decoded.clone(),
+    })
+}
+
+/// Position-only targets given the NORMAL deltas of their shapes ([`target_normals`]), so
+/// that the keys of the glTF rig layout (played by their authored weights) shade as the frames
+/// between them; a line saying so, as the output's authored targets then differ from the
+/// input's. Not for a mesh with no frame between keys (a rig baked at the output's rate goes
+/// out as it came in).
+fn shape_normals(doc: &Document, meshes: &mut [MorphMesh], opts: &TweenOptions) -> Option<String> {
+    let given: Vec<usize> = (meshes.par_iter_mut())
+        .map(|m| {
+            let between =
+                (m.tracks.iter()).any(|t| plan(&t.times, opts).iter().any(|f| f.key().is_none()));
+            match between {
+                true => target_normals::derive(m),
+                false => 0,
+            }
+        })
+        .collect();
+    let names: Vec<String> = (meshes.iter().zip(&given))
+        .filter(|(_, &n)| n > 0)
+        .map(|(m, _)| format!("{:?}", m.name))
+        .collect();
+    let total: usize = given.iter().sum();
+    (total > 0).then(|| {
+        format!(
+            "{}: {total} morph target{} of {} carr{} no NORMAL deltas: given those of {} shape{}, so that keys shade as the frames between them (the positions as authored)",
+            doc.path.display(),
+            if total == 1 { "" } else { "s" },
+            gltf::listed(&names),
+            if total == 1 { "ies" } else { "y" },
+            if total == 1 { "its" } else { "their" },
+            if total == 1 { "" } else { "s" },
+        )
     })
 }
 

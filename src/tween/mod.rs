@@ -1,7 +1,8 @@
 //! `inbetween tween`: in-between frames of a mesh's morph keyframes.
 //!
 //! The pipeline, one module per stage: [`keys`] (morph meshes and their key tracks from the
-//! glTF) -> [`weld`] (seams merged for the solve) -> [`schedule`] (where frames lie in time) ->
+//! glTF; for the glTF rig layout, [`target_normals`] for position-only targets) -> [`weld`]
+//! (seams merged for the solve) -> [`schedule`] (where frames lie in time) ->
 //! [`segment`] per pair of keys: [`seed`] or [`spline`] (with [`gradient`]: deformation
 //! gradients, polar decomposition, rotation logs; and [`solve`]: the sparse Poisson system,
 //! large meshes ordered by [`order`], factored subtree by subtree by [`cholesky`]) ->
@@ -28,6 +29,7 @@ mod seed;
 mod segment;
 mod solve;
 mod spline;
+mod target_normals;
 mod timegrid;
 mod weld;
 

@@ -24,7 +24,7 @@ use super::options::Layout;
 use super::schedule::FrameAt;
 use crate::gltf::{
     self, arr, close_keys, compact as drop_unused, drop_channels, row_components, Document, Output,
-    ELEMENT_MARK, FILTER_GROUP, FILTER_MARK,
+    Storage, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK,
 };
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -605,7 +605,9 @@ fn same_frames(a: &PrimitiveFrames, b: &PrimitiveFrames) -> bool {
 
 /// The authored targets of a primitive, stored again as the compaction chose (through the
 /// EXPONENTIAL filter, and sparse where that pays) when they are plain float accessors; as
-/// they are otherwise.
+/// they are otherwise. Deltas the input lacks ([`super::target_normals`]: the normals of
+/// position-only targets) are stored as the compaction chose, or as f32 (sparse where that
+/// pays) without one.
 fn reencode_authored(
     out: &mut Output,
     w: &Written,
@@ -613,19 +615,19 @@ fn reencode_authored(
     old: Vec<Map<String, Value>>,
     replaced: &mut BTreeSet<usize>,
 ) -> Vec<Map<String, Value>> {
-    let Some((storage, sparse)) = w
+    let compacted = w
         .compact
         .as_ref()
-        .and_then(|c| Some((c.authored?, c.sparse)))
-    else {
-        return old;
-    };
+        .and_then(|c| Some((c.authored?, c.sparse)));
     // Attribute by attribute, so that each attribute's targets share one filtered view (the
     // compaction measured them so): the dense ones first, then the sparse ones, so that nothing
     // comes between the dense ones.
     let mut targets = old;
     for (name, bounds) in [("POSITION", true), ("NORMAL", false), ("TANGENT", false)] {
-        let storage = storage.of(name);
+        let (storage, sparse) = match compacted {
+            Some((storage, sparse)) => (storage.of(name), sparse),
+            None => (Storage::Float { exp_bits: None }, true),
+        };
         // (target, its values, sparse), each decided once.
         let mut chosen: Vec<(usize, Vec<f32>, bool)> = Vec::new();
         for (i, t) in targets.iter().enumerate() {
@@ -634,13 +636,16 @@ fn reencode_authored(
                 "NORMAL" => read.target_nrm[i].as_ref(),
                 _ => read.target_tan[i].as_ref(),
             };
-            let (Some(values), Some(a)) = (values, t.get(name).and_then(Value::as_u64)) else {
+            let Some(values) = values else {
                 continue;
             };
-            if !base::plain(&out.json, Some(a)) {
-                continue;
+            match t.get(name).and_then(Value::as_u64) {
+                Some(a) if compacted.is_some() && base::plain(&out.json, Some(a)) => {
+                    replaced.insert(a as usize);
+                }
+                Some(_) => continue,
+                None => {}
             }
-            replaced.insert(a as usize);
             let flat: Vec<f32> = values.iter().flat_map(|d| d.as_vec3().to_array()).collect();
             let sparse = sparse && sparse_pays(&flat, storage, out.meshopt);
             chosen.push((i, flat, sparse));

@@ -97,3 +97,15 @@ pub fn carry(
     let n = na * (1.0 - t) + nb * t;
     n.try_normalize().unwrap_or(rec_frame)
 }
+
+/// The TANGENT (xyz) delta of a vertex whose normal turns from `base_normal` to `normal`:
+/// its tangent `t` turned by the same shortest arc and made orthogonal to `normal` again, its
+/// length kept.
+pub fn tangent_delta(base_normal: DVec3, normal: DVec3, t: [f64; 4]) -> DVec3 {
+    let t3 = DVec3::new(t[0], t[1], t[2]);
+    let rotated = arc(base_normal.normalize_or_zero(), normal) * t3;
+    let ortho = (rotated - normal * normal.dot(rotated))
+        .try_normalize()
+        .unwrap_or(rotated);
+    ortho * t3.length() - t3
+}
