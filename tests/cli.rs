@@ -1396,6 +1396,29 @@ fn position_only_targets_shade_through_their_keys() {
     }
 }
 
+/// A .gltf's external images count with its input (a .glb output embeds them): the 49.5 KB
+/// texture of MorphPrimitivesTest made its tween read as 7122 B -> 100 KB, "14.4x", and warned.
+#[test]
+fn a_gltf_s_external_images_count_with_its_input() {
+    let Some(fx) = fixtures() else { return };
+    let input = fx.join("morph-khronos/MorphPrimitivesTest/glTF/MorphPrimitivesTest.gltf");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.glb");
+    let told = run_ok(&[
+        "tween",
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let text =
+        String::from_utf8_lossy(&told.stdout).to_string() + &String::from_utf8_lossy(&told.stderr);
+    // 5,610 + 1,512 + 49,535 bytes.
+    assert!(text.contains(" 55 KB -> "), "{text}");
+    assert!(!text.contains("x the size of the input"), "{text}");
+    let doc = Document::open(&input).unwrap();
+    assert_eq!(doc.input_bytes, 56_657);
+}
+
 #[test]
 fn loop_closes_the_motion_and_extension_adds_frames() {
     let dir = tempfile::tempdir().unwrap();

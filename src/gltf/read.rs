@@ -22,7 +22,7 @@ pub struct Document {
     pub buffers: Vec<Vec<u8>>,
     /// Where external references (images) may lead.
     pub access: Access,
-    /// Bytes read: the file and its external buffers.
+    /// Bytes of the input: the file, its external buffers and its external images.
     pub input_bytes: u64,
     /// The compression extensions decoded on read (no longer in the JSON).
     pub decoded: Vec<String>,
@@ -172,6 +172,13 @@ impl Document {
                     if let Some(why) = why {
                         return Err(uri_error(path, &format!("image {i}"), uri, why));
                     }
+                    // Counted with the input: a .glb output embeds it (a missing one is said
+                    // when an output reads it).
+                    let size = (access.resolve(&folder, uri).ok())
+                        .and_then(|p| std::fs::metadata(p).ok())
+                        .filter(std::fs::Metadata::is_file)
+                        .map_or(0, |m| m.len());
+                    input_bytes += size;
                 }
             }
         }
