@@ -278,8 +278,9 @@ pub struct TweenArgs {
     timing: TimingArgs,
     /// How a glTF output carries the frames. `rig`: the authored morph targets stay (names,
     /// other animations driving them); keys are played by the authored weights and only the
-    /// frames between keys get targets of their own. `frames`: one target per frame, keys
-    /// included, replacing the authored targets.
+    /// frames between keys get targets of their own (a target that moves positions without
+    /// NORMAL deltas is given those of its shape, so keys shade as the frames between them).
+    /// `frames`: one target per frame, keys included, replacing the authored targets.
     #[arg(long, value_enum, default_value_t = Layout::default().into())]
     layout: LayoutArg,
     /// Write the smallest glTF whose every frame is within --tolerance of the dense frames: a

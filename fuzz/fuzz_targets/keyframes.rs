@@ -4,7 +4,7 @@
 #![no_main]
 
 use inbetween::gltf::{Access, Document};
-use inbetween::tween::{find_morph_meshes, track_frames_welded, KeyOptions, KeySource, Method, Timing, TweenOptions};
+use inbetween::tween::{derive_target_normals, find_morph_meshes, track_frames_welded, KeyOptions, KeySource, Method, Timing, TweenOptions};
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
@@ -17,12 +17,18 @@ fuzz_target!(|data: &[u8]| {
             source,
             animation: None,
         };
-        let Ok(meshes) = find_morph_meshes(&doc, &opts) else {
+        let Ok(mut meshes) = find_morph_meshes(&doc, &opts) else {
             continue;
         };
-        for m in &meshes {
+        for m in &mut meshes {
             if m.vertex_count() > 5000 {
                 continue;
+            }
+            // The normals a position-only target is given (the glTF rig layout) are finite.
+            derive_target_normals(m);
+            for p in &m.primitives {
+                let given = p.target_nrm.iter().chain(&p.target_tan).flatten().flatten();
+                assert!(given.clone().all(|n| n.is_finite()), "a target's normal is not finite");
             }
             for t in m.tracks.iter().filter(|t| t.times.len() <= 32) {
                 for method in [Method::Spline, Method::Seed, Method::Linear] {
