@@ -77,7 +77,8 @@ pub fn arc(from: DVec3, to: DVec3) -> DQuat {
 }
 
 /// Output normal of a frame at `t` between keys a and b: each key's authored normal carried by
-/// the rotation of its recomputed normal onto the frame's, blended by `t`.
+/// the rotation of its recomputed normal onto the frame's, blended by `t` (on the sphere where
+/// they are far apart).
 pub fn carry(
     authored_a: DVec3,
     rec_a: DVec3,
@@ -94,9 +95,23 @@ pub fn carry(
     if t == 1.0 {
         return nb;
     }
+    // Far apart (keys whose blended targets turn a normal each their own way), at a constant
+    // rate: the normalized blend would swing most of the way near the middle.
+    let cos = na.dot(nb);
+    if (-SLERP_FLOOR..SLERP_BELOW).contains(&cos) && na != DVec3::ZERO && nb != DVec3::ZERO {
+        return DQuat::IDENTITY.slerp(arc(na, nb), t) * na;
+    }
     let n = na * (1.0 - t) + nb * t;
     n.try_normalize().unwrap_or(rec_frame)
 }
+
+/// Carried normals farther apart than this (cosine; 30 degrees) are interpolated on the sphere
+/// at a constant rate; nearer, their normalized blend is within 0.14 degrees of that.
+pub const SLERP_BELOW: f64 = 0.866;
+
+/// ... unless they are nearly opposite (cosine below minus this), where no turn between them
+/// is preferred: there the normalized blend, or the frame's own normal where it vanishes.
+pub const SLERP_FLOOR: f64 = 0.9999;
 
 /// The TANGENT (xyz) delta of a vertex whose normal turns from `base_normal` to `normal`:
 /// its tangent `t` turned by the same shortest arc and made orthogonal to `normal` again, its
@@ -108,4 +123,35 @@ pub fn tangent_delta(base_normal: DVec3, normal: DVec3, t: [f64; 4]) -> DVec3 {
         .try_normalize()
         .unwrap_or(rotated);
     ortho * t3.length() - t3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Key normals 120 degrees apart, the surface not turning (each key's recomputed normal the
+    /// frame's): the frames between turn at a constant rate, 40 degrees a third (the normalized
+    /// blend gave 30 and 90 degrees: a 60-degree step in the middle).
+    #[test]
+    fn far_apart_key_normals_turn_at_a_constant_rate() {
+        let (a, b) = (DVec3::X, DVec3::new(-0.5, 0.75f64.sqrt(), 0.0));
+        let rec = DVec3::Z;
+        for (t, want) in [(1.0 / 3.0, 40.0), (2.0 / 3.0, 80.0), (0.5, 60.0)] {
+            let n = carry(a, rec, b, rec, rec, t);
+            let got = n.angle_between(a).to_degrees();
+            assert!((got - want).abs() < 1e-9, "t {t}: {got} degrees from a");
+            assert!((n.length() - 1.0).abs() < 1e-12);
+        }
+        // Near each other, the normalized blend (outputs unchanged where no key pair is far
+        // apart), within 0.14 degrees of the constant rate.
+        let c = DVec3::new(0.9, (1.0f64 - 0.81).sqrt(), 0.0);
+        let n = carry(a, rec, c, rec, rec, 0.25);
+        assert_eq!(n, (a * 0.75 + c * 0.25).normalize());
+        assert!(
+            (n.angle_between(a) - 0.25 * c.angle_between(a))
+                .abs()
+                .to_degrees()
+                < 0.14
+        );
+    }
 }
