@@ -1352,8 +1352,29 @@ fn position_only_targets_shade_through_their_keys() {
     let (_, authored) = read_targets(&input, 0, 0);
     // (--compact keeps the normals within its tolerance of these: compact_table's face rig.)
     let out = dir.path().join("out.glb");
-    tween_quietly(&input, &out, &["--tweens", "3"]);
+    let report = dir.path().join("report.json");
+    tween_quietly(
+        &input,
+        &out,
+        &["--tweens", "3", "--report", report.to_str().unwrap()],
+    );
     assert_no_new_issues(&input, &out);
+    assert_eq!(read_json(&report)["meshes"][0]["targets_given_normals"], 2);
+    // The frames layout replaces the authored targets: none given.
+    let frames = dir.path().join("frames.glb");
+    tween_quietly(
+        &input,
+        &frames,
+        &[
+            "--tweens",
+            "3",
+            "--layout",
+            "frames",
+            "--report",
+            report.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(read_json(&report)["meshes"][0]["targets_given_normals"], 0);
     // The authored positions as they were, each target with normals now.
     let (_, targets) = read_targets(&out, 0, 0);
     assert_eq!(targets[..2], authored[..]);

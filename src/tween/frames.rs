@@ -607,6 +607,7 @@ pub fn tween_mesh(
             method: opts.method.name().to_string(),
             triangles: tween.welded.triangles.len(),
             closed: shape.closed,
+            targets_given_normals: mesh.normals_given,
             frames: Vec::new(),
         }),
     };

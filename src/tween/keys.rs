@@ -89,6 +89,9 @@ pub struct MorphMesh {
     pub tracks: Vec<Track>,
     /// Weight channels on this mesh's nodes that no track keeps (dropped from the output).
     pub dropped_channels: Vec<(usize, usize)>,
+    /// Authored targets given the normals of their shapes (`target_normals`, the glTF rig
+    /// layout); 0 as read.
+    pub normals_given: usize,
 }
 
 impl MorphMesh {
@@ -302,6 +305,7 @@ fn morph_mesh(
         target_count,
         tracks,
         dropped_channels: dropped,
+        normals_given: 0,
     };
     Ok(Some((mm, use_animation)))
 }

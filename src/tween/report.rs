@@ -37,6 +37,9 @@ pub struct MeshReport {
     pub method: String,
     pub triangles: usize,
     pub closed: bool,
+    /// Authored targets given the NORMAL deltas of their shapes (position-only targets in the
+    /// glTF rig layout).
+    pub targets_given_normals: usize,
     pub frames: Vec<FrameReport>,
 }
 

@@ -100,5 +100,6 @@ pub fn derive(mesh: &mut MorphMesh) -> usize {
         }
         given += any as usize;
     }
+    mesh.normals_given += given;
     given
 }

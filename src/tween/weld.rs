@@ -224,6 +224,7 @@ mod tests {
             target_count: 2,
             tracks: Vec::new(),
             dropped_channels: Vec::new(),
+            normals_given: 0,
         };
         let welded = Welded::build(&mesh);
         let diag = bbox_diagonal(&mesh.pose(&[0.0, 0.0]));
