@@ -1440,6 +1440,66 @@ fn a_gltf_s_external_images_count_with_its_input() {
     assert_eq!(doc.input_bytes, 56_657);
 }
 
+/// Bounds and sparse storage a writer got wrong, as gltf-pipeline 4's Draco writes a Blender
+/// morph file (a target's max declared 0 where its values reach 1.2, kept as a sparse accessor
+/// whose index and value views other accessors read as vertex data): mended on write, so the
+/// output is validator-clean where the input was not, and plays the same values.
+#[test]
+fn wrong_bounds_and_sparse_parts_in_vertex_views_are_mended() {
+    use serde_json::json;
+    let doc = Document::open(&sample("flag_wave.glb")).unwrap();
+    let (mut j, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let target = j["meshes"][0]["primitives"][0]["targets"][0]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    // Two views holding an index (vertex 3) and a value, each also read by a plain accessor.
+    let mut view = |bytes: &[u8], j: &mut serde_json::Value| -> usize {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let offset = bin.len();
+        bin.extend_from_slice(bytes);
+        let views = j["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "byteStride": 12, "target": 34962 }));
+        views.len() - 1
+    };
+    let index = view(&[3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0], &mut j);
+    let value: Vec<u8> = [0.25f32, 1.2, -0.5]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let values = view(&value, &mut j);
+    let accessors = j["accessors"].as_array_mut().unwrap();
+    for v in [index, values] {
+        accessors
+            .push(json!({ "bufferView": v, "componentType": 5126, "count": 1, "type": "VEC3" }));
+    }
+    accessors[target]["max"] = json!([0, 0, 0]);
+    accessors[target]["sparse"] = json!({
+        "count": 1,
+        "indices": { "bufferView": index, "componentType": 5121 },
+        "values": { "bufferView": values }
+    });
+    j["buffers"][0]["byteLength"] = json!(bin.len());
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("broken.glb");
+    write_glb(&input, &j, &bin);
+    let out = dir.path().join("out.glb");
+    let told = run_ok(&["tween", s(&input), "-o", s(&out)]);
+    assert_valid(&out);
+    let err =
+        String::from_utf8_lossy(&told.stdout).to_string() + &String::from_utf8_lossy(&told.stderr);
+    assert!(err.contains("did not match its values"), "{err}");
+    assert!(err.contains("written dense"), "{err}");
+    // The target as read from the input, now dense: vertex 3 moved by the sparse value.
+    let (_, targets) = read_targets(&out, 0, 0);
+    assert_eq!(targets[0][3], [0.25, 1.2, -0.5]);
+    let before = inbetween::gltf::Document::open(&input).unwrap();
+    let (want, _) = before.read_f64(target).unwrap();
+    let got: Vec<f64> = targets[0].iter().flatten().map(|&x| x as f64).collect();
+    assert_eq!(got, want);
+}
+
 #[test]
 fn loop_closes_the_motion_and_extension_adds_frames() {
     let dir = tempfile::tempdir().unwrap();

@@ -22,6 +22,15 @@
 //! weights (gltfpack) are left as they are; a vertex with a negative weight, a joint twice or
 //! no weight at all is left too (normalizing cannot mend those).
 //!
+//! **Accessor bounds** ([`bounds`]): a float accessor's declared `min` and `max` must be its
+//! values' (gltf-pipeline 4's Draco on a Blender morph file declared a target's max 0 where its
+//! values reach 1.2): each component whose declared bound, read as a float, differs from the
+//! values' is written as theirs; bounds right to a float's precision stay as written. SCALAR,
+//! VEC2 and VEC3 only (the VEC4 weights and rotations the mends above may change are left as
+//! they are). A buffer view that only sparse parts use loses `byteStride` and `target` (only
+//! vertex data may have them); a float sparse accessor whose parts lie in a view that other
+//! accessors read as vertex data (the same writer's) is written dense, as it decodes.
+//!
 //! **Rotation keys** ([`rotations`]) must be unit quaternions: a key farther from unit length
 //! than the validator allows ([`UNIT_LENGTH`]) is divided by its length (a CUBICSPLINE key's
 //! tangents by the same), as a player's slerp does; float outputs of `rotation` channels only.
@@ -310,6 +319,131 @@ pub fn rotations(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
             ));
         }
     }
+    lines
+}
+
+/// Correct the declared `min`/`max` of the output's float accessors from the values `doc`
+/// decodes (see the module comment), and drop `byteStride`/`target` from views that only sparse
+/// parts use, in `json` (the input's JSON, copied) and `bin`'s views (placed by
+/// `write::begin`); returns a line when any bound was wrong.
+pub fn bounds(doc: &super::read::Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<String> {
+    let mut wrong = Vec::new();
+    let count = arr(json, "accessors").len();
+    for i in 0..count {
+        let a = &json["accessors"][i];
+        let ncomp = match a["type"].as_str() {
+            Some("SCALAR") => 1,
+            Some("VEC2") => 2,
+            Some("VEC3") => 3,
+            _ => continue,
+        };
+        let declared = |k: &str| -> Option<Vec<f64>> {
+            let v: Vec<f64> = a[k].as_array()?.iter().filter_map(Value::as_f64).collect();
+            (v.len() == ncomp).then_some(v)
+        };
+        if a["componentType"].as_u64() != Some(5126) || a["count"].as_u64().unwrap_or(0) == 0 {
+            continue;
+        }
+        let (min, max) = (declared("min"), declared("max"));
+        if min.is_none() && max.is_none() {
+            continue;
+        }
+        let Ok((values, _)) = doc.read_f64(i) else {
+            continue;
+        };
+        let mut lo = vec![f32::INFINITY; ncomp];
+        let mut hi = vec![f32::NEG_INFINITY; ncomp];
+        for row in values.chunks_exact(ncomp) {
+            for (c, &x) in row.iter().enumerate() {
+                lo[c] = lo[c].min(x as f32);
+                hi[c] = hi[c].max(x as f32);
+            }
+        }
+        let mut mended = false;
+        for (key, found, actual) in [("min", min, &lo), ("max", max, &hi)] {
+            let Some(found) = found else {
+                continue;
+            };
+            for (c, (&d, &v)) in found.iter().zip(actual.iter()).enumerate() {
+                if d as f32 != v {
+                    json["accessors"][i][key][c] = serde_json::json!(v as f64);
+                    mended = true;
+                }
+            }
+        }
+        if mended {
+            wrong.push(i.to_string());
+        }
+    }
+    // Views that only sparse parts use.
+    let mut plain = std::collections::BTreeSet::new();
+    let mut sparse = std::collections::BTreeSet::new();
+    for a in arr(json, "accessors") {
+        if let Some(v) = a["bufferView"].as_u64() {
+            plain.insert(v);
+        }
+        for part in ["indices", "values"] {
+            if let Some(v) = a["sparse"][part]["bufferView"].as_u64() {
+                sparse.insert(v);
+            }
+        }
+    }
+    for v in sparse.difference(&plain) {
+        if let Some(view) = bin
+            .views
+            .get_mut(*v as usize)
+            .and_then(Value::as_object_mut)
+        {
+            view.remove("byteStride");
+            view.remove("target");
+        }
+    }
+    // A float sparse accessor whose indices or values lie in a view that other accessors read
+    // as vertex data (gltf-pipeline's Draco output again) is written dense, as it decodes.
+    let mut densified = Vec::new();
+    for i in 0..count {
+        let a = &json["accessors"][i];
+        let shared = ["indices", "values"].iter().any(|part| {
+            a["sparse"][part]["bufferView"]
+                .as_u64()
+                .is_some_and(|v| plain.contains(&v))
+        });
+        if !shared || a["componentType"].as_u64() != Some(5126) {
+            continue;
+        }
+        let Ok((values, _)) = doc.read_f64(i) else {
+            continue;
+        };
+        let bytes: Vec<u8> = (values.iter())
+            .flat_map(|&x| (x as f32).to_le_bytes())
+            .collect();
+        let view = bin.push_view(&bytes, Some(34962));
+        if let Some(o) = json["accessors"][i].as_object_mut() {
+            o.remove("sparse");
+            o.remove("byteOffset");
+            o.insert("bufferView".into(), serde_json::json!(view));
+        }
+        densified.push(i.to_string());
+    }
+    let mut lines = Vec::new();
+    if !densified.is_empty() {
+        let n = densified.len();
+        lines.push(format!(
+            "{n} sparse accessor{} ({}) kept {} indices or values in a view that vertex data also uses; written dense",
+            if n == 1 { "" } else { "s" },
+            super::read::listed(&densified),
+            if n == 1 { "its" } else { "their" },
+        ));
+    }
+    lines.extend(match wrong.len() {
+        0 => Vec::new(),
+        n => vec![format!(
+            "the declared min/max of {n} accessor{} ({}) did not match {} values; written as the values are",
+            if n == 1 { "" } else { "s" },
+            super::read::listed(&wrong),
+            if n == 1 { "its" } else { "their" },
+        )],
+    });
     lines
 }
 

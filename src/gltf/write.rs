@@ -53,7 +53,8 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         bin.views[idx] = view;
     }
     embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
-    let mended = mend::all(&json, &mut bin);
+    let mut mended = mend::all(&json, &mut bin);
+    mended.extend(mend::bounds(doc, &mut json, &mut bin));
     Ok(Output {
         json,
         bin,
