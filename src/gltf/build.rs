@@ -110,7 +110,7 @@ impl Storage {
 /// f32 values as JSON numbers written as short as they read back exactly as f32 (serde_json
 /// would write each as the f64 it widens to: `0.04999995231628418` for `0.049999952`), whole
 /// ones without a fraction (`2`, not `2.0`).
-fn f32_json(values: &[f32]) -> Value {
+pub(super) fn f32_json(values: &[f32]) -> Value {
     Value::Array(
         values
             .iter()
@@ -125,7 +125,7 @@ fn f32_json(values: &[f32]) -> Value {
 }
 
 /// Per component, the smallest and largest of `data` (elements of `ncomp` values).
-fn min_max(data: &[f32], ncomp: usize) -> (Vec<f32>, Vec<f32>) {
+pub(super) fn min_max(data: &[f32], ncomp: usize) -> (Vec<f32>, Vec<f32>) {
     let none = || (vec![f32::INFINITY; ncomp], vec![f32::NEG_INFINITY; ncomp]);
     let whole = data.len() - data.len() % ncomp;
     data[..whole]

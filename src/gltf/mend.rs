@@ -27,16 +27,19 @@
 //! values reach 1.2): each component whose declared bound, read as a float, differs from the
 //! values' is written as theirs; bounds right to a float's precision stay as written. SCALAR,
 //! VEC2 and VEC3 only (the VEC4 weights and rotations the mends above may change are left as
-//! they are). A buffer view that only sparse parts use loses `byteStride` and `target` (only
-//! vertex data may have them); a float sparse accessor whose parts lie in a view that other
-//! accessors read as vertex data (the same writer's) is written dense, as it decodes.
+//! they are).
+//!
+//! **Sparse parts** ([`sparse_parts`]): a buffer view that only sparse parts use loses
+//! `byteStride` and `target` (only vertex data may have them); a float sparse accessor whose
+//! parts lie in a view that other accessors read as vertex data (the same writer's) is written
+//! dense, as it decodes.
 //!
 //! **Rotation keys** ([`rotations`]) must be unit quaternions: a key farther from unit length
 //! than the validator allows ([`UNIT_LENGTH`]) is divided by its length (a CUBICSPLINE key's
 //! tangents by the same), as a player's slerp does; float outputs of `rotation` channels only.
 
-use super::build::BinBuilder;
-use super::read::{arr, quoted_name};
+use super::build::{f32_json, min_max, BinBuilder};
+use super::read::{arr, listed, quoted_name, Document};
 use serde_json::Value;
 use std::collections::BTreeMap;
 
@@ -323,13 +326,11 @@ pub fn rotations(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
 }
 
 /// Correct the declared `min`/`max` of the output's float accessors from the values `doc`
-/// decodes (see the module comment), and drop `byteStride`/`target` from views that only sparse
-/// parts use, in `json` (the input's JSON, copied) and `bin`'s views (placed by
-/// `write::begin`); returns a line when any bound was wrong.
-pub fn bounds(doc: &super::read::Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<String> {
+/// decodes (see the module comment), in `json` (the input's JSON, copied); returns a line when
+/// any bound was wrong.
+pub fn bounds(doc: &Document, json: &mut Value) -> Vec<String> {
     let mut wrong = Vec::new();
-    let count = arr(json, "accessors").len();
-    for i in 0..count {
+    for i in 0..arr(json, "accessors").len() {
         let a = &json["accessors"][i];
         let ncomp = match a["type"].as_str() {
             Some("SCALAR") => 1,
@@ -351,22 +352,16 @@ pub fn bounds(doc: &super::read::Document, json: &mut Value, bin: &mut BinBuilde
         let Ok((values, _)) = doc.read_f64(i) else {
             continue;
         };
-        let mut lo = vec![f32::INFINITY; ncomp];
-        let mut hi = vec![f32::NEG_INFINITY; ncomp];
-        for row in values.chunks_exact(ncomp) {
-            for (c, &x) in row.iter().enumerate() {
-                lo[c] = lo[c].min(x as f32);
-                hi[c] = hi[c].max(x as f32);
-            }
-        }
+        let values: Vec<f32> = values.iter().map(|&x| x as f32).collect();
+        let (lo, hi) = min_max(&values, ncomp);
         let mut mended = false;
-        for (key, found, actual) in [("min", min, &lo), ("max", max, &hi)] {
+        for (key, found, actual) in [("min", min, lo), ("max", max, hi)] {
             let Some(found) = found else {
                 continue;
             };
-            for (c, (&d, &v)) in found.iter().zip(actual.iter()).enumerate() {
+            for (c, (&d, &v)) in found.iter().zip(&actual).enumerate() {
                 if d as f32 != v {
-                    json["accessors"][i][key][c] = serde_json::json!(v as f64);
+                    json["accessors"][i][key][c] = f32_json(&[v])[0].take();
                     mended = true;
                 }
             }
@@ -375,7 +370,22 @@ pub fn bounds(doc: &super::read::Document, json: &mut Value, bin: &mut BinBuilde
             wrong.push(i.to_string());
         }
     }
-    // Views that only sparse parts use.
+    match wrong.len() {
+        0 => Vec::new(),
+        n => vec![format!(
+            "the declared min/max of {n} accessor{} ({}) did not match {} values; written as the values are",
+            if n == 1 { "" } else { "s" },
+            listed(&wrong),
+            if n == 1 { "its" } else { "their" },
+        )],
+    }
+}
+
+/// Sparse parts stored where they may not be (see the module comment): `byteStride`/`target`
+/// dropped from the views of `bin` (placed by `write::begin`) that only sparse parts use, and
+/// a float sparse accessor whose parts lie in a view that other accessors read as vertex data
+/// written dense into `bin`, as `doc` decodes it; returns a line when any was.
+pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<String> {
     let mut plain = std::collections::BTreeSet::new();
     let mut sparse = std::collections::BTreeSet::new();
     for a in arr(json, "accessors") {
@@ -398,10 +408,8 @@ pub fn bounds(doc: &super::read::Document, json: &mut Value, bin: &mut BinBuilde
             view.remove("target");
         }
     }
-    // A float sparse accessor whose indices or values lie in a view that other accessors read
-    // as vertex data (gltf-pipeline's Draco output again) is written dense, as it decodes.
     let mut densified = Vec::new();
-    for i in 0..count {
+    for i in 0..arr(json, "accessors").len() {
         let a = &json["accessors"][i];
         let shared = ["indices", "values"].iter().any(|part| {
             a["sparse"][part]["bufferView"]
@@ -425,26 +433,15 @@ pub fn bounds(doc: &super::read::Document, json: &mut Value, bin: &mut BinBuilde
         }
         densified.push(i.to_string());
     }
-    let mut lines = Vec::new();
-    if !densified.is_empty() {
-        let n = densified.len();
-        lines.push(format!(
-            "{n} sparse accessor{} ({}) kept {} indices or values in a view that vertex data also uses; written dense",
-            if n == 1 { "" } else { "s" },
-            super::read::listed(&densified),
-            if n == 1 { "its" } else { "their" },
-        ));
-    }
-    lines.extend(match wrong.len() {
+    match densified.len() {
         0 => Vec::new(),
         n => vec![format!(
-            "the declared min/max of {n} accessor{} ({}) did not match {} values; written as the values are",
+            "{n} sparse accessor{} ({}) kept {} indices or values in a view that vertex data also uses; written dense",
             if n == 1 { "" } else { "s" },
-            super::read::listed(&wrong),
+            listed(&densified),
             if n == 1 { "its" } else { "their" },
         )],
-    });
-    lines
+    }
 }
 
 #[cfg(test)]

@@ -673,21 +673,16 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
 /// input's. Not for a mesh with no frame between keys (a rig baked at the output's rate goes
 /// out as it came in).
 fn shape_normals(doc: &Document, meshes: &mut [MorphMesh], opts: &TweenOptions) -> Option<String> {
-    let given: Vec<usize> = (meshes.par_iter_mut())
-        .map(|m| {
-            let between =
-                (m.tracks.iter()).any(|t| plan(&t.times, opts).iter().any(|f| f.key().is_none()));
-            match between {
-                true => target_normals::derive(m),
-                false => 0,
-            }
-        })
+    meshes.par_iter_mut().for_each(|m| {
+        if (m.tracks.iter()).any(|t| plan(&t.times, opts).iter().any(|f| f.key().is_none())) {
+            target_normals::derive(m);
+        }
+    });
+    let names: Vec<String> = (meshes.iter())
+        .filter(|m| m.normals_given > 0)
+        .map(|m| format!("{:?}", m.name))
         .collect();
-    let names: Vec<String> = (meshes.iter().zip(&given))
-        .filter(|(_, &n)| n > 0)
-        .map(|(m, _)| format!("{:?}", m.name))
-        .collect();
-    let total: usize = given.iter().sum();
+    let total: usize = meshes.iter().map(|m| m.normals_given).sum();
     (total > 0).then(|| {
         format!(
             "{}: {total} morph target{} of {} carr{} no NORMAL deltas: given those of {} shape{}, so that keys shade as the frames between them (the positions as authored)",

@@ -663,9 +663,10 @@ fn reencode_authored(
     targets
 }
 
-/// The mesh's default weights (and the overrides of its nodes, `carriers`) padded for the new targets (frame 0
-/// in the frames layout), and the targets' names in `extras.targetNames`: the authored names
-/// kept, each new target named after its frame (`f0007_t0.2917`: frame 7 at 0.2917 s).
+/// The mesh's default weights (and the overrides of its nodes, `carriers`) padded for the new
+/// targets (frame 0 in the frames layout), and the targets' names in `extras.targetNames`: the
+/// authored names kept, each new target named after its frame (`f0007_t0.2917`: frame 7 at
+/// 0.2917 s).
 fn name_targets(
     out: &mut Output,
     w: &Written,

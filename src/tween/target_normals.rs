@@ -31,11 +31,11 @@ pub const LEAST_CHANGE: f64 = 1e-3;
 
 /// Give every target of `mesh` that moves positions but carries no NORMAL deltas (in some
 /// primitive) the deltas of its shape, and TANGENT deltas where the base has tangents and the
-/// target none. Nothing where a primitive has no normals. Returns how many targets were given
+/// target none, counting them in `mesh.normals_given`. Nothing where a primitive has no
 /// normals.
-pub fn derive(mesh: &mut MorphMesh) -> usize {
+pub fn derive(mesh: &mut MorphMesh) {
     if mesh.primitives.iter().any(|p| p.normals.is_none()) {
-        return 0;
+        return;
     }
     let wanted: Vec<usize> = (0..mesh.target_count)
         .filter(|&i| {
@@ -46,7 +46,7 @@ pub fn derive(mesh: &mut MorphMesh) -> usize {
         })
         .collect();
     if wanted.is_empty() {
-        return 0;
+        return;
     }
     let welded = Welded::build(mesh);
     let raw: Vec<DVec3> = (mesh.primitives.iter())
@@ -73,7 +73,6 @@ pub fn derive(mesh: &mut MorphMesh) -> usize {
                 .collect()
         })
         .collect();
-    let mut given = 0;
     for (&i, d) in wanted.iter().zip(derived) {
         let mut offset = 0;
         let mut any = false;
@@ -98,8 +97,6 @@ pub fn derive(mesh: &mut MorphMesh) -> usize {
             }
             p.target_nrm[i] = Some(d.to_vec());
         }
-        given += any as usize;
+        mesh.normals_given += any as usize;
     }
-    mesh.normals_given += given;
-    given
 }
