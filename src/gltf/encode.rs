@@ -9,7 +9,7 @@
 //! Views of images, or shared by accessors that disagree on their layout, stay as they are.
 
 use super::accessor::components;
-use super::build::Output;
+use super::build::{set_bounds, Output};
 use super::read::arr;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -130,11 +130,7 @@ fn uses(json: &Value, views: &[Value]) -> BTreeMap<usize, Use> {
 fn compress(data: &[u8], u: Use, filter: Filter) -> Option<(Vec<u8>, Value)> {
     match u {
         Use::Attributes { stride } => {
-            if stride == 0
-                || !stride.is_multiple_of(4)
-                || stride > 256
-                || !data.len().is_multiple_of(stride)
-            {
+            if !filterable(data, stride) {
                 return None;
             }
             let count = data.len() / stride;
@@ -153,11 +149,7 @@ fn compress(data: &[u8], u: Use, filter: Filter) -> Option<(Vec<u8>, Value)> {
                 }
                 Filter::Oct(_) => return None,
                 Filter::Exp(bits) => {
-                    let floats: Vec<f32> = data
-                        .chunks_exact(4)
-                        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                        .collect();
-                    let encoded = exp_encode(&floats, count, stride, bits);
+                    let encoded = exp_encode(&f32s(&data), count, stride, bits);
                     data = encoded.iter().flat_map(|v| v.to_le_bytes()).collect();
                     "EXPONENTIAL"
                 }
@@ -336,11 +328,17 @@ fn coalesce(out: &mut Output) {
 /// Compress every view of `out` that can be, in place (runs of views of one vertex layout
 /// merged first): the binary buffer is rebuilt with the compressed streams and the views left
 /// raw; returns the size of the fallback buffer (0 when nothing was compressed).
+///
+/// A view marked for the EXPONENTIAL filter holds, compressed or left raw, the values a reader
+/// decodes from the filtered stream, and the bounds of the accessors reading it are theirs:
+/// writers mark a view and declare bounds before it is known which of the two it becomes.
 pub fn meshopt(out: &mut Output) -> usize {
     coalesce(out);
     let uses = uses(&out.json, &out.bin.views);
     let mut bytes = Vec::with_capacity(out.bin.bytes.len() / 2);
     let mut fallback = 0usize;
+    // Marked views as decoded (f32 values, from the view's start).
+    let mut decoded: BTreeMap<usize, Vec<f32>> = BTreeMap::new();
     for (i, view) in out.bin.views.iter_mut().enumerate() {
         let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
         let len = view["byteLength"].as_u64().unwrap_or(0) as usize;
@@ -356,6 +354,11 @@ pub fn meshopt(out: &mut Output) -> usize {
             (u, view.get(ELEMENT_MARK).and_then(Value::as_u64))
         {
             u = Use::Attributes { stride: e as usize };
+        }
+        if let (Filter::Exp(bits), Use::Attributes { stride }) = (filter, u) {
+            if filterable(data, stride) {
+                decoded.insert(i, exp_roundtrip(&f32s(data), stride / 4, bits));
+            }
         }
         while !bytes.len().is_multiple_of(4) {
             bytes.push(0);
@@ -376,12 +379,73 @@ pub fn meshopt(out: &mut Output) -> usize {
             }
             None => {
                 view["byteOffset"] = json!(bytes.len());
-                bytes.extend_from_slice(data);
+                match decoded.get(&i) {
+                    Some(values) => bytes.extend(values.iter().flat_map(|v| v.to_le_bytes())),
+                    None => bytes.extend_from_slice(data),
+                }
             }
         }
     }
     out.bin.bytes = bytes;
+    rebound(out, &decoded);
     fallback
+}
+
+/// Whether view data read as elements of `stride` bytes can go through the EXPONENTIAL
+/// filter (meshopt's limits).
+fn filterable(data: &[u8], stride: usize) -> bool {
+    stride > 0 && stride.is_multiple_of(4) && stride <= 256 && data.len().is_multiple_of(stride)
+}
+
+/// The declared min/max of every float accessor reading a view of `decoded` (directly, or its
+/// sparse values) set to those of the values it decodes to.
+fn rebound(out: &mut Output, decoded: &BTreeMap<usize, Vec<f32>>) {
+    let views = &out.bin.views;
+    let Some(accessors) = out.json.get_mut("accessors").and_then(Value::as_array_mut) else {
+        return;
+    };
+    for a in accessors {
+        let n = components(a["type"].as_str().unwrap_or("")).unwrap_or(0);
+        let count = a["count"].as_u64().unwrap_or(0) as usize;
+        if n == 0 || count == 0 || a["componentType"].as_u64() != Some(5126) {
+            continue;
+        }
+        if a.get("min").is_none() && a.get("max").is_none() {
+            continue;
+        }
+        // (view, first byte, elements, implicit zeros beside them)
+        let read = match (a["bufferView"].as_u64(), a["sparse"].is_object()) {
+            (Some(v), false) => Some((v, a["byteOffset"].as_u64().unwrap_or(0), count, false)),
+            (None, true) => a["sparse"]["values"]["bufferView"].as_u64().map(|v| {
+                let k = a["sparse"]["count"].as_u64().unwrap_or(0) as usize;
+                let offset = a["sparse"]["values"]["byteOffset"].as_u64().unwrap_or(0);
+                (v, offset, k, k < count)
+            }),
+            _ => None,
+        };
+        let Some((v, offset, elements, zeros)) = read else {
+            continue;
+        };
+        let Some(floats) = decoded.get(&(v as usize)) else {
+            continue;
+        };
+        let stride = views[v as usize]["byteStride"]
+            .as_u64()
+            .map_or(n, |s| s as usize / 4);
+        let first = offset as usize / 4;
+        let mut values: Vec<f32> = (0..elements)
+            .filter_map(|e| floats.get(first + e * stride..first + e * stride + n))
+            .flatten()
+            .copied()
+            .collect();
+        if values.len() != elements * n {
+            continue;
+        }
+        if zeros {
+            values.extend(std::iter::repeat_n(0.0, n));
+        }
+        set_bounds(a, &values, n);
+    }
 }
 
 /// Remove the writer's private marks from every view.
@@ -394,6 +458,13 @@ pub fn clear_marks(out: &mut Output) {
             o.remove(OCT_MARK);
         }
     }
+}
+
+/// Little-endian bytes read as f32 values.
+fn f32s(data: &[u8]) -> Vec<f32> {
+    data.chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
 }
 
 /// `floats` (`count` vectors of `stride` bytes) through meshopt's EXPONENTIAL filter at `bits`
