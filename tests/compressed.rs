@@ -211,3 +211,81 @@ fn key_times(path: &Path, channel: usize) -> Vec<f64> {
 }
 
 use inbetween::gltf::Document;
+
+/// A Draco stream with edgebreaker connectivity numbers the vertices in its own order, which
+/// morph targets stored apart (as the extension has them) do not follow: FBX2glTF's `-d` writes
+/// such files, and every viewer plays them scrambled (its Flamingo: each decoded vertex is an
+/// original one, within Draco's quantization, at another index in 1625 of 1626). Refused with
+/// one line saying so, as is a stream of more vertices than its accessors declare (its
+/// synthetic face rig: 1684 against 1683). Built as FBX2glTF builds it: bar_twist without its
+/// target through glTF-Transform's Draco (edgebreaker where a mesh has no targets), its target
+/// then added beside the stream.
+#[test]
+fn morph_targets_beside_a_renumbering_draco_stream_are_refused() {
+    let Some(bin) = node_bin() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let bare = dir.path().join("bare.glb");
+    edited_glb(&sample("bar_twist.glb"), &bare, |j| {
+        let m = &mut j["meshes"][0];
+        m["primitives"][0]
+            .as_object_mut()
+            .unwrap()
+            .remove("targets");
+        m.as_object_mut().unwrap().remove("weights");
+        m.as_object_mut().unwrap().remove("extras");
+    });
+    let packed = dir.path().join("packed.glb");
+    node_tool(&bin, "gltf-transform", ["draco", s(&bare), s(&packed)]);
+    let target = Document::open(&sample("bar_twist.glb"))
+        .unwrap()
+        .read_f64(2)
+        .unwrap()
+        .0
+        .iter()
+        .map(|&x| x as f32)
+        .collect::<Vec<_>>();
+    let (json, data) = glb_parts(&packed);
+    // The stream's header: "DRACO", version, a triangle mesh (1), edgebreaker (1).
+    let draco = &json["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"];
+    let view = &json["bufferViews"][draco["bufferView"].as_u64().unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    assert_eq!(&data[at..at + 5], b"DRACO");
+    assert_eq!(data[at + 7..at + 9], [1, 1], "edgebreaker");
+    let with_target = |out: &Path, declared: Option<u64>| {
+        let (mut json, mut data) = (json.clone(), data.clone());
+        let t = push_f32_accessor(&mut json, &mut data, &target, "VEC3");
+        let p = &mut json["meshes"][0]["primitives"][0];
+        p["targets"] = serde_json::json!([{ "POSITION": t }]);
+        if let Some(n) = declared {
+            let a = p["attributes"]["POSITION"].as_u64().unwrap() as usize;
+            json["accessors"][a]["count"] = n.into();
+            json["accessors"][t]["count"] = n.into();
+        }
+        json["meshes"][0]["weights"] = serde_json::json!([0.0]);
+        write_glb(out, &json, &data);
+    };
+    let n = (target.len() / 3) as u64;
+    for (declared, what) in [
+        (
+            None,
+            "the stream is edgebreaker-encoded, which renumbers the vertices",
+        ),
+        (
+            Some(n - 1),
+            &format!(
+                "the stream decodes to {n} vertices where its accessors declare {}",
+                n - 1
+            )[..],
+        ),
+    ] {
+        let input = dir.path().join("in.glb");
+        with_target(&input, declared);
+        let out = dir.path().join("out.glb");
+        for args in [
+            &["tween", s(&input), "-o", s(&out)][..],
+            &["inspect", s(&input)][..],
+        ] {
+            assert_refused(args, "in.glb", what, &out);
+        }
+    }
+}

@@ -361,6 +361,7 @@ fn draco_primitive(
         .decode(&mut reader, &mut mesh)
         .map_err(|e| format!("{what} does not decode: {e}"))?;
     let points = mesh.num_points();
+    scrambled_targets(json, &prim, &stream, points).map_err(|e| format!("{what}: {e}"))?;
     for (name, id) in ext["attributes"].as_object().into_iter().flatten() {
         let id = id
             .as_u64()
@@ -430,6 +431,48 @@ fn draco_primitive(
         if o.is_empty() {
             prim.as_object_mut().map(|v| v.remove("extensions"));
         }
+    }
+    Ok(())
+}
+
+/// Why the morph targets of primitive `prim` (stored outside its Draco `stream`, as the
+/// extension has them) no longer fit the `points` vertices the stream decodes to, if they do
+/// not: a count other than its accessors declare, or edgebreaker connectivity (the stream's
+/// header: a triangle mesh, method 1), which numbers the vertices in its own traversal order.
+/// Encoders keep the order for morph targets with the sequential method (glTF-Transform and
+/// Blender do); FBX2glTF's `-d` does not, and every viewer then plays the targets on the wrong
+/// vertices.
+fn scrambled_targets(
+    json: &Value,
+    prim: &Value,
+    stream: &[u8],
+    points: usize,
+) -> Result<(), String> {
+    let targets = arr(prim, "targets").len();
+    if targets == 0 {
+        return Ok(());
+    }
+    let declared = prim["attributes"]["POSITION"]
+        .as_u64()
+        .and_then(|a| json["accessors"][a as usize]["count"].as_u64());
+    let fix = "export it without Draco, or with its sequential method (gltf-transform draco \
+               keeps the order for morph targets)";
+    let them = match targets {
+        1 => "its morph target".to_owned(),
+        n => format!("its {n} morph targets"),
+    };
+    if let Some(n) = declared.filter(|&n| n as usize != points) {
+        return Err(format!(
+            "the stream decodes to {points} vertices where its accessors declare {n}, so {them} \
+             (stored apart, {n} values each) fit none of them; {fix}"
+        ));
+    }
+    if stream.get(7) == Some(&1) && stream.get(8) == Some(&1) {
+        return Err(format!(
+            "the stream is edgebreaker-encoded, which renumbers the vertices, but {them} \
+             (stored apart) keep the order they were written for: they no longer fit (every \
+             viewer plays them scrambled); {fix}"
+        ));
     }
     Ok(())
 }

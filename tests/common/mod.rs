@@ -291,6 +291,16 @@ pub fn glb_bytes(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
     f
 }
 
+/// A GLB file's JSON and binary chunk as they are stored (nothing decoded).
+pub fn glb_parts(path: &Path) -> (serde_json::Value, Vec<u8>) {
+    let b = std::fs::read(path).unwrap();
+    let word = |at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as usize;
+    let js = word(12);
+    let json = serde_json::from_slice(&b[20..20 + js]).unwrap();
+    let bin = b.get(28 + js..).unwrap_or_default().to_vec();
+    (json, bin)
+}
+
 /// Write `json` and `bin` as a GLB file, byte for byte as given.
 pub fn write_glb(path: &Path, json: &serde_json::Value, bin: &[u8]) {
     std::fs::write(path, glb_bytes(json, bin)).unwrap();
