@@ -37,6 +37,10 @@
 //! **Rotation keys** ([`rotations`]) must be unit quaternions: a key farther from unit length
 //! than the validator allows ([`UNIT_LENGTH`]) is divided by its length (a CUBICSPLINE key's
 //! tangents by the same), as a player's slerp does; float outputs of `rotation` channels only.
+//!
+//! **Empty animations** ([`empty_animations`], [`drop_empty_animations`]): an animation must
+//! have a channel and a sampler (assimp 5.2's glTF-to-glTF export keeps a morph file's clip
+//! with neither, having lost its weights): left out of the output, which plays the same.
 
 use super::build::{f32_json, min_max, BinBuilder};
 use super::read::{arr, listed, quoted_name, Document};
@@ -441,6 +445,42 @@ pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> V
             listed(&densified),
             if n == 1 { "its" } else { "their" },
         )],
+    }
+}
+
+/// Whether animation `anim` has what the specification asks of one: a channel and a sampler.
+fn playable(anim: &Value) -> bool {
+    !arr(anim, "channels").is_empty() && !arr(anim, "samplers").is_empty()
+}
+
+/// A line naming the input's animations that have no channel or no sampler, which the output
+/// leaves out ([`drop_empty_animations`], when it is written: until then the other stages
+/// address the animations by their index in the input).
+pub fn empty_animations(json: &Value) -> Vec<String> {
+    let empty: Vec<String> = (arr(json, "animations").iter().enumerate())
+        .filter(|(_, a)| !playable(a))
+        .map(|(i, a)| quoted_name(a, || format!("{i}")))
+        .collect();
+    let (what, has) = match empty.len() {
+        0 => return Vec::new(),
+        1 => ("animation", "has"),
+        _ => ("animations", "have"),
+    };
+    vec![format!(
+        "{what} {} {has} no channel or no sampler (nothing to play): left out",
+        listed(&empty)
+    )]
+}
+
+/// Remove the animations that have no channel or no sampler (and `animations`, if none is
+/// left); see [`empty_animations`].
+pub fn drop_empty_animations(json: &mut Value) {
+    let Some(anims) = json.get_mut("animations").and_then(Value::as_array_mut) else {
+        return;
+    };
+    anims.retain(playable);
+    if anims.is_empty() {
+        json.as_object_mut().map(|o| o.remove("animations"));
     }
 }
 

@@ -56,6 +56,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     let mut mended = mend::all(&json, &mut bin);
     mended.extend(mend::bounds(doc, &mut json));
     mended.extend(mend::sparse_parts(doc, &mut json, &mut bin));
+    mended.extend(mend::empty_animations(&json));
     Ok(Output {
         json,
         bin,
@@ -211,6 +212,7 @@ pub fn glb_bytes(mut out: Output, path: &Path) -> Result<Vec<u8>> {
 /// Finish `out`'s JSON for writing: meshopt compression where asked, the views and buffers in
 /// place; returns the binary chunk (padded to 4 bytes) and, for a `.gltf`, the `.bin`'s name.
 fn assemble(out: &mut Output, container: Container, path: &Path) -> (Vec<u8>, Option<String>) {
+    mend::drop_empty_animations(&mut out.json);
     let fallback = if out.meshopt { encode::meshopt(out) } else { 0 };
     encode::clear_marks(out);
     let views = std::mem::take(&mut out.bin.views);
