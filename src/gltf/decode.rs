@@ -347,7 +347,8 @@ fn draco_primitive(
     let Some(ext) = prim["extensions"].get("KHR_draco_mesh_compression") else {
         return Ok(());
     };
-    let what = format!("mesh {m} primitive {p} (Draco)");
+    let mesh_name = super::read::quoted_name(&json["meshes"][m], || format!("{m}"));
+    let what = format!("mesh {mesh_name} primitive {p} (Draco)");
     let view = ext["bufferView"]
         .as_u64()
         .ok_or(format!("{what} has no bufferView"))? as usize;
@@ -457,21 +458,21 @@ fn scrambled_targets(
         .and_then(|a| json["accessors"][a as usize]["count"].as_u64());
     let fix = "export it without Draco, or with its sequential method (gltf-transform draco \
                keeps the order for morph targets)";
-    let them = match targets {
-        1 => "its morph target".to_owned(),
-        n => format!("its {n} morph targets"),
+    let (them, follow, fit, it) = match targets {
+        1 => ("its morph target".to_owned(), "follows", "fits", "it"),
+        n => (format!("its {n} morph targets"), "follow", "fit", "them"),
     };
     if let Some(n) = declared.filter(|&n| n as usize != points) {
         return Err(format!(
             "the stream decodes to {points} vertices where its accessors declare {n}, so {them} \
-             (stored apart, {n} values each) fit none of them; {fix}"
+             (stored apart, {n} values each) no longer {fit}; {fix}"
         ));
     }
     if stream.get(7) == Some(&1) && stream.get(8) == Some(&1) {
         return Err(format!(
-            "the stream is edgebreaker-encoded, which renumbers the vertices, but {them} \
-             (stored apart) keep the order they were written for: they no longer fit (every \
-             viewer plays them scrambled); {fix}"
+            "the stream is edgebreaker-encoded, which renumbers the vertices, but {them}, \
+             stored apart, still {follow} the original order (every viewer plays {it} \
+             scrambled); {fix}"
         ));
     }
     Ok(())
