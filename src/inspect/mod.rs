@@ -8,10 +8,11 @@
 
 use crate::gltf::{arr, listed, quoted_name, weights_target, Access, Document, PASSED_THROUGH};
 use crate::tween::{
-    find_morph_meshes, grid_of, plan, skeletal_clips, KeyOptions, KeySource, MorphMesh,
-    TrackOrigin, TweenOptions,
+    find_morph_meshes, grid_of, plan, skeletal_clips, targets_given_normals, KeyOptions, KeySource,
+    MorphMesh, TrackOrigin, TweenOptions,
 };
 use anyhow::Result;
+use glam::DVec3;
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeSet;
@@ -371,6 +372,27 @@ fn tween_tracks(meshes: &[MorphMesh]) -> Vec<TrackInfo> {
             let frames = plan(&t.times, &opts);
             let new_targets = frames.iter().filter(|f| f.t != 0.0 && f.t != 1.0).count();
             let targets = (m.target_count + new_targets) as u64;
+            // Position-only targets beside base normals are given NORMAL (and TANGENT) deltas
+            // of their own when frames go between the keys: sparse where that is smaller, about
+            // where the positions move (the ring around them turns too, so a little more).
+            let given: u64 = match new_targets {
+                0 => 0,
+                _ => (targets_given_normals(m).iter())
+                    .map(|&i| {
+                        let moved: u64 = (m.primitives.iter())
+                            .map(|p| {
+                                p.target_pos[i]
+                                    .iter()
+                                    .filter(|d| **d != DVec3::ZERO)
+                                    .count()
+                            })
+                            .sum::<usize>() as u64;
+                        let index = if m.vertex_count() <= 65_536 { 2 } else { 4 };
+                        let dense = m.vertex_count() as u64 * 12;
+                        dense.min(moved * (12 + index)) * (per_vertex / 12 - 1)
+                    })
+                    .sum(),
+            };
             out.push(TrackInfo {
                 mesh: m.name.clone(),
                 keys_from: match &t.origin {
@@ -381,6 +403,7 @@ fn tween_tracks(meshes: &[MorphMesh]) -> Vec<TrackInfo> {
                 frames: frames.len(),
                 new_targets,
                 added_bytes: new_targets as u64 * m.vertex_count() as u64 * per_vertex
+                    + given
                     + frames.len() as u64 * (4 + 4 * targets),
             });
         }

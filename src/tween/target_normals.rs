@@ -29,22 +29,28 @@ use rayon::prelude::*;
 /// one (a face rig's 52 shapes: 52% of the rows, 26% above this).
 pub const LEAST_CHANGE: f64 = 1e-3;
 
-/// Give every target of `mesh` that moves positions but carries no NORMAL deltas (in some
-/// primitive) the deltas of its shape, and TANGENT deltas where the base has tangents and the
-/// target none, counting them in `mesh.normals_given`. Nothing where a primitive has no
-/// normals.
-pub fn derive(mesh: &mut MorphMesh) {
+/// The targets of `mesh` that [`derive`] gives normals: those that move positions but carry no
+/// NORMAL deltas (in some primitive), where every primitive has normals.
+pub fn wanted(mesh: &MorphMesh) -> Vec<usize> {
     if mesh.primitives.iter().any(|p| p.normals.is_none()) {
-        return;
+        return Vec::new();
     }
-    let wanted: Vec<usize> = (0..mesh.target_count)
+    (0..mesh.target_count)
         .filter(|&i| {
             let lacks = mesh.primitives.iter().any(|p| p.target_nrm[i].is_none());
             let moves =
                 (mesh.primitives.iter()).any(|p| p.target_pos[i].iter().any(|d| *d != DVec3::ZERO));
             lacks && moves
         })
-        .collect();
+        .collect()
+}
+
+/// Give every target of `mesh` that moves positions but carries no NORMAL deltas (in some
+/// primitive) the deltas of its shape, and TANGENT deltas where the base has tangents and the
+/// target none, counting them in `mesh.normals_given`. Nothing where a primitive has no
+/// normals.
+pub fn derive(mesh: &mut MorphMesh) {
+    let wanted = wanted(mesh);
     if wanted.is_empty() {
         return;
     }
