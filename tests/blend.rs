@@ -1678,3 +1678,119 @@ fn a_long_capture_s_cycles_are_told_as_their_range() {
         serde_json::from_slice(&run_ok(&["inspect", &s(&long), "--json"]).stdout).unwrap();
     assert_eq!(v["blend"]["cycles"].as_array().unwrap().len(), 40);
 }
+
+/// A writer that declares min/max on every accessor (assimp's RobotExpressive: 18-21 validator
+/// errors in each blend, none its own) has them right for the values it wrote; where the mends
+/// change those values (skin weights divided by their sums, a weightless influence's joint made
+/// joint 0, rotation keys divided by their lengths), the output declares the bounds of the
+/// values it holds.
+#[test]
+fn declared_bounds_follow_the_mended_weights_joints_and_rotations() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let robot = fx.join("skinned/RobotExpressive.glb");
+    let doc = Document::open(&robot).unwrap();
+    let (mut json, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let mut vec4 = std::collections::BTreeSet::new();
+    for m in json["meshes"].as_array().unwrap() {
+        for p in m["primitives"].as_array().unwrap() {
+            for (k, a) in p["attributes"].as_object().unwrap() {
+                if k.starts_with("WEIGHTS_") || k.starts_with("JOINTS_") {
+                    vec4.insert(a.as_u64().unwrap() as usize);
+                }
+            }
+        }
+    }
+    // The walk's rotation keys lengthened by 5% (the validator allows 0.77%).
+    let walk = json["animations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["name"] == "Walking")
+        .unwrap()
+        .clone();
+    for c in walk["channels"].as_array().unwrap() {
+        if c["target"]["path"] != "rotation" {
+            continue;
+        }
+        let o = walk["samplers"][c["sampler"].as_u64().unwrap() as usize]["output"]
+            .as_u64()
+            .unwrap() as usize;
+        if !vec4.insert(o) {
+            continue;
+        }
+        let acc = &json["accessors"][o];
+        let view = &json["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
+        let start = (view["byteOffset"].as_u64().unwrap_or(0)
+            + acc["byteOffset"].as_u64().unwrap_or(0)) as usize;
+        for at in (start..start + 16 * acc["count"].as_u64().unwrap() as usize).step_by(4) {
+            let x = f32::from_le_bytes(bin[at..at + 4].try_into().unwrap());
+            bin[at..at + 4].copy_from_slice(&(x * 1.05).to_le_bytes());
+        }
+    }
+    let bounds = |doc: &Document, a: usize| -> (Vec<f64>, Vec<f64>) {
+        let (v, _) = doc.read_f64(a).unwrap();
+        let col = |c: usize, f: fn(f64, f64) -> f64, init: f64| -> f64 {
+            v.iter()
+                .skip(c)
+                .step_by(4)
+                .map(|&x| x as f32 as f64)
+                .fold(init, f)
+        };
+        (
+            (0..4).map(|c| col(c, f64::min, f64::MAX)).collect(),
+            (0..4).map(|c| col(c, f64::max, f64::MIN)).collect(),
+        )
+    };
+    let edited = dir.path().join("bounded.glb");
+    write_glb(&edited, &json, &bin);
+    let read = Document::open(&edited).unwrap();
+    for &a in &vec4 {
+        let (lo, hi) = bounds(&read, a);
+        json["accessors"][a]["min"] = serde_json::json!(lo);
+        json["accessors"][a]["max"] = serde_json::json!(hi);
+    }
+    write_glb(&edited, &json, &bin);
+    let out = dir.path().join("out.glb");
+    let p = |f: &Path| f.to_str().unwrap().to_string();
+    let r = run_ok(&[
+        "blend",
+        &p(&edited),
+        "--clips",
+        "Walking",
+        "Running",
+        "-o",
+        &p(&out),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("the skin weights of"), "{err}");
+    assert!(err.contains("rotation keys of length"), "{err}");
+    if let Some((errors, _, line)) = validate(&out) {
+        assert_eq!(errors, 0, "{line}");
+    }
+    // Each declared bound is its values' (as the output's reader reads them).
+    let written = Document::open(&out).unwrap();
+    let mut checked = 0;
+    for (a, acc) in written.json["accessors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+    {
+        if acc["type"] != "VEC4" || acc.get("max").is_none() {
+            continue;
+        }
+        let (lo, hi) = bounds(&written, a);
+        let declared = |k: &str| -> Vec<f64> {
+            acc[k]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap() as f32 as f64)
+                .collect()
+        };
+        assert_eq!((declared("min"), declared("max")), (lo, hi), "accessor {a}");
+        checked += 1;
+    }
+    assert!(checked >= vec4.len(), "{checked} of {}", vec4.len());
+}

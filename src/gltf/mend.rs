@@ -26,8 +26,9 @@
 //! values' (gltf-pipeline 4's Draco on a Blender morph file declared a target's max 0 where its
 //! values reach 1.2): each component whose declared bound, read as a float, differs from the
 //! values' is written as theirs; bounds right to a float's precision stay as written. SCALAR,
-//! VEC2 and VEC3 only (the VEC4 weights and rotations the mends above may change are left as
-//! they are).
+//! VEC2 and VEC3 from the input's values; the VEC4 skin weights, joints and rotation keys the
+//! mends above may change, from the values written (assimp declares bounds on every accessor,
+//! right for its weights before they were divided by their sums: 18-21 errors per blend).
 //!
 //! **Sparse parts** ([`sparse_parts`]): a buffer view that only sparse parts use loses
 //! `byteStride` and `target` (only vertex data may have them); a float sparse accessor whose
@@ -191,11 +192,74 @@ fn normalized(w: &mut [f32], j: &[u32]) {
     }
 }
 
-/// Every mend, in place in `bin` (the views placed by `write::begin`); returns the lines.
-pub fn all(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
+/// Every mend, in place in `bin` (the views placed by `write::begin`) and, for the bounds of
+/// the data they change, `json`; returns the lines.
+pub fn all(json: &mut Value, bin: &mut BinBuilder) -> Vec<String> {
     let mut lines = weights(json, bin);
     lines.extend(rotations(json, bin));
+    rebound_vec4(json, bin);
     lines
+}
+
+/// The VEC4 data [`weights`] and [`rotations`] may change (skin weights and their joints,
+/// rotation keys): where an accessor of them declares min/max that no longer match its values
+/// in `bin` (compared as floats, as [`bounds`] does), they are set to the values'. Writers that
+/// declare bounds on every accessor (assimp) had them right for the values before.
+fn rebound_vec4(json: &mut Value, bin: &BinBuilder) {
+    let mut vec4 = std::collections::BTreeSet::new();
+    for mesh in arr(json, "meshes") {
+        for p in arr(mesh, "primitives") {
+            let attrs = p["attributes"].as_object().into_iter().flatten();
+            vec4.extend(
+                attrs
+                    .filter(|(k, _)| k.starts_with("WEIGHTS_") || k.starts_with("JOINTS_"))
+                    .filter_map(|(_, a)| a.as_u64()),
+            );
+        }
+    }
+    for anim in arr(json, "animations") {
+        for ch in arr(anim, "channels") {
+            if ch["target"]["path"].as_str() == Some("rotation") {
+                let sampler = ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize;
+                vec4.extend(anim["samplers"][sampler]["output"].as_u64());
+            }
+        }
+    }
+    for a in vec4.into_iter().map(|a| a as usize) {
+        let acc = &json["accessors"][a];
+        if acc.get("min").is_none() && acc.get("max").is_none() {
+            continue;
+        }
+        let count = acc["count"].as_u64().unwrap_or(0) as usize;
+        // Normalized integers (weights the mends leave as they are) keep theirs.
+        let Some(column) = Column::of(json, bin, a, count)
+            .filter(|c| count > 0 && (c.component == 5126 || acc["normalized"] != true))
+        else {
+            continue;
+        };
+        let values: Vec<f32> = (0..count)
+            .flat_map(|i| (0..4).map(move |c| (i, c)))
+            .map(|(i, c)| match column.component {
+                5126 => column.float(&bin.bytes, i, c),
+                _ => column.joint(&bin.bytes, i, c) as f32,
+            })
+            .collect();
+        let (lo, hi) = min_max(&values, 4);
+        for (key, actual) in [("min", lo), ("max", hi)] {
+            let Some(declared) = json["accessors"][a][key].as_array() else {
+                continue;
+            };
+            let wrong = declared.len() != 4
+                || (declared.iter().zip(&actual))
+                    .any(|(d, &v)| d.as_f64().map(|d| d as f32) != Some(v));
+            if wrong {
+                json["accessors"][a][key] = match column.component {
+                    5126 => f32_json(&actual),
+                    _ => actual.iter().map(|&v| v as u64).collect(),
+                };
+            }
+        }
+    }
 }
 
 /// Make every float `WEIGHTS_n` set of the output sum to one per vertex (see the module
