@@ -1586,6 +1586,32 @@ fn a_loop_baked_short_of_its_first_pose_is_closed() {
     let dir = tempfile::tempdir().unwrap();
     let fox = fx.join("skinned/Fox.glb");
     let (baked, run) = with_resampled_clip(&fox, "Run", 24.0, dir.path());
+    let sub = |d: &str| {
+        let d = dir.path().join(d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    };
+    // Every other frame of that (Blender's sampling step 2), and a 60 per second resample of
+    // it (FBX2glTF's bake of Blender's FBX): 0.79, 0.9 and 2.5 key spacings short.
+    let (by12, run12) = with_resampled_clip(&fox, "Run", 12.0, &sub("12"));
+    let (by60, run60) = with_resampled_clip(&baked, &run, 60.0, &sub("60"));
+    for (file, clip, rate) in [
+        (&baked, &run, 24.0),
+        (&by12, &run12, 12.0),
+        (&by60, &run60, 60.0),
+    ] {
+        let rep = blend_report(file, "Walk", clip, 0.5, &dir.path().join("c.glb"), &[]);
+        let clip = &rep["clips"][1];
+        assert_eq!(clip["looping"], true, "{rate}");
+        let period = clip["cycles"][0]["period"].as_f64().unwrap();
+        assert!((period - 1.1583).abs() < 0.02, "{rate}: period {period}");
+        let slide = |k: &str| rep["result"][k]["sliding"]["mean"].as_f64().unwrap();
+        assert!(slide("after_cleanup") < 1e-6, "{rate}");
+        assert!(
+            rep["result"]["jerk_ratio"].as_f64().unwrap() <= 1.15,
+            "{rate}"
+        );
+    }
     for w in [0.25, 0.5, 0.75] {
         let original = blend_report(&fox, "Walk", "Run", w, &dir.path().join("a.glb"), &[]);
         let rep = blend_report(&baked, "Walk", &run, w, &dir.path().join("b.glb"), &[]);
