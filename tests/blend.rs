@@ -1820,3 +1820,79 @@ fn declared_bounds_follow_the_mended_weights_joints_and_rotations() {
     }
     assert!(checked >= vec4.len(), "{checked} of {}", vec4.len());
 }
+
+/// Normals must be unit vectors: Babylon.js 9's export of Fox wrote zero normals (994 validator
+/// errors its blends carried). A character's normals off unit length are written divided by
+/// their lengths, zero ones as the normals of their faces, with a line saying so; the output
+/// passes the validator. CesiumMan with 40 of its normals zeroed and 40 doubled, its declared
+/// bounds those of the broken values.
+#[test]
+fn normals_off_unit_length_are_written_as_unit() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let man = fx.join("skinned/CesiumMan.glb");
+    let doc = Document::open(&man).unwrap();
+    let (mut json, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let acc = json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"]
+        .as_u64()
+        .unwrap() as usize;
+    let (original, _) = doc.read_f64(acc).unwrap();
+    let view =
+        &json["bufferViews"][json["accessors"][acc]["bufferView"].as_u64().unwrap() as usize];
+    let (start, stride) = (
+        view["byteOffset"].as_u64().unwrap() as usize,
+        view["byteStride"].as_u64().unwrap_or(12) as usize,
+    );
+    let mut broken = original.clone();
+    for v in 0..80 {
+        let scale = if v < 40 { 0.0 } else { 2.0 };
+        for c in 0..3 {
+            broken[3 * v + c] *= scale;
+            let at = start + v * stride + 4 * c;
+            bin[at..at + 4].copy_from_slice(&(broken[3 * v + c] as f32).to_le_bytes());
+        }
+    }
+    for (k, pick) in [("min", f64::min as fn(f64, f64) -> f64), ("max", f64::max)] {
+        let b: Vec<f64> = (0..3)
+            .map(|c| {
+                broken
+                    .iter()
+                    .skip(c)
+                    .step_by(3)
+                    .copied()
+                    .reduce(pick)
+                    .unwrap()
+            })
+            .collect();
+        json["accessors"][acc][k] = serde_json::json!(b);
+    }
+    let input = dir.path().join("broken.glb");
+    write_glb(&input, &json, &bin);
+    let out = dir.path().join("out.glb");
+    let p = |f: &Path| f.to_str().unwrap().to_string();
+    let r = run_ok(&["blend", &p(&input), &p(&input), "-o", &p(&out)]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("80 normals were not of unit length as glTF requires (40 of them zero)"),
+        "{err}"
+    );
+    if let Some((errors, _, line)) = validate(&out) {
+        assert_eq!(errors, 0, "{line}");
+    }
+    let written = Document::open(&out).unwrap();
+    let acc = written.json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"]
+        .as_u64()
+        .unwrap() as usize;
+    let (normals, _) = written.read_f64(acc).unwrap();
+    let at = |v: &[f64], i: usize| glam::DVec3::from_slice(&v[3 * i..3 * i + 3]);
+    for i in 0..normals.len() / 3 {
+        let (n, o) = (at(&normals, i), at(&original, i));
+        assert!((n.length() - 1.0).abs() < 1e-6, "{i}: {n}");
+        // The doubled ones and the rest as they were; the zeroed ones their faces'.
+        let within = if i < 40 { 60f64 } else { 1e-3 };
+        assert!(
+            n.angle_between(o).to_degrees() < within,
+            "{i}: {n} against {o}"
+        );
+    }
+}

@@ -39,11 +39,19 @@
 //! than the validator allows ([`UNIT_LENGTH`]) is divided by its length (a CUBICSPLINE key's
 //! tangents by the same), as a player's slerp does; float outputs of `rotation` channels only.
 //!
+//! **Normals** ([`normals`]) must be unit vectors: a float NORMAL attribute's vector farther
+//! from unit length than the validator allows ([`UNIT_NORMAL`]) is divided by its length; a
+//! zero (or not finite) one, which no division mends, is its vertex's area-weighted face normal
+//! in its primitive (Babylon.js 9's export of Fox: 994 zero normals its outputs carried). What
+//! a renderer shows there was undefined, black in three.js. Primitives without morph targets
+//! only: a morph primitive's targets (and the frames `tween` adds) carry NORMAL deltas from
+//! its normals as they were, which a different base would turn.
+//!
 //! **Empty animations** ([`empty_animations`], [`drop_empty_animations`]): an animation must
 //! have a channel and a sampler (assimp 5.2's glTF-to-glTF export keeps a morph file's clip
 //! with neither, having lost its weights): left out of the output, which plays the same.
 
-use super::build::{f32_json, min_max, BinBuilder};
+use super::build::{f32_json, min_max, set_bounds, BinBuilder};
 use super::read::{arr, listed, quoted_name, Document};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -73,6 +81,17 @@ impl Column {
     /// Attribute `acc` of `json` with its data in `bin` (views placed by `write::begin`), when
     /// it is a plain (not sparse) VEC4 accessor of `count` elements inside the buffer.
     fn of(json: &Value, bin: &BinBuilder, acc: usize, count: usize) -> Option<Column> {
+        Column::of_width(json, bin, acc, count, 4)
+    }
+
+    /// As [`Column::of`], for a plain accessor of `width` components (VEC3, VEC4).
+    fn of_width(
+        json: &Value,
+        bin: &BinBuilder,
+        acc: usize,
+        count: usize,
+        width: u64,
+    ) -> Option<Column> {
         let a = &json["accessors"][acc];
         let component = a["componentType"].as_u64()?;
         let size: u64 = match component {
@@ -81,7 +100,11 @@ impl Column {
             5126 => 4,
             _ => return None,
         };
-        if a["type"].as_str() != Some("VEC4")
+        let ty = match width {
+            3 => "VEC3",
+            _ => "VEC4",
+        };
+        if a["type"].as_str() != Some(ty)
             || a.get("sparse").is_some()
             || a["count"].as_u64() != Some(count as u64)
         {
@@ -93,22 +116,23 @@ impl Column {
         let start = view["byteOffset"]
             .as_u64()?
             .checked_add(a["byteOffset"].as_u64().unwrap_or(0))?;
-        let stride = view["byteStride"].as_u64().unwrap_or(4 * size);
+        let stride = view["byteStride"].as_u64().unwrap_or(width * size);
         let end = (count as u64)
             .checked_sub(1)?
             .checked_mul(stride)?
             .checked_add(start)?
-            .checked_add(4 * size)?;
+            .checked_add(width * size)?;
         let view_end = view["byteOffset"]
             .as_u64()?
             .checked_add(view["byteLength"].as_u64()?)?;
         let (start, stride, size) = (start as usize, stride as usize, size as usize);
-        (stride >= 4 * size && end <= view_end && end <= bin.bytes.len() as u64).then_some(Column {
-            start,
-            stride,
-            component,
-            size,
-        })
+        (stride >= width as usize * size && end <= view_end && end <= bin.bytes.len() as u64)
+            .then_some(Column {
+                start,
+                stride,
+                component,
+                size,
+            })
     }
 
     fn at(&self, i: usize, c: usize) -> usize {
@@ -328,7 +352,7 @@ pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
     said.into_iter()
         .filter(|&(_, (_, lo, hi))| (1.0 - lo).max(hi - 1.0) > SAID_ABOVE)
         .map(|(m, (n, lo, hi))| {
-            let name = quoted_name(&json["meshes"][m], || format!("mesh {m}"));
+            let name = quoted_name(&json["meshes"][m], || format!("{m}"));
             format!(
                 "mesh {name}: the skin weights of {n} vertices summed to {lo:.4}-{hi:.4}, not 1 as glTF requires; written divided by their sums"
             )
@@ -515,6 +539,112 @@ pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> V
 /// Whether animation `anim` has what the specification asks of one: a channel and a sampler.
 fn playable(anim: &Value) -> bool {
     !arr(anim, "channels").is_empty() && !arr(anim, "samplers").is_empty()
+}
+
+/// How far from 1 the validator lets a NORMAL's length be (glTF-Validator 2.0.0-dev.3.10: 1.005
+/// passes, 1.0068 and 0.993 fail), with a margin.
+const UNIT_NORMAL: f64 = 0.006;
+
+/// Make every float NORMAL attribute of the output a unit vector (see the module comment), in
+/// place in `bin` (the views placed by `write::begin`), from the values `doc` reads; returns a
+/// line for each mesh with such normals.
+pub fn normals(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut done = std::collections::BTreeSet::new();
+    // Mended accessors and their values as written, for their declared bounds.
+    let mut rebound: Vec<(usize, Vec<f32>)> = Vec::new();
+    for (m, mesh) in arr(json, "meshes").iter().enumerate() {
+        let (mut scaled, mut zero) = (0, 0);
+        for p in arr(mesh, "primitives") {
+            // A morph primitive's frames carry NORMAL deltas from the normals as read.
+            let targets = !arr(p, "targets").is_empty();
+            let acc = p["attributes"]["NORMAL"].as_u64().map(|a| a as usize);
+            let Some(acc) = acc.filter(|_| !targets) else {
+                continue;
+            };
+            let count = json["accessors"][acc]["count"].as_u64().unwrap_or(0) as usize;
+            let column = Column::of_width(json, bin, acc, count, 3).filter(|c| c.component == 5126);
+            let Some(column) = column.filter(|_| done.insert(acc)) else {
+                continue;
+            };
+            let Ok((values, 3)) = doc.read_f64(acc) else {
+                continue;
+            };
+            let off = |v: &[f64]| {
+                let length = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                !(length.is_finite() && (length - 1.0).abs() <= UNIT_NORMAL)
+            };
+            if !values.chunks_exact(3).any(off) {
+                continue;
+            }
+            let faces = face_normals(doc, p, count);
+            let mut written: Vec<f32> = values.iter().map(|&x| x as f32).collect();
+            for (i, v) in values.chunks_exact(3).enumerate() {
+                if !off(v) {
+                    continue;
+                }
+                let n = glam::DVec3::from_slice(v);
+                let unit = match n.length() {
+                    l if l.is_finite() && l > 1e-12 => {
+                        scaled += 1;
+                        n / l
+                    }
+                    _ => {
+                        zero += 1;
+                        faces[i].try_normalize().unwrap_or(glam::DVec3::Y)
+                    }
+                };
+                for (c, x) in unit.to_array().into_iter().enumerate() {
+                    column.set_float(&mut bin.bytes, i, c, x as f32);
+                    written[3 * i + c] = x as f32;
+                }
+            }
+            rebound.push((acc, written));
+        }
+        if scaled + zero > 0 {
+            let name = quoted_name(mesh, || format!("{m}"));
+            lines.push(format!(
+                "mesh {name}: {} normals were not of unit length as glTF requires ({zero} of them zero); written divided by their lengths, the zero ones as the normals of their faces",
+                scaled + zero
+            ));
+        }
+    }
+    for (acc, written) in rebound {
+        let a = &mut json["accessors"][acc];
+        if a.get("min").is_some() || a.get("max").is_some() {
+            set_bounds(a, &written, 3);
+        }
+    }
+    lines
+}
+
+/// The area-weighted sum of the face normals around each of the `count` vertices of triangle
+/// primitive `p` (zero where none, or where its positions or indices do not read).
+fn face_normals(doc: &Document, p: &Value, count: usize) -> Vec<glam::DVec3> {
+    let mut out = vec![glam::DVec3::ZERO; count];
+    let read = |k: &Value| k.as_u64().and_then(|a| doc.read_f64(a as usize).ok());
+    let Some((pos, 3)) = read(&p["attributes"]["POSITION"]) else {
+        return out;
+    };
+    if p["mode"].as_u64().unwrap_or(4) != 4 || pos.len() != 3 * count {
+        return out;
+    }
+    let indices: Vec<usize> = match read(&p["indices"]) {
+        Some((ix, 1)) => ix.iter().map(|&i| i as usize).collect(),
+        Some(_) => return out,
+        None => (0..count).collect(),
+    };
+    let at = |i: usize| glam::DVec3::from_slice(&pos[3 * i..3 * i + 3]);
+    for t in indices.chunks_exact(3) {
+        if t.iter().any(|&i| i >= count) {
+            continue;
+        }
+        let n = (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
+        for &i in t {
+            out[i] += n;
+        }
+    }
+    out
 }
 
 /// A line naming the input's animations that have no channel or no sampler, which the output

@@ -55,6 +55,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
     let mut mended = mend::all(&mut json, &mut bin);
     mended.extend(mend::bounds(doc, &mut json));
+    mended.extend(mend::normals(doc, &mut json, &mut bin));
     mended.extend(mend::sparse_parts(doc, &mut json, &mut bin));
     mended.extend(mend::empty_animations(&json));
     Ok(Output {
