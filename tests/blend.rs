@@ -328,9 +328,7 @@ fn rotation_keys_off_unit_length_are_read_and_written_as_unit() {
     for &o in &outputs {
         let acc = &json["accessors"][o];
         assert_eq!(acc["componentType"], 5126);
-        let view = &json["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
-        let start = (view["byteOffset"].as_u64().unwrap_or(0)
-            + acc["byteOffset"].as_u64().unwrap_or(0)) as usize;
+        let (start, _) = accessor_bytes(&json, o, 16);
         let count = acc["count"].as_u64().unwrap() as usize;
         for k in 0..count {
             let scale = 0.9 + 0.2 * (k % 5) as f32 / 4.0;
@@ -1745,11 +1743,9 @@ fn declared_bounds_follow_the_mended_weights_joints_and_rotations() {
         if !vec4.insert(o) {
             continue;
         }
-        let acc = &json["accessors"][o];
-        let view = &json["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
-        let start = (view["byteOffset"].as_u64().unwrap_or(0)
-            + acc["byteOffset"].as_u64().unwrap_or(0)) as usize;
-        for at in (start..start + 16 * acc["count"].as_u64().unwrap() as usize).step_by(4) {
+        let (start, _) = accessor_bytes(&json, o, 16);
+        let count = json["accessors"][o]["count"].as_u64().unwrap() as usize;
+        for at in (start..start + 16 * count).step_by(4) {
             let x = f32::from_le_bytes(bin[at..at + 4].try_into().unwrap());
             bin[at..at + 4].copy_from_slice(&(x * 1.05).to_le_bytes());
         }
@@ -1837,12 +1833,7 @@ fn normals_off_unit_length_are_written_as_unit() {
         .as_u64()
         .unwrap() as usize;
     let (original, _) = doc.read_f64(acc).unwrap();
-    let view =
-        &json["bufferViews"][json["accessors"][acc]["bufferView"].as_u64().unwrap() as usize];
-    let (start, stride) = (
-        view["byteOffset"].as_u64().unwrap() as usize,
-        view["byteStride"].as_u64().unwrap_or(12) as usize,
-    );
+    let (start, stride) = accessor_bytes(&json, acc, 12);
     let mut broken = original.clone();
     for v in 0..80 {
         let scale = if v < 40 { 0.0 } else { 2.0 };
@@ -1895,4 +1886,14 @@ fn normals_off_unit_length_are_written_as_unit() {
             "{i}: {n} against {o}"
         );
     }
+}
+
+/// Where accessor `acc` of `json` starts in its buffer, and its byte stride (`elem` bytes
+/// where its view has none).
+fn accessor_bytes(json: &Value, acc: usize, elem: usize) -> (usize, usize) {
+    let a = &json["accessors"][acc];
+    let view = &json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+    let start = view["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0);
+    let stride = view["byteStride"].as_u64().map_or(elem, |s| s as usize);
+    (start as usize, stride)
 }
