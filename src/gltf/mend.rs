@@ -67,7 +67,7 @@ const SUM_STEP: f64 = 0.0039216;
 /// they are a codec's quantization and mended without a word.
 const SAID_ABOVE: f64 = SUM_STEP;
 
-/// Where one VEC4 float attribute's elements lie in the output buffer.
+/// Where one VEC3 or VEC4 attribute's elements lie in the output buffer.
 #[derive(Clone, Copy)]
 struct Column {
     start: usize,
