@@ -251,16 +251,7 @@ fn skin_weights_are_written_summing_to_one() {
     let p = |f: &Path| f.to_str().unwrap().to_string();
     let robot = fx.join("skinned/RobotExpressive.glb");
     let out = dir.path().join("robot.glb");
-    let r = run_ok(&[
-        "blend",
-        &p(&robot),
-        "--clips",
-        "Walking",
-        "Running",
-        "-o",
-        &p(&out),
-    ]);
-    let err = String::from_utf8_lossy(&r.stderr);
+    let err = robot_walk_and_run(&robot, &out);
     let said: Vec<&str> = (err.lines())
         .filter(|l| l.starts_with("warning: ") && l.contains("the skin weights of"))
         .collect();
@@ -1710,11 +1701,9 @@ fn a_long_capture_s_cycles_are_told_as_their_range() {
 /// values it holds.
 #[test]
 fn declared_bounds_follow_the_mended_weights_joints_and_rotations() {
-    let Some(fx) = fixtures() else { return };
-    let dir = tempfile::tempdir().unwrap();
-    let robot = fx.join("skinned/RobotExpressive.glb");
-    let doc = Document::open(&robot).unwrap();
-    let (mut json, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let Some((dir, _, mut json, mut bin)) = editable("RobotExpressive") else {
+        return;
+    };
     let mut vec4 = std::collections::BTreeSet::new();
     for m in json["meshes"].as_array().unwrap() {
         for p in m["primitives"].as_array().unwrap() {
@@ -1774,17 +1763,7 @@ fn declared_bounds_follow_the_mended_weights_joints_and_rotations() {
     }
     write_glb(&edited, &json, &bin);
     let out = dir.path().join("out.glb");
-    let p = |f: &Path| f.to_str().unwrap().to_string();
-    let r = run_ok(&[
-        "blend",
-        &p(&edited),
-        "--clips",
-        "Walking",
-        "Running",
-        "-o",
-        &p(&out),
-    ]);
-    let err = String::from_utf8_lossy(&r.stderr);
+    let err = robot_walk_and_run(&edited, &out);
     assert!(err.contains("the skin weights of"), "{err}");
     assert!(err.contains("rotation keys of length"), "{err}");
     if let Some((errors, _, line)) = validate(&out) {
@@ -1824,11 +1803,9 @@ fn declared_bounds_follow_the_mended_weights_joints_and_rotations() {
 /// bounds those of the broken values.
 #[test]
 fn normals_off_unit_length_are_written_as_unit() {
-    let Some(fx) = fixtures() else { return };
-    let dir = tempfile::tempdir().unwrap();
-    let man = fx.join("skinned/CesiumMan.glb");
-    let doc = Document::open(&man).unwrap();
-    let (mut json, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let Some((dir, doc, mut json, mut bin)) = editable("CesiumMan") else {
+        return;
+    };
     let acc = json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"]
         .as_u64()
         .unwrap() as usize;
@@ -1896,4 +1873,19 @@ fn accessor_bytes(json: &Value, acc: usize, elem: usize) -> (usize, usize) {
     let start = view["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0);
     let stride = view["byteStride"].as_u64().map_or(elem, |s| s as usize);
     (start as usize, stride)
+}
+
+/// Skinned fixture `name` opened to be edited: a temporary folder, its document, and copies of
+/// its JSON and binary buffer; `None` without the fixtures.
+fn editable(name: &str) -> Option<(tempfile::TempDir, Document, Value, Vec<u8>)> {
+    let doc = Document::open(&fixtures()?.join(format!("skinned/{name}.glb"))).unwrap();
+    let (json, bin) = (doc.json.clone(), doc.buffers[0].clone());
+    Some((tempfile::tempdir().unwrap(), doc, json, bin))
+}
+
+/// `blend` of RobotExpressive's Walking and Running in `input` to `out`; what it said on stderr.
+fn robot_walk_and_run(input: &Path, out: &Path) -> String {
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let r = run_ok(&["blend", i, "--clips", "Walking", "Running", "-o", o]);
+    String::from_utf8_lossy(&r.stderr).into_owned()
 }
