@@ -51,6 +51,7 @@
 //! have a channel and a sampler (assimp 5.2's glTF-to-glTF export keeps a morph file's clip
 //! with neither, having lost its weights): left out of the output, which plays the same.
 
+use super::accessor::{read_triangles, read_vec3};
 use super::build::{f32_json, min_max, set_bounds, BinBuilder};
 use super::read::{arr, listed, quoted_name, Document};
 use serde_json::Value;
@@ -619,28 +620,20 @@ pub fn normals(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<St
 }
 
 /// The area-weighted sum of the face normals around each of the `count` vertices of triangle
-/// primitive `p` (zero where none, or where its positions or indices do not read).
+/// primitive `p` (TRIANGLES, strips or fans; zero where none, or where its positions or
+/// triangles do not read).
 fn face_normals(doc: &Document, p: &Value, count: usize) -> Vec<glam::DVec3> {
     let mut out = vec![glam::DVec3::ZERO; count];
-    let read = |k: &Value| k.as_u64().and_then(|a| doc.read_f64(a as usize).ok());
-    let Some((pos, 3)) = read(&p["attributes"]["POSITION"]) else {
+    let positions = (p["attributes"]["POSITION"].as_u64())
+        .and_then(|a| read_vec3(doc, a as usize, "POSITION").ok())
+        .filter(|v| v.len() == count);
+    let triangles = read_triangles(doc, p, count, "primitive").ok();
+    let (Some(at), Some(triangles)) = (positions, triangles) else {
         return out;
     };
-    if p["mode"].as_u64().unwrap_or(4) != 4 || pos.len() != 3 * count {
-        return out;
-    }
-    let indices: Vec<usize> = match read(&p["indices"]) {
-        Some((ix, 1)) => ix.iter().map(|&i| i as usize).collect(),
-        Some(_) => return out,
-        None => (0..count).collect(),
-    };
-    let at = |i: usize| glam::DVec3::from_slice(&pos[3 * i..3 * i + 3]);
-    for t in indices.chunks_exact(3) {
-        if t.iter().any(|&i| i >= count) {
-            continue;
-        }
-        let n = (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
-        for &i in t {
+    for t in triangles.iter().map(|t| t.map(|i| i as usize)) {
+        let n = (at[t[1]] - at[t[0]]).cross(at[t[2]] - at[t[0]]);
+        for i in t {
             out[i] += n;
         }
     }
