@@ -463,15 +463,20 @@ pub fn bounds(doc: &Document, json: &mut Value) -> Vec<String> {
             wrong.push(i.to_string());
         }
     }
-    match wrong.len() {
-        0 => Vec::new(),
-        n => vec![format!(
-            "the declared min/max of {n} accessor{} ({}) did not match {} values; written as the values are",
-            if n == 1 { "" } else { "s" },
-            listed(&wrong),
-            if n == 1 { "its" } else { "their" },
-        )],
-    }
+    said_of(&wrong, |n, s, its, which| {
+        format!("the declared min/max of {n} accessor{s} ({which}) did not match {its} values; written as the values are")
+    })
+}
+
+/// A line about the accessors `which` (none: no line), `say` given their count, the plural's
+/// `s`, `its` or `their`, and the list.
+fn said_of(which: &[String], say: impl Fn(usize, &str, &str, &str) -> String) -> Vec<String> {
+    let (s, its) = match which.len() {
+        0 => return Vec::new(),
+        1 => ("", "its"),
+        _ => ("s", "their"),
+    };
+    vec![say(which.len(), s, its, &listed(which))]
 }
 
 /// Sparse parts stored where they may not be (see the module comment): `byteStride`/`target`
@@ -526,15 +531,9 @@ pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> V
         }
         densified.push(i.to_string());
     }
-    match densified.len() {
-        0 => Vec::new(),
-        n => vec![format!(
-            "{n} sparse accessor{} ({}) kept {} indices or values in a view that vertex data also uses; written dense",
-            if n == 1 { "" } else { "s" },
-            listed(&densified),
-            if n == 1 { "its" } else { "their" },
-        )],
-    }
+    said_of(&densified, |n, s, its, which| {
+        format!("{n} sparse accessor{s} ({which}) kept {its} indices or values in a view that vertex data also uses; written dense")
+    })
 }
 
 /// Whether animation `anim` has what the specification asks of one: a channel and a sampler.
