@@ -326,11 +326,17 @@ pub fn clip_from_channels(name: String, index: usize, channels: Vec<Channel>) ->
     }
 }
 
+/// A helper leaf nearer its joint's origin than this fraction of the skin's longest joint
+/// offset (in their parents' frames) is taken as no end at all.
+const END_ON_JOINT: f64 = 1e-6;
+
 /// Mark the skeleton of skin `skin`: its joints plus their descendants that carry nothing,
 /// themselves or below them (end-of-chain helper nodes such as `LowerLeg.L_end`), and find its
 /// topmost joint. A node whose mesh hangs from a child of its own (gltfpack moves a mesh on a
 /// joint's child into a new node below it) is an attachment, not a bone: taken as one, it ended
-/// RobotExpressive's legs at the knee and the blend planted its fingers.
+/// RobotExpressive's legs at the knee and the blend planted its fingers. So is a helper leaf on
+/// its joint's origin ([`END_ON_JOINT`]): it marks nothing (assimp's glTF export writes every
+/// end node there, and the same fingers were planted).
 pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
     let nodes = arr(&doc.json, "nodes");
     let joints: BTreeSet<usize> = arr(&doc.json["skins"][skin], "joints")
@@ -349,10 +355,22 @@ pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
             loaded[p] |= loaded[i] && !joints.contains(&i);
         }
     }
+    // A helper leaf written on its joint's origin marks no end (assimp's glTF export writes
+    // every end node so): left out, the joint is the leaf and [`add_ends`] may give it one.
+    let reach = joints
+        .iter()
+        .map(|&j| rig.rest.local[j].t.length())
+        .fold(0.0, f64::max);
+    let children = rig.children();
+    let on_joint =
+        |i: usize| children[i].is_empty() && rig.rest.local[i].t.length() <= END_ON_JOINT * reach;
     let mut member = vec![false; rig.len()];
     for &i in &rig.order {
         member[i] = joints.contains(&i)
-            || (!loaded[i] && rig.parent[i].is_some_and(|p| member[p]) && !joints.is_empty());
+            || (!loaded[i]
+                && !on_joint(i)
+                && rig.parent[i].is_some_and(|p| member[p])
+                && !joints.is_empty());
     }
     rig.root = rig.order.iter().copied().find(|&i| member[i]).unwrap_or(0);
     rig.skeleton = member;
@@ -360,11 +378,12 @@ pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
 }
 
 /// Give each leaf joint that carries rigid geometry and nothing to mark where it ends an end
-/// node at that geometry's lowest point in the rest pose (in the joint's frame), named
-/// `<joint>_end` as Blender names such nodes. gltfpack drops end nodes no skin uses: on
-/// RobotExpressive, whose shins are rigid meshes hung from the knee joints and whose
-/// `LowerLeg.L_end` nodes were the only mark of where they end, the legs then stopped at the
-/// knee and the blend took the fingers for feet. Joints whose geometry is skinned (Fox,
+/// node where that geometry ends ([`geometry_end`], in the joint's frame), named `<joint>_end`
+/// as Blender names such nodes. gltfpack drops end nodes no skin uses, and assimp writes them
+/// on their joints' origins ([`use_skin`] leaves those out): on RobotExpressive, whose shins
+/// are rigid meshes hung from the knee joints and whose `LowerLeg.L_end` nodes were the only
+/// mark of where they end, the legs then stopped at the knee and the blend took the fingers for
+/// feet. Joints whose geometry is skinned (Fox,
 /// CesiumMan: their foot joints are the leaves) are left as they are. An unreadable mesh adds
 /// no end (the blend then goes on as before).
 fn add_ends(doc: &Document, rig: &mut Rig, joints: &BTreeSet<usize>) {
@@ -379,7 +398,7 @@ fn add_ends(doc: &Document, rig: &mut Rig, joints: &BTreeSet<usize>) {
         // The joint and its non-joint descendants, each with its transform into the joint's
         // frame.
         let mut stack = vec![(j, DMat4::IDENTITY)];
-        let mut lowest: Option<(f64, DVec3)> = None;
+        let mut points: Vec<DVec3> = Vec::new();
         while let Some((i, to_joint)) = stack.pop() {
             let node = &nodes[i];
             if let (Some(mesh), None) = (node.get("mesh").and_then(Value::as_u64), node.get("skin"))
@@ -392,13 +411,10 @@ fn add_ends(doc: &Document, rig: &mut Rig, joints: &BTreeSet<usize>) {
                     let Ok((p, 3)) = doc.read_f64(acc as usize) else {
                         continue;
                     };
-                    for v in p.chunks_exact(3) {
-                        let local = to_joint.transform_point3(DVec3::new(v[0], v[1], v[2]));
-                        let y = world[j].transform_point3(local).y;
-                        if lowest.is_none_or(|(b, _)| y < b) {
-                            lowest = Some((y, local));
-                        }
-                    }
+                    points.extend(
+                        p.chunks_exact(3)
+                            .map(|v| to_joint.transform_point3(DVec3::new(v[0], v[1], v[2]))),
+                    );
                 }
             }
             stack.extend(
@@ -408,7 +424,7 @@ fn add_ends(doc: &Document, rig: &mut Rig, joints: &BTreeSet<usize>) {
                     .map(|&c| (c, to_joint * rig.rest.local[c].matrix())),
             );
         }
-        if let Some((_, at)) = lowest {
+        if let Some(at) = geometry_end(&points, world[j]) {
             ends.push((j, at));
         }
     }
@@ -426,6 +442,34 @@ fn add_ends(doc: &Document, rig: &mut Rig, joints: &BTreeSet<usize>) {
         rig.skeleton.push(true);
     }
 }
+
+/// Where a joint's rigid geometry ends, from `points` (its vertices in the joint's frame, `world`
+/// the joint's rest matrix): along the axis from the joint to their centroid, on that axis at
+/// their farthest extent along it (the tip of the bone the geometry shapes: RobotExpressive's
+/// shin ends 0.0088 along its knee's axis, its lost end node at 0.0093 at the ankle); for
+/// geometry centred on the joint, its lowest vertex in the rest pose. `None` for no points or
+/// one that is not a number (a broken or hostile file).
+fn geometry_end(points: &[DVec3], world: DMat4) -> Option<DVec3> {
+    if points.is_empty() || !points.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    let centroid = points.iter().sum::<DVec3>() / points.len() as f64;
+    let reach = points.iter().map(|p| p.length()).fold(0.0, f64::max);
+    if centroid.length() > CENTRED * reach {
+        let axis = centroid.normalize();
+        let far = points.iter().map(|p| p.dot(axis)).fold(f64::MIN, f64::max);
+        return Some(axis * far);
+    }
+    let height = |p: &DVec3| world.transform_point3(*p).y;
+    points
+        .iter()
+        .copied()
+        .min_by(|a, b| height(a).total_cmp(&height(b)))
+}
+
+/// Geometry whose centroid is nearer its joint than this fraction of its farthest vertex is
+/// centred on the joint (no bone direction to follow).
+const CENTRED: f64 = 0.05;
 
 /// The skin joints of the document: one set per skin.
 pub fn skins(doc: &Document) -> Vec<BTreeSet<usize>> {
@@ -479,12 +523,26 @@ mod tests {
     /// The rig of a two-joint skin whose leaf joint (the shin, at y = -1) carries a rigid mesh
     /// of two vertices, `positions` as base64 of six little-endian f32.
     fn shin_with_mesh(positions: &str) -> Rig {
+        shin_with_mesh_and_end(positions, None)
+    }
+
+    /// [`shin_with_mesh`] whose shin has a child `shin_end` at `end` (in its frame).
+    fn shin_with_mesh_and_end(positions: &str, end: Option<[f64; 3]>) -> Rig {
+        let mut shin =
+            serde_json::json!({"name": "shin", "mesh": 0, "translation": [0.0, -1.0, 0.0]});
+        let mut nodes = vec![serde_json::json!({"name": "hip", "children": [1]})];
+        if let Some(end) = end {
+            shin["children"] = serde_json::json!([2]);
+            nodes.extend([
+                shin,
+                serde_json::json!({"name": "shin_end", "translation": end}),
+            ]);
+        } else {
+            nodes.push(shin);
+        }
         let json = serde_json::json!({
             "asset": {"version": "2.0"},
-            "nodes": [
-                {"name": "hip", "children": [1]},
-                {"name": "shin", "mesh": 0, "translation": [0.0, -1.0, 0.0]},
-            ],
+            "nodes": nodes,
             "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
             "accessors": [{"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"}],
             "bufferViews": [{"buffer": 0, "byteLength": 24}],
@@ -495,18 +553,32 @@ mod tests {
         skinned(&json)
     }
 
-    /// A leaf joint's rigid mesh gives it an end at its lowest vertex in the rest pose, in the
-    /// joint's frame, never written; a mesh with a vertex that is not a number (a broken or
-    /// hostile file) gives none rather than an end at NaN.
+    /// A leaf joint's rigid mesh gives it an end where the mesh ends along the axis from the
+    /// joint to its centroid, in the joint's frame, never written; a mesh centred on its joint
+    /// at its lowest vertex in the rest pose; a mesh with a vertex that is not a number (a
+    /// broken or hostile file) gives none rather than an end at NaN.
     #[test]
-    fn a_leaf_joint_ends_at_its_mesh_s_lowest_vertex() {
-        // (0, 0.5, 0) and (0, -0.5, 0.25).
-        let rig = shin_with_mesh("AAAAAAAAAD8AAAAAAAAAAAAAAL8AAIA+");
+    fn a_leaf_joint_ends_where_its_mesh_ends() {
+        // (0.1, -0.5, 0) and (-0.1, -1, 0): the axis is -y, the end at its farthest, y = -1.
+        let rig = shin_with_mesh("zczMPQAAAL8AAAAAzczMvQAAgL8AAAAA");
         assert_eq!((rig.len(), rig.file_nodes), (3, 2));
         assert_eq!(rig.names[2], "shin_end");
         assert_eq!(rig.parent[2], Some(1));
         assert!(rig.skeleton[2]);
-        assert_eq!(rig.rest.local[2].t, DVec3::new(0.0, -0.5, 0.25));
+        assert!((rig.rest.local[2].t - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-7);
+        // (0, 0.5, 0) and (0, -0.5, 1/32): centred on the joint, the lower vertex.
+        let rig = shin_with_mesh("AAAAAAAAAD8AAAAAAAAAAAAAAL8AAAA9");
+        assert_eq!(rig.rest.local[2].t, DVec3::new(0.0, -0.5, 0.03125));
+        // An end node on the joint's origin (as assimp writes them) marks no end: the mesh's
+        // is given; one off it is kept.
+        let mesh = "zczMPQAAAL8AAAAAzczMvQAAgL8AAAAA";
+        let rig = shin_with_mesh_and_end(mesh, Some([0.0; 3]));
+        assert_eq!((rig.len(), rig.file_nodes), (4, 3));
+        assert!(!rig.skeleton[2] && rig.skeleton[3]);
+        assert!((rig.rest.local[3].t - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-7);
+        let rig = shin_with_mesh_and_end(mesh, Some([0.0, -0.25, 0.0]));
+        assert_eq!((rig.len(), rig.file_nodes), (3, 3));
+        assert!(rig.skeleton[2]);
         // (NaN, NaN, NaN) and (0, -0.5, 0.25).
         let rig = shin_with_mesh("AADAfwAAwH8AAMB/AAAAAAAAAL8AAIA+");
         assert_eq!(rig.len(), 2);
