@@ -447,6 +447,44 @@ fn a_character_s_clips_play_a_band_each_posed_as_gltf_plays_them() {
     assert!(!none.exists());
 }
 
+/// A mesh that several nodes instance is drawn at each of them, as a viewer draws it (it was
+/// drawn at its first node only): a triangle on two nodes 10 apart, the first moved by the clip.
+#[test]
+fn a_mesh_on_two_nodes_is_drawn_at_both() {
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 0, "translation": [10.0, 0.0, 0.0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR",
+                "min": [0.0], "max": [1.0]},
+            {"bufferView": 2, "componentType": 5126, "count": 2, "type": "VEC3"},
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 8},
+            {"buffer": 0, "byteOffset": 44, "byteLength": 24},
+        ],
+        "buffers": [{"byteLength": 68,
+            "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAAAAAACAPwAAAAA="}],
+        "animations": [{"name": "lift",
+            "samplers": [{"input": 1, "output": 2}],
+            "channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}]}],
+    });
+    let bytes = serde_json::to_vec(&json).unwrap();
+    let doc =
+        inbetween::gltf::Document::from_bytes(Path::new("two.gltf"), &bytes, &Default::default())
+            .unwrap();
+    let posed = inbetween::preview::posed(&doc, "lift", &[0.5]).unwrap();
+    assert_eq!(posed.len(), 2, "a primitive drawn per node");
+    let corner = |k: usize| posed[k][0][1];
+    assert_eq!(corner(0), glam::DVec3::new(1.0, 0.5, 0.0));
+    assert_eq!(corner(1), glam::DVec3::new(11.0, 0.0, 0.0));
+}
+
 /// A BVH capture (no mesh) is drawn as bones, an octahedron a bone, posed at each frame; a
 /// capture that walks across the room is followed by the camera, so every cell holds the whole
 /// figure at the cell's height (over its 2.5 s the CMU walk travels twice its size: seen from

@@ -1,5 +1,5 @@
 //! Posing (the scene of a file without morph keys): its meshes as the file shows them, each
-//! placed by the first node that instances it, skinned meshes through their skin
+//! placed by every node that instances it, skinned meshes through their skin
 //! ([`Skinning`]) and rigid ones by their node's world transform, either with no clip playing
 //! (the pose the joints rest in: band `as stored`) or played by each of its clips that move
 //! nodes (a band per clip, labelled with its name, the frames spread over the clip from its
@@ -108,29 +108,37 @@ pub(super) fn world_of(
     m
 }
 
-/// A mesh drawn: the first node that instances it and its triangle primitives (their stored
-/// points and JSON), read once for every band.
+/// A mesh drawn at one of the nodes that instance it, with its triangle primitives (their
+/// stored points and JSON), read once for every band.
 struct Drawn<'a> {
     node: usize,
     primitives: Vec<(Vec<[f32; 3]>, &'a Value)>,
 }
 
-/// The meshes drawn, and the triangles of each primitive (in the same order).
+/// The meshes drawn, one for each node that instances one (a mesh on two nodes, as two eyes
+/// share one, is drawn twice), and the triangles of each primitive (in the same order).
 fn drawn(doc: &Document) -> Result<(Vec<Drawn<'_>>, Triangles)> {
     let json = &doc.json;
     let (mut meshes, mut triangles) = (Vec::new(), Vec::new());
     for (mi, carriers) in mesh_nodes(json).iter().enumerate() {
-        let Some(&node) = carriers.first() else {
+        if carriers.is_empty() {
             continue;
-        };
+        }
         let prims = (arr(&json["meshes"][mi], "primitives").iter())
             .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4);
         let mut primitives = Vec::new();
+        let mut tris_of_mesh = Vec::new();
         for ((base, tris), p) in mesh_geometry(doc, mi)?.into_iter().zip(prims) {
             primitives.push((base.iter().map(|p| p.as_vec3().to_array()).collect(), p));
-            triangles.push(tris);
+            tris_of_mesh.push(tris);
         }
-        meshes.push(Drawn { node, primitives });
+        for &node in carriers {
+            triangles.extend(tris_of_mesh.iter().cloned());
+            meshes.push(Drawn {
+                node,
+                primitives: primitives.clone(),
+            });
+        }
     }
     if triangles.is_empty() {
         bail!(doc.err("has no triangle mesh to draw"));
@@ -201,7 +209,7 @@ fn columns(points: Points, times: &[f64]) -> Vec<Column> {
 
 /// Every drawn primitive's world-space points at each of `times` (seconds) as clip `clip`
 /// (name or index) plays: `[primitive][time][vertex]`, the primitives in file order (each mesh
-/// as its first node places it), the vertices as stored.
+/// as each of its nodes places it), the vertices as stored.
 pub fn posed(doc: &Document, clip: &str, times: &[f64]) -> Result<Points> {
     let found = find(doc, clip)?;
     let (meshes, _) = drawn(doc)?;
