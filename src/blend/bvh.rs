@@ -349,13 +349,22 @@ fn motion(words: &mut Words, h: &Hierarchy) -> Result<(Vec<Channel>, f64), Strin
     let times: Vec<f64> = (0..frames).map(|f| f as f64 * dt).collect();
     let mut trans: Vec<Vec<f64>> = vec![Vec::new(); n];
     let mut rots: Vec<Vec<f64>> = vec![Vec::new(); n];
-    for _ in 0..frames {
+    for f in 0..frames {
+        let mut read = 0;
         for (j, list) in &h.dofs {
             let mut t = h.offsets[*j];
             let mut r = DQuat::IDENTITY;
             let mut moved = false;
             for d in list {
-                let v = num(words.next("frame values")?)?;
+                // A capture cut short (the recording stopped, the header kept): said as such.
+                let word = words.next("").map_err(|_| {
+                    format!(
+                        "declares {frames} frames but ends after {f} (frame {} has {read} of its {per_frame} values)",
+                        f + 1
+                    )
+                })?;
+                let v = num(word)?;
+                read += 1;
                 match *d {
                     Dof::Pos(c) => {
                         t[c] = v;
@@ -457,5 +466,15 @@ mod tests {
         // A Z-up rest pose that its root's rotation stands up in the motion is left as read.
         let stood = parse_layout(&figure(|v| DVec3::new(v.x, -v.z, v.y), -90.0)).unwrap();
         assert_eq!(stood.turn, DQuat::IDENTITY);
+    }
+
+    /// A capture cut short (the recording stopped, its header kept) is refused saying how many
+    /// frames it declares, how many it holds and how much of the next.
+    #[test]
+    fn a_capture_cut_short_says_where() {
+        let whole = figure(|v| v, 0.0).replace("Frames: 1", "Frames: 3");
+        let text = format!("{whole}0 0 0 5 0 0\n0 0 0\n");
+        let err = parse(&text).err().unwrap();
+        assert_eq!(err, "declares 3 frames but ends after 2 (frame 3 has 3 of its 6 values)");
     }
 }
