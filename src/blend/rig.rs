@@ -383,9 +383,8 @@ pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
 /// on their joints' origins ([`use_skin`] leaves those out): on RobotExpressive, whose shins
 /// are rigid meshes hung from the knee joints and whose `LowerLeg.L_end` nodes were the only
 /// mark of where they end, the legs then stopped at the knee and the blend took the fingers for
-/// feet. Joints whose geometry is skinned (Fox,
-/// CesiumMan: their foot joints are the leaves) are left as they are. An unreadable mesh adds
-/// no end (the blend then goes on as before).
+/// feet. Joints whose geometry is skinned (Fox, CesiumMan: their foot joints are the leaves)
+/// are left as they are. An unreadable mesh adds no end (the blend then goes on as before).
 fn add_ends(doc: &Document, rig: &mut Rig, joints: &BTreeSet<usize>) {
     let nodes = arr(&doc.json, "nodes");
     let world = rig.world(&rig.rest);
