@@ -475,6 +475,9 @@ mod tests {
         let whole = figure(|v| v, 0.0).replace("Frames: 1", "Frames: 3");
         let text = format!("{whole}0 0 0 5 0 0\n0 0 0\n");
         let err = parse(&text).err().unwrap();
-        assert_eq!(err, "declares 3 frames but ends after 2 (frame 3 has 3 of its 6 values)");
+        assert_eq!(
+            err,
+            "declares 3 frames but ends after 2 (frame 3 has 3 of its 6 values)"
+        );
     }
 }
