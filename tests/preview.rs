@@ -448,10 +448,12 @@ fn a_character_s_clips_play_a_band_each_posed_as_gltf_plays_them() {
 }
 
 /// A mesh that several nodes instance is drawn at each of them, as a viewer draws it (it was
-/// drawn at its first node only): a triangle on two nodes 10 apart, the first moved by the clip.
+/// drawn at its first node only), and a node's `EXT_mesh_gpu_instancing` instances each (as
+/// gltfpack `-mi` writes repeated props; drawn once before): a triangle on two nodes 10 apart,
+/// the first moved by the clip, then the second drawing it twice, 5 apart.
 #[test]
 fn a_mesh_on_two_nodes_is_drawn_at_both() {
-    let json = serde_json::json!({
+    let mut json = serde_json::json!({
         "asset": {"version": "2.0"},
         "scenes": [{"nodes": [0, 1]}],
         "nodes": [{"mesh": 0}, {"mesh": 0, "translation": [10.0, 0.0, 0.0]}],
@@ -462,27 +464,33 @@ fn a_mesh_on_two_nodes_is_drawn_at_both() {
             {"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR",
                 "min": [0.0], "max": [1.0]},
             {"bufferView": 2, "componentType": 5126, "count": 2, "type": "VEC3"},
+            {"bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC3"},
         ],
         "bufferViews": [
             {"buffer": 0, "byteLength": 36},
             {"buffer": 0, "byteOffset": 36, "byteLength": 8},
             {"buffer": 0, "byteOffset": 44, "byteLength": 24},
+            {"buffer": 0, "byteOffset": 68, "byteLength": 24},
         ],
-        "buffers": [{"byteLength": 68,
-            "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAAAAAACAPwAAAAA="}],
+        "buffers": [{"byteLength": 92,
+            "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAoEA="}],
         "animations": [{"name": "lift",
             "samplers": [{"input": 1, "output": 2}],
             "channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}]}],
     });
-    let bytes = serde_json::to_vec(&json).unwrap();
-    let doc =
-        inbetween::gltf::Document::from_bytes(Path::new("two.gltf"), &bytes, &Default::default())
-            .unwrap();
-    let posed = inbetween::preview::posed(&doc, "lift", &[0.5]).unwrap();
-    assert_eq!(posed.len(), 2, "a primitive drawn per node");
-    let corner = |k: usize| posed[k][0][1];
-    assert_eq!(corner(0), glam::DVec3::new(1.0, 0.5, 0.0));
-    assert_eq!(corner(1), glam::DVec3::new(11.0, 0.0, 0.0));
+    let posed = |json: &serde_json::Value| {
+        let bytes = serde_json::to_vec(json).unwrap();
+        let path = Path::new("two.gltf");
+        let doc = inbetween::gltf::Document::from_bytes(path, &bytes, &Default::default()).unwrap();
+        let posed = inbetween::preview::posed(&doc, "lift", &[0.5]).unwrap();
+        posed.iter().map(|p| p[0][1]).collect::<Vec<_>>()
+    };
+    let v = |x: f64, y: f64, z: f64| glam::DVec3::new(x, y, z);
+    assert_eq!(posed(&json), [v(1.0, 0.5, 0.0), v(11.0, 0.0, 0.0)]);
+    json["nodes"][1]["extensions"] = serde_json::json!(
+        {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 3}}});
+    let three = [v(1.0, 0.5, 0.0), v(11.0, 0.0, 0.0), v(11.0, 0.0, 5.0)];
+    assert_eq!(posed(&json), three);
 }
 
 /// A BVH capture (no mesh) is drawn as bones, an octahedron a bone, posed at each frame; a

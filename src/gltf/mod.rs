@@ -4,7 +4,7 @@
 //! container, buffers; [`uri`] says what external files it may read) -> [`decode`] (meshopt
 //! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`,
 //! triangles; [`channel`]: animation channels read and evaluated, nodes' rest transforms;
-//! [`skin`]: skinned points at any pose) ... the command's own work
+//! [`skin`]: skinned points at any pose; [`instancing`]: a node's mesh instances) ... the command's own work
 //! ... -> [`build`] (new accessors and buffer views on an [`Output`]; [`mend`]: skin
 //! weights that do not sum to one and rotation keys off unit length mended as the input is
 //! copied) -> [`mod@reorder`] (with
@@ -19,6 +19,7 @@ mod channel;
 mod compact;
 mod decode;
 mod encode;
+mod instancing;
 mod mend;
 mod read;
 mod reorder;
@@ -36,6 +37,7 @@ pub(crate) use compact::{compact, drop_channels, AccessorRefs, PASSED_THROUGH};
 pub use encode::{
     exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,
 };
+pub use instancing::{instances, Instances};
 pub use read::{
     arr, at, listed, listed_or_none, mesh_nodes, node_target, quoted_name, starts_like_bvh,
     weights_target, Document, WeightsTarget,

@@ -11,7 +11,7 @@
 //! ```
 
 use super::{Column, Scene, MAX_ANIMATION_FRAMES};
-use crate::gltf::{arr, clip_name, listed_or_none, local_at, mesh_nodes, node_parents};
+use crate::gltf::{self, arr, clip_name, listed_or_none, local_at, mesh_nodes, node_parents};
 use crate::gltf::{read_channels, rest_matrix, rest_trs};
 use crate::gltf::{Channel, Document, Path, Skeleton, Skinning};
 use crate::progress::Progress;
@@ -108,15 +108,18 @@ pub(super) fn world_of(
     m
 }
 
-/// A mesh drawn at one of the nodes that instance it, with its triangle primitives (their
-/// stored points and JSON), read once for every band.
+/// A mesh drawn at one of the nodes that instance it (and at one of that node's
+/// `EXT_mesh_gpu_instancing` instances, `instance` its transform in the node's frame), with its
+/// triangle primitives (their stored points and JSON), read once for every band.
 struct Drawn<'a> {
     node: usize,
+    instance: DMat4,
     primitives: Vec<(Vec<[f32; 3]>, &'a Value)>,
 }
 
-/// The meshes drawn, one for each node that instances one (a mesh on two nodes, as two eyes
-/// share one, is drawn twice), and the triangles of each primitive (in the same order).
+/// The meshes drawn, one for each node that instances one and each of its GPU instances (a
+/// mesh on two nodes, as two eyes share one, is drawn twice; a prop gltfpack `-mi` made 40
+/// instances of, 40 times), and the triangles of each primitive (in the same order).
 fn drawn(doc: &Document) -> Result<(Vec<Drawn<'_>>, Triangles)> {
     let json = &doc.json;
     let (mut meshes, mut triangles) = (Vec::new(), Vec::new());
@@ -133,11 +136,18 @@ fn drawn(doc: &Document) -> Result<(Vec<Drawn<'_>>, Triangles)> {
             tris_of_mesh.push(tris);
         }
         for &node in carriers {
-            triangles.extend(tris_of_mesh.iter().cloned());
-            meshes.push(Drawn {
-                node,
-                primitives: primitives.clone(),
-            });
+            let instances = match gltf::instances(doc, node)? {
+                Some(inst) => (0..inst.len()).map(|k| inst.matrix(k)).collect(),
+                None => vec![DMat4::IDENTITY],
+            };
+            for instance in instances {
+                triangles.extend(tris_of_mesh.iter().cloned());
+                meshes.push(Drawn {
+                    node,
+                    instance,
+                    primitives: primitives.clone(),
+                });
+            }
         }
     }
     if triangles.is_empty() {
@@ -165,7 +175,12 @@ fn pose(doc: &Document, meshes: &[Drawn], samples: &Samples, times: &[f64]) -> R
     };
     let samples_of = |x: usize| samples.get(&x).cloned().unwrap_or_default();
     let mut points: Points = Vec::new();
-    for Drawn { node, primitives } in meshes {
+    for Drawn {
+        node,
+        instance,
+        primitives,
+    } in meshes
+    {
         let node = *node;
         let skeleton = Skeleton::read(doc, node, &samples_of)?;
         for (stored, p) in primitives {
@@ -179,7 +194,7 @@ fn pose(doc: &Document, meshes: &[Drawn], samples: &Samples, times: &[f64]) -> R
                 if let Some(skin) = &skin {
                     skin.apply(t, &mut moved, None);
                 }
-                let w = world(node, t);
+                let w = world(node, t) * *instance;
                 (moved.iter())
                     .map(|&p| w.transform_point3(Vec3::from(p).as_dvec3()))
                     .collect()

@@ -34,11 +34,11 @@ use super::camera_light::{self, say, Plain};
 use super::material::{st_name, Look, LookBuilder};
 use super::motion::{ClipOnStage, NodeMotion};
 use crate::gltf::{
-    arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3,
-    rest_matrix, Document, Skeleton, Skinning, MIN_QUATERNION,
+    self, arr, listed, quoted_name, read_attribute, read_attribute3, read_triangles, read_vec3,
+    rest_matrix, Document, Skeleton, Skinning,
 };
 use anyhow::{bail, Result};
-use glam::{DMat4, DQuat, DVec3};
+use glam::{DMat4, DVec3};
 use serde_json::{json, Value};
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
@@ -463,7 +463,7 @@ impl Ctx<'_> {
         let motion = self.motion.samples(index, node);
         let mut kids = HashMap::new();
         let mut children = Vec::new();
-        let instances = self.instances(index, node)?;
+        let instances = self.instances(index)?;
         let mut mesh = Vec::new();
         if let Some(mi) = node["mesh"].as_u64() {
             let mut taken = HashMap::new();
@@ -619,71 +619,19 @@ impl Ctx<'_> {
         Ok((color, double_sided, prim))
     }
 
-    /// The instances of a node with a mesh and `EXT_mesh_gpu_instancing` (TRANSLATION,
-    /// ROTATION, SCALE; float or, for rotations, normalized integers; one missing is the
-    /// identity), or `None`.
-    fn instances(&self, index: usize, node: &Value) -> Result<Option<Instances>> {
-        let attributes = &node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
-        if !node["mesh"].is_u64() || !attributes.is_object() {
-            return Ok(None);
-        }
-        let read = |name: &str, width: usize| -> Result<Option<Vec<f64>>> {
-            let Some(a) = attributes[name].as_u64() else {
-                return Ok(None);
-            };
-            let (values, n) = self.doc.read_f64(a as usize)?;
-            if n != width {
-                bail!(self.doc.err(format!(
-                    "node {index}'s EXT_mesh_gpu_instancing {name} (accessor {a}) has {n} components, not {width}"
-                )));
-            }
-            Ok(Some(values))
-        };
-        let (t, r, s) = (
-            read("TRANSLATION", 3)?,
-            read("ROTATION", 4)?,
-            read("SCALE", 3)?,
-        );
-        let counts: Vec<usize> = [(&t, 3), (&r, 4), (&s, 3)]
-            .iter()
-            .filter_map(|(v, w)| v.as_ref().map(|v| v.len() / w))
-            .collect();
-        let Some(&count) = counts.first() else {
+    /// The instances of a node with a mesh and `EXT_mesh_gpu_instancing` ([`gltf::instances`]),
+    /// in single precision, or `None`.
+    fn instances(&self, index: usize) -> Result<Option<Instances>> {
+        let Some(inst) = gltf::instances(self.doc, index)? else {
             return Ok(None);
         };
-        if counts.iter().any(|&c| c != count) {
-            bail!(self.doc.err(format!(
-                "node {index}'s EXT_mesh_gpu_instancing attributes hold different instance counts"
-            )));
-        }
-        let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
-        let vec3s = |v: Option<Vec<f64>>, default: [f32; 3]| -> Vec<[f32; 3]> {
-            match v {
-                Some(v) => f32s(&v)
-                    .chunks_exact(3)
-                    .map(|c| [c[0], c[1], c[2]])
-                    .collect(),
-                None => vec![default; count],
-            }
-        };
-        let orientations = match r {
-            Some(r) => (r.chunks_exact(4).enumerate())
-                .map(|(k, q)| {
-                    let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3]);
-                    if q.length() < MIN_QUATERNION {
-                        bail!(self.doc.err(format!(
-                            "node {index}'s EXT_mesh_gpu_instancing ROTATION of instance {k} is not a rotation (a zero quaternion)"
-                        )));
-                    }
-                    Ok(q.normalize().as_quat().to_array())
-                })
-                .collect::<Result<_>>()?,
-            None => vec![[0.0, 0.0, 0.0, 1.0]; count],
-        };
+        let f32s = |v: &[DVec3]| v.iter().map(|v| v.as_vec3().to_array()).collect();
         Ok(Some(Instances {
-            positions: vec3s(t, [0.0; 3]),
-            orientations,
-            scales: vec3s(s, [1.0; 3]),
+            positions: f32s(&inst.translations),
+            orientations: (inst.rotations.iter())
+                .map(|q| q.as_quat().to_array())
+                .collect(),
+            scales: f32s(&inst.scales),
         }))
     }
 
