@@ -6,8 +6,8 @@
 //! first key to its last), as a glTF viewer plays them.
 //!
 //! ```text
-//! let (scene, left_out) = clips::scene(&doc, Some("Walk"), 12, false, quiet)?.unwrap(); // None: no clip moves a node
-//! let still = clips::still(&doc)?;
+//! let (scene, clips_left, instances_left) = clips::scene(&doc, Some("Walk"), 12, false, quiet)?.unwrap(); // None: no clip moves a node
+//! let (still, instances_left) = clips::still(&doc)?;
 //! ```
 
 use super::{Column, Scene, MAX_ANIMATION_FRAMES};
@@ -20,6 +20,7 @@ use anyhow::{bail, Result};
 use glam::{DMat4, DVec3, Vec3};
 use serde_json::Value;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// Frames a second of a clip's animation (`--animate`).
 pub const ANIMATION_RATE: f64 = 30.0;
@@ -114,38 +115,55 @@ pub(super) fn world_of(
 struct Drawn<'a> {
     node: usize,
     instance: DMat4,
-    primitives: Vec<(Vec<[f32; 3]>, &'a Value)>,
+    primitives: Arc<Primitives<'a>>,
 }
+
+/// A mesh's triangle primitives: their stored points and JSON.
+type Primitives<'a> = Vec<(Vec<[f32; 3]>, &'a Value)>;
 
 /// The meshes drawn, one for each node that instances one and each of its GPU instances (a
 /// mesh on two nodes, as two eyes share one, is drawn twice; a prop gltfpack `-mi` made 40
-/// instances of, 40 times), and the triangles of each primitive (in the same order).
-fn drawn(doc: &Document) -> Result<(Vec<Drawn<'_>>, Triangles)> {
+/// instances of, 40 times), the triangles of each primitive (in the same order), and how many
+/// instances were left out: those beyond half of [`MAX_POINTS`] in all (two frames' worth).
+fn drawn(doc: &Document) -> Result<(Vec<Drawn<'_>>, Triangles, usize)> {
+    drawn_within(doc, MAX_POINTS / 2)
+}
+
+/// [`drawn`] with at most `budget` points in all (the first instance is always drawn).
+fn drawn_within(doc: &Document, budget: usize) -> Result<(Vec<Drawn<'_>>, Triangles, usize)> {
     let json = &doc.json;
     let (mut meshes, mut triangles) = (Vec::new(), Vec::new());
+    let (mut points, mut left) = (0usize, 0usize);
     for (mi, carriers) in mesh_nodes(json).iter().enumerate() {
         if carriers.is_empty() {
             continue;
         }
         let prims = (arr(&json["meshes"][mi], "primitives").iter())
             .filter(|p| p["mode"].as_u64().unwrap_or(4) == 4);
-        let mut primitives = Vec::new();
+        let mut primitives: Primitives = Vec::new();
         let mut tris_of_mesh = Vec::new();
         for ((base, tris), p) in mesh_geometry(doc, mi)?.into_iter().zip(prims) {
             primitives.push((base.iter().map(|p| p.as_vec3().to_array()).collect(), p));
             tris_of_mesh.push(tris);
         }
+        let size: usize = primitives.iter().map(|(p, _)| p.len()).sum();
+        let primitives = Arc::new(primitives);
         for &node in carriers {
             let instances = match gltf::instances(doc, node)? {
                 Some(inst) => (0..inst.len()).map(|k| inst.matrix(k)).collect(),
                 None => vec![DMat4::IDENTITY],
             };
             for instance in instances {
+                if points + size > budget && !meshes.is_empty() {
+                    left += 1;
+                    continue;
+                }
+                points += size;
                 triangles.extend(tris_of_mesh.iter().cloned());
                 meshes.push(Drawn {
                     node,
                     instance,
-                    primitives: primitives.clone(),
+                    primitives: Arc::clone(&primitives),
                 });
             }
         }
@@ -153,7 +171,7 @@ fn drawn(doc: &Document) -> Result<(Vec<Drawn<'_>>, Triangles)> {
     if triangles.is_empty() {
         bail!(doc.err("has no triangle mesh to draw"));
     }
-    Ok((meshes, triangles))
+    Ok((meshes, triangles, left))
 }
 
 /// Every drawn primitive's world-space points at each of `times`, its nodes moved by
@@ -183,7 +201,7 @@ fn pose(doc: &Document, meshes: &[Drawn], samples: &Samples, times: &[f64]) -> R
     {
         let node = *node;
         let skeleton = Skeleton::read(doc, node, &samples_of)?;
-        for (stored, p) in primitives {
+        for (stored, p) in primitives.iter() {
             let what = format!("node {node}'s mesh");
             let skin = match &skeleton {
                 Some(s) => Skinning::read(doc, s, p, stored.len(), &what)?,
@@ -227,7 +245,7 @@ fn columns(points: Points, times: &[f64]) -> Vec<Column> {
 /// as each of its nodes places it), the vertices as stored.
 pub fn posed(doc: &Document, clip: &str, times: &[f64]) -> Result<Points> {
     let found = find(doc, clip)?;
-    let (meshes, _) = drawn(doc)?;
+    let (meshes, _, _) = drawn(doc)?;
     pose(doc, &meshes, &samples(doc, &found, times), times)
 }
 
@@ -247,16 +265,18 @@ fn find(doc: &Document, name: &str) -> Result<ClipSpan> {
     }
 }
 
-/// The file's meshes with no clip playing: one column, band `as stored`.
-pub fn still(doc: &Document) -> Result<Scene> {
-    let (meshes, triangles) = drawn(doc)?;
+/// The file's meshes with no clip playing: one column, band `as stored`; and how many mesh
+/// instances were left out (see [`drawn`]).
+pub fn still(doc: &Document) -> Result<(Scene, usize)> {
+    let (meshes, triangles, left) = drawn(doc)?;
     let points = pose(doc, &meshes, &Samples::new(), &[0.0])?;
     let mut cols = columns(points, &[0.0]);
     cols[0].key = true;
-    Ok(Scene {
+    let scene = Scene {
         triangles,
         bands: vec![("as stored".into(), cols)],
-    })
+    };
+    Ok((scene, left))
 }
 
 /// The times a band draws over `(a, b)` (seconds, first key to last): `count` frames spread
@@ -279,15 +299,15 @@ pub(super) fn band_times((a, b): (f64, f64), count: usize, animate: bool, most: 
 /// A band per clip that moves nodes (the first [`MAX_BANDS`], or only the one `only` names,
 /// by name or index), each of `count` frames spread over the clip's keys, first and last
 /// included (`animate`: frames [`ANIMATION_RATE`] a second, at most [`MAX_ANIMATION_FRAMES`]),
-/// within [`MAX_POINTS`], and how many clips were left out; `None` when no clip moves a node
-/// (and none is named).
+/// within [`MAX_POINTS`], how many clips were left out and how many mesh instances (see
+/// [`drawn`]); `None` when no clip moves a node (and none is named).
 pub fn scene(
     doc: &Document,
     only: Option<&str>,
     count: usize,
     animate: bool,
     quiet: bool,
-) -> Result<Option<(Scene, usize)>> {
+) -> Result<Option<(Scene, usize, usize)>> {
     let mut clips = match only {
         Some(name) => vec![find(doc, name)?],
         None => moving_clips(doc)?,
@@ -295,9 +315,9 @@ pub fn scene(
     if clips.is_empty() {
         return Ok(None);
     }
-    let (meshes, triangles) = drawn(doc)?;
+    let (meshes, triangles, instances_left) = drawn(doc)?;
     // Vertices posed a frame.
-    let vertices: usize = (meshes.iter().flat_map(|m| &m.primitives))
+    let vertices: usize = (meshes.iter().flat_map(|m| m.primitives.iter()))
         .map(|(stored, _)| stored.len())
         .sum::<usize>()
         .max(1);
@@ -319,5 +339,45 @@ pub fn scene(
         progress.inc();
     }
     progress.finish();
-    Ok(Some((Scene { triangles, bands }, left)))
+    Ok(Some((Scene { triangles, bands }, left, instances_left)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Instances beyond the points budget are left out and counted, the first always drawn.
+    #[test]
+    fn instances_beyond_the_budget_are_left_out_and_counted() {
+        let json = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "nodes": [{"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing":
+                {"attributes": {"TRANSLATION": 1}}}}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+                {"bufferView": 1, "componentType": 5126, "count": 5, "type": "VEC3"},
+            ],
+            "bufferViews": [
+                {"buffer": 0, "byteLength": 36},
+                {"buffer": 0, "byteOffset": 36, "byteLength": 60},
+            ],
+            "buffers": [{"byteLength": 96,
+                "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAQAAAAAAAAAAAAABAQAAAAAAAAAAAAACAQAAAAAAAAAAA"}],
+        });
+        let bytes = serde_json::to_vec(&json).unwrap();
+        let path = std::path::Path::new("five.gltf");
+        let doc = Document::from_bytes(path, &bytes, &Default::default()).unwrap();
+        let counts = |budget: usize| {
+            let (meshes, triangles, left) = drawn_within(&doc, budget).unwrap();
+            assert_eq!(meshes.len(), triangles.len());
+            (meshes.len(), left)
+        };
+        assert_eq!(counts(15), (5, 0));
+        assert_eq!(counts(9), (3, 2));
+        assert_eq!(counts(1), (1, 4));
+        let (meshes, _, _) = drawn_within(&doc, 9).unwrap();
+        let x: Vec<f64> = meshes.iter().map(|m| m.instance.w_axis.x).collect();
+        assert_eq!(x, [0.0, 1.0, 2.0]);
+    }
 }

@@ -561,21 +561,35 @@ fn source(job: &PreviewJob, base: &TweenOptions) -> Result<(Source, Scene, Optio
             }
         }
     }
-    if let Some((played, left)) =
+    if let Some((played, left, instances_left)) =
         clips::scene(&doc, job.animation.as_deref(), job.frames, false, job.quiet)?
     {
         let note = format!(
-            "no morph keys: the file's clips that move its nodes as they play, a band each{}",
+            "no morph keys: the file's clips that move its nodes as they play, a band each{}{}",
             match (played.bands.len(), left) {
                 (1, _) => String::new(),
                 (_, 0) => " (--animation NAME draws one)".into(),
                 (n, left) => format!(" (the first {n}; {left} more: --animation NAME draws any)"),
-            }
+            },
+            instances_left_out(instances_left)
         );
         return Ok((Source::Clips(doc), played, Some(note)));
     }
-    let note = "no morph keys and no clip that moves a node: the meshes as the file shows them (a skinned one in the pose its joints rest in)";
-    Ok((Source::Still, clips::still(&doc)?, Some(note.into())))
+    let (still, instances_left) = clips::still(&doc)?;
+    let note = format!("no morph keys and no clip that moves a node: the meshes as the file shows them (a skinned one in the pose its joints rest in){}", instances_left_out(instances_left));
+    Ok((Source::Still, still, Some(note)))
+}
+
+/// What the note says of `left` mesh instances left out (more points than a preview poses).
+fn instances_left_out(left: usize) -> String {
+    match left {
+        0 => String::new(),
+        n => format!(
+            "; {n} mesh instance{} left out: more than {} points to pose",
+            if n == 1 { "" } else { "s" },
+            clips::MAX_POINTS / 2
+        ),
+    }
 }
 
 /// Run the preview job. Nothing is written unless every step succeeds.
