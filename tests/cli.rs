@@ -2006,3 +2006,88 @@ fn empty_animations_are_left_out() {
         assert!(same, "{ext} {args:?}: the files differ");
     }
 }
+
+/// A mesh that two nodes draw, each with a weights channel of its own (two characters sharing
+/// one face mesh, each with its own performance): a track each, in one mesh's targets; each
+/// node plays its own keys where they were (within 1e-5 of the size) and frames of its own
+/// between them.
+#[test]
+fn two_nodes_sharing_a_mesh_each_play_their_own_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    let flag = sample("flag_wave.glb");
+    let (mut json, mut bin) = glb_parts(&flag);
+    let doc = Document::open(&flag).unwrap();
+    let channel = json["animations"][0]["channels"][0].clone();
+    let node = channel["target"]["node"].as_u64().unwrap() as usize;
+    let sampler =
+        json["animations"][0]["samplers"][channel["sampler"].as_u64().unwrap() as usize].clone();
+    let (weights, _) = doc
+        .read_f64(sampler["output"].as_u64().unwrap() as usize)
+        .unwrap();
+    let targets = json["meshes"][0]["primitives"][0]["targets"]
+        .as_array()
+        .unwrap()
+        .len();
+    // The second node plays the keys backwards.
+    let reversed: Vec<f32> = (weights.chunks(targets).rev().flatten())
+        .map(|&w| w as f32)
+        .collect();
+    let output = push_f32_accessor(&mut json, &mut bin, &reversed, "SCALAR");
+    json["accessors"][output]
+        .as_object_mut()
+        .unwrap()
+        .retain(|k, _| k != "min" && k != "max");
+    let second = json["nodes"].as_array().unwrap().len();
+    let mut copy = json["nodes"][node].clone();
+    copy["translation"] = serde_json::json!([3.0, 0.0, 0.0]);
+    copy.as_object_mut().unwrap().remove("children");
+    json["nodes"].as_array_mut().unwrap().push(copy);
+    json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(second.into());
+    let anim = &mut json["animations"][0];
+    let samplers = anim["samplers"].as_array_mut().unwrap();
+    samplers.push(serde_json::json!({"input": sampler["input"], "output": output}));
+    let s = samplers.len() - 1;
+    anim["channels"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"sampler": s, "target": {"node": second, "path": "weights"}}));
+    let input = out_in(&dir, "two.glb");
+    write_glb(&input, &json, &bin);
+    assert_valid(&input);
+    let out = out_in(&dir, "out.glb");
+    tween_quietly(&input, &out, &[]);
+    assert_valid(&out);
+    let size = diag(
+        &(played(&input, 0, 0, 0).positions[0].iter())
+            .map(|p| glam::Vec3::from(*p).as_dvec3())
+            .collect::<Vec<_>>(),
+    );
+    let mut frames = Vec::new();
+    for c in 0..2 {
+        let (was, now) = (played(&input, 0, 0, c), played(&out, 0, 0, c));
+        assert!(
+            now.times.len() > was.times.len(),
+            "channel {c}: frames between the keys"
+        );
+        for (t, keyed) in was.times.iter().zip(&was.positions) {
+            let f = (now.times.iter().position(|x| (x - t).abs() < 1e-6))
+                .unwrap_or_else(|| panic!("channel {c}: key {t} kept"));
+            let off = (keyed.iter().zip(&now.positions[f]))
+                .map(|(a, b)| (glam::Vec3::from(*a) - glam::Vec3::from(*b)).length())
+                .fold(0.0f32, f32::max);
+            assert!((off as f64) < 1e-5 * size, "channel {c} key {t}: {off} off");
+        }
+        frames.push(now);
+    }
+    // Between the keys, each node its own frame: the first frame after the start differs.
+    let apart = (frames[0].positions[1].iter().zip(&frames[1].positions[1]))
+        .map(|(a, b)| (glam::Vec3::from(*a) - glam::Vec3::from(*b)).length())
+        .fold(0.0f32, f32::max);
+    assert!(
+        apart as f64 > 0.01 * size,
+        "the two nodes play the same frame ({apart})"
+    );
+}
