@@ -5,13 +5,12 @@
 //! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`,
 //! triangles; [`channel`]: animation channels read and evaluated, nodes' rest transforms;
 //! [`skin`]: skinned points at any pose; [`instancing`]: a node's mesh instances) ... the
-//! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`]; [`mend`]: skin
-//! weights that do not sum to one and rotation keys off unit length mended as the input is
-//! copied) -> [`mod@reorder`] (with
-//! meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors
-//! nothing uses any more dropped) -> [`encode`] (meshopt compression, when asked for) ->
-//! [`write`] (`.glb` or `.gltf` with its `.bin` and images,
-//! staged as one all-or-nothing set of files).
+//! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`];
+//! [`mend`]: skin weights that do not sum to one and rotation keys off unit length mended as
+//! the input is copied) -> [`mod@reorder`] (with meshopt: triangles and vertices in mesh
+//! order) -> [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`]
+//! (meshopt compression, when asked for) -> [`write`] (`.glb` or `.gltf` with its `.bin` and
+//! images, staged as one all-or-nothing set of files).
 
 mod accessor;
 mod build;
