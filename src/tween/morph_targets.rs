@@ -666,7 +666,7 @@ fn reencode_authored(
 /// The mesh's default weights (and the overrides of its nodes, `carriers`) padded for the new
 /// targets (frame 0 in the frames layout), and the targets' names in `extras.targetNames`: the
 /// authored names kept, each new target named after its frame (`f0007_t0.2917`: frame 7 at
-/// 0.2917 s).
+/// 0.2917 s) or, for a compaction's, its place among the basis targets (`basis0003`).
 fn name_targets(
     out: &mut Output,
     w: &Written,
@@ -709,6 +709,13 @@ fn name_targets(
             }
         }
     }
+    // A compaction's basis targets play no frame of their own: `basis0000`, ... (a name for
+    // every target: cgltf, and so gltfpack, Filament and raylib, refuse a mesh whose
+    // targetNames are fewer than its targets).
+    if w.compact.is_some() {
+        names.extend((0..new).map(|k| format!("basis{k:04}")));
+    }
+    debug_assert_eq!(names.len(), kept + new);
     let mesh = &mut out.json["meshes"][m.mesh];
     mesh["weights"] = weights;
     if !mesh.get("extras").is_some_and(Value::is_object) {
