@@ -314,6 +314,9 @@ pub struct TweenArgs {
     /// the triangles in vertex-cache order (alpha-blended ones keep their order), as gltfpack
     /// does; float targets, the weights animation and the meshes' own positions, normals,
     /// tangents and texture coordinates through its exponential filter, within the tolerance.
+    /// Readers need the extension (three.js and Babylon.js with their meshopt decoders,
+    /// gltfpack, glTF-Transform); Blender's importer, assimp and tinygltf refuse it: for them,
+    /// --basis auto --quantize.
     #[arg(long)]
     meshopt: bool,
     /// Interpolation method.
