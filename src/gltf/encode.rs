@@ -55,7 +55,7 @@ enum Filter {
 /// How a buffer view is read, as far as the accessors that use it say.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Use {
-    /// Vertex, target, sparse or animation data: elements of `stride` bytes.
+    /// Vertex, target or animation data: elements of `stride` bytes.
     Attributes { stride: usize },
     /// Indices of `stride` bytes; `triangles` when they form a triangle list read whole.
     Indices { stride: usize, triangles: bool },
@@ -106,17 +106,13 @@ fn uses(json: &Value, views: &[Value]) -> BTreeMap<usize, Use> {
             };
             meet(Some(v), if elem == 0 { Use::Other } else { u });
         }
+        // Sparse parts are stored raw: cgltf (gltfpack's reader, Filament's, raylib's) reads
+        // them from their buffer before any view is decoded, and the fallback buffer has no
+        // data ("buffer has no data"); they are small where sparse storage pays.
         let sparse = &a["sparse"];
         if sparse.is_object() {
-            let it = component_size(sparse["indices"]["componentType"].as_u64().unwrap_or(0));
-            meet(
-                sparse["indices"]["bufferView"].as_u64(),
-                Use::Attributes { stride: it },
-            );
-            meet(
-                sparse["values"]["bufferView"].as_u64(),
-                Use::Attributes { stride: elem },
-            );
+            meet(sparse["indices"]["bufferView"].as_u64(), Use::Other);
+            meet(sparse["values"]["bufferView"].as_u64(), Use::Other);
         }
     }
     for img in arr(json, "images") {
