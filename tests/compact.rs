@@ -121,7 +121,7 @@ fn reported(report: &Path) -> (f64, f64) {
 
 /// The output read back by the `gltf` crate (structure: its meshes' morph targets and the
 /// animations' channels; the crate does not decode meshopt), by `gltf-transform inspect` and by
-/// gltfpack, whose reader (cgltf, as Filament's and raylib's) refuses a mesh whose
+/// gltfpack, whose reader (cgltf, which Filament and raylib use too) refuses a mesh whose
 /// `extras.targetNames` are not one per target: every compact output was refused so, its basis
 /// targets unnamed, while the Khronos validator, which reads no extras, passed it.
 fn read_back_by_others(out: &Path) {

@@ -106,7 +106,7 @@ fn uses(json: &Value, views: &[Value]) -> BTreeMap<usize, Use> {
             };
             meet(Some(v), if elem == 0 { Use::Other } else { u });
         }
-        // Sparse parts are stored raw: cgltf (gltfpack's reader, Filament's, raylib's) reads
+        // Sparse parts are stored raw: cgltf (gltfpack's reader; Filament and raylib use it) reads
         // them from their buffer before any view is decoded, and the fallback buffer has no
         // data ("buffer has no data"); they are small where sparse storage pays.
         let sparse = &a["sparse"];

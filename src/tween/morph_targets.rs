@@ -710,7 +710,7 @@ fn name_targets(
         }
     }
     // A compaction's basis targets play no frame of their own: `basis0000`, ... (a name for
-    // every target: cgltf, and so gltfpack, Filament and raylib, refuse a mesh whose
+    // every target: cgltf's validation, and so gltfpack, refuses a mesh whose
     // targetNames are fewer than its targets).
     if w.compact.is_some() {
         names.extend((0..new).map(|k| format!("basis{k:04}")));
