@@ -418,23 +418,31 @@ fn a_basis_capped_below_the_tolerance_is_warned_of() {
     }
 }
 
+/// MorphStressTest through `gltf-transform VERB`, written in `dir`; `None` (skipped, said) without
+/// the fixtures or the node tools.
+fn stress_test_through(verb: &str, dir: &Path) -> Option<PathBuf> {
+    let input = fixtures()?.join("morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf");
+    let bin = node_bin()?;
+    let out = dir.join(format!("{verb}.glb"));
+    let args = [
+        std::ffi::OsStr::new(verb),
+        input.as_os_str(),
+        out.as_os_str(),
+    ];
+    node_tool(&bin, "gltf-transform", args);
+    Some(out)
+}
+
 /// MorphStressTest with sparse targets (`gltf-transform sparse`) compacts with its sparse
 /// accessors kept and their parts stored raw: meshopt-compressed sparse values lay in the
 /// fallback buffer, which has no data, and gltfpack's reader (cgltf) refused the file ("buffer
 /// has no data") while the validator and glTF-Transform read it.
 #[test]
 fn sparse_targets_compact_readable_by_cgltf() {
-    let Some(fx) = fixtures() else { return };
-    let Some(bin) = node_bin() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let input = fx.join("morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf");
-    let sparse = dir.path().join("sparse.glb");
-    let args = [
-        std::ffi::OsStr::new("sparse"),
-        input.as_os_str(),
-        sparse.as_os_str(),
-    ];
-    node_tool(&bin, "gltf-transform", args);
+    let Some(sparse) = stress_test_through("sparse", dir.path()) else {
+        return;
+    };
     let out = dir.path().join("c.glb");
     tween_quietly(&sparse, &out, &["--compact"]);
     assert_valid(&out);
@@ -465,17 +473,10 @@ fn sparse_targets_compact_readable_by_cgltf() {
 /// decomposition failed (NoConvergence)") until they were left out of it.
 #[test]
 fn a_resampled_rig_compacts() {
-    let Some(fx) = fixtures() else { return };
-    let Some(bin) = node_bin() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let input = fx.join("morph-khronos/MorphStressTest/glTF/MorphStressTest.gltf");
-    let resampled = dir.path().join("resampled.glb");
-    let args = [
-        std::ffi::OsStr::new("resample"),
-        input.as_os_str(),
-        resampled.as_os_str(),
-    ];
-    node_tool(&bin, "gltf-transform", args);
+    let Some(resampled) = stress_test_through("resample", dir.path()) else {
+        return;
+    };
     let (dense, out) = (dir.path().join("dense.glb"), dir.path().join("c.glb"));
     tween_quietly(&resampled, &dense, &[]);
     tween_quietly(&resampled, &out, &["--compact"]);
