@@ -393,8 +393,8 @@ fn filterable(data: &[u8], stride: usize) -> bool {
     stride > 0 && stride.is_multiple_of(4) && stride <= 256 && data.len().is_multiple_of(stride)
 }
 
-/// The declared min/max of every float accessor reading a view of `decoded` (directly, or its
-/// sparse values) set to those of the values it decodes to.
+/// The declared min/max of every float accessor reading a view of `decoded` set to those of the
+/// values it decodes to (sparse parts are never filtered: see [`uses`]).
 fn rebound(out: &mut Output, decoded: &BTreeMap<usize, Vec<f32>>) {
     let views = &out.bin.views;
     let Some(accessors) = out.json.get_mut("accessors").and_then(Value::as_array_mut) else {
@@ -409,17 +409,10 @@ fn rebound(out: &mut Output, decoded: &BTreeMap<usize, Vec<f32>>) {
         if a.get("min").is_none() && a.get("max").is_none() {
             continue;
         }
-        // (view, first byte, elements, implicit zeros beside them)
-        let read = match (a["bufferView"].as_u64(), a["sparse"].is_object()) {
-            (Some(v), false) => Some((v, a["byteOffset"].as_u64().unwrap_or(0), count, false)),
-            (None, true) => a["sparse"]["values"]["bufferView"].as_u64().map(|v| {
-                let k = a["sparse"]["count"].as_u64().unwrap_or(0) as usize;
-                let offset = a["sparse"]["values"]["byteOffset"].as_u64().unwrap_or(0);
-                (v, offset, k, k < count)
-            }),
-            _ => None,
-        };
-        let Some((v, offset, elements, zeros)) = read else {
+        let Some(v) = a["bufferView"]
+            .as_u64()
+            .filter(|_| !a["sparse"].is_object())
+        else {
             continue;
         };
         let Some(floats) = decoded.get(&(v as usize)) else {
@@ -428,17 +421,14 @@ fn rebound(out: &mut Output, decoded: &BTreeMap<usize, Vec<f32>>) {
         let stride = views[v as usize]["byteStride"]
             .as_u64()
             .map_or(n, |s| s as usize / 4);
-        let first = offset as usize / 4;
-        let mut values: Vec<f32> = (0..elements)
+        let first = a["byteOffset"].as_u64().unwrap_or(0) as usize / 4;
+        let values: Vec<f32> = (0..count)
             .filter_map(|e| floats.get(first + e * stride..first + e * stride + n))
             .flatten()
             .copied()
             .collect();
-        if values.len() != elements * n {
+        if values.len() != count * n {
             continue;
-        }
-        if zeros {
-            values.extend(std::iter::repeat_n(0.0, n));
         }
         set_bounds(a, &values, n);
     }
