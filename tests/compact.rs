@@ -500,17 +500,7 @@ fn small_triangle(path: &Path) {
     let mut bin = Vec::new();
     let mut vec3 = |json: &mut serde_json::Value, values: &[f32]| {
         let a = push_f32_accessor(json, &mut bin, values, "VEC3");
-        let (lo, hi) = (0..3)
-            .map(|c| {
-                let v = values.iter().skip(c).step_by(3);
-                (
-                    v.clone().copied().fold(f32::MAX, f32::min),
-                    v.copied().fold(f32::MIN, f32::max),
-                )
-            })
-            .unzip::<_, _, Vec<f32>, Vec<f32>>();
-        json["accessors"][a]["min"] = serde_json::json!(lo);
-        json["accessors"][a]["max"] = serde_json::json!(hi);
+        inbetween::gltf::set_bounds(&mut json["accessors"][a], values, 3);
         a
     };
     let p = vec3(&mut json, &[0.0, 0.0, 0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.005]);
