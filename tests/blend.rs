@@ -1815,17 +1815,8 @@ fn declared_bounds_follow_the_mended_weights_joints_and_rotations() {
     }
     let bounds = |doc: &Document, a: usize| -> (Vec<f64>, Vec<f64>) {
         let (v, _) = doc.read_f64(a).unwrap();
-        let col = |c: usize, f: fn(f64, f64) -> f64, init: f64| -> f64 {
-            v.iter()
-                .skip(c)
-                .step_by(4)
-                .map(|&x| x as f32 as f64)
-                .fold(init, f)
-        };
-        (
-            (0..4).map(|c| col(c, f64::min, f64::MAX)).collect(),
-            (0..4).map(|c| col(c, f64::max, f64::MIN)).collect(),
-        )
+        let v: Vec<f64> = v.iter().map(|&x| x as f32 as f64).collect();
+        column_bounds(&v, 4)
     };
     let edited = dir.path().join("bounded.glb");
     write_glb(&edited, &json, &bin);
@@ -1894,20 +1885,9 @@ fn normals_off_unit_length_are_written_as_unit() {
             bin[at..at + 4].copy_from_slice(&(broken[3 * v + c] as f32).to_le_bytes());
         }
     }
-    for (k, pick) in [("min", f64::min as fn(f64, f64) -> f64), ("max", f64::max)] {
-        let b: Vec<f64> = (0..3)
-            .map(|c| {
-                broken
-                    .iter()
-                    .skip(c)
-                    .step_by(3)
-                    .copied()
-                    .reduce(pick)
-                    .unwrap()
-            })
-            .collect();
-        json["accessors"][acc][k] = serde_json::json!(b);
-    }
+    let (lo, hi) = column_bounds(&broken, 3);
+    json["accessors"][acc]["min"] = serde_json::json!(lo);
+    json["accessors"][acc]["max"] = serde_json::json!(hi);
     let input = dir.path().join("broken.glb");
     write_glb(&input, &json, &bin);
     let out = dir.path().join("out.glb");

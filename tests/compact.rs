@@ -540,12 +540,13 @@ fn assert_bounds_are_the_decoded_values(path: &Path) {
             continue;
         }
         let (values, n) = doc.read_f64(i).unwrap();
+        let values: Vec<f64> = values.iter().map(|&x| x as f32 as f64).collect();
+        let (lo, hi) = column_bounds(&values, n);
         for (c, key) in (0..n).flat_map(|c| [(c, "min"), (c, "max")]) {
-            let column = values.iter().skip(c).step_by(n).map(|&x| x as f32);
             let found = match key {
-                "min" => column.fold(f32::MAX, f32::min),
-                _ => column.fold(f32::MIN, f32::max),
-            };
+                "min" => lo[c],
+                _ => hi[c],
+            } as f32;
             let declared = a[key][c].as_f64().unwrap() as f32;
             assert_eq!(
                 declared,

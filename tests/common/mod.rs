@@ -150,6 +150,16 @@ pub fn read_targets(path: &Path, mesh: usize, prim: usize) -> (Vec<[f32; 3]>, Ve
     (base, targets)
 }
 
+/// Per-component least and greatest of `values` (elements of `n` components), as an
+/// accessor's min and max declare them.
+pub fn column_bounds(values: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
+    let column = |c: usize| values.iter().skip(c).step_by(n).copied();
+    (
+        (0..n).map(|c| column(c).fold(f64::MAX, f64::min)).collect(),
+        (0..n).map(|c| column(c).fold(f64::MIN, f64::max)).collect(),
+    )
+}
+
 pub fn diag(points: &[glam::DVec3]) -> f64 {
     inbetween::tween::bbox_diagonal(points)
 }
