@@ -368,6 +368,111 @@ fn skin_weights_are_written_summing_to_one() {
     }
 }
 
+/// Skin weights stored as normalized integers, each rounded alone (an exporter that quantizes
+/// to 8 or 16 bits and does not make the sums whole again: Fox's and CesiumMan's so written sum
+/// to 253/255 to 257/255, 202-320 validator errors each), were copied as read into every
+/// output, whose reader scales them alike. They are written summing to exactly the type's
+/// largest value (the validator's 1), each within a unit or two of its own (the largest
+/// remainders take the units left over), a joint left with no weight made joint 0, and the
+/// bounds the input declares on them made the written values'.
+#[test]
+fn normalized_integer_skin_weights_are_written_summing_to_one() {
+    for (name, clips) in [("Fox", ["Walk", "Run"]), ("CesiumMan", ["0", "0"])] {
+        for (component, unit, size) in [(5121u64, 255u32, 1usize), (5123, 65535, 2)] {
+            let Some((dir, _, mut json, mut bin)) = editable(name) else {
+                return;
+            };
+            let read = |bin: &[u8], at: usize| match size {
+                1 => bin[at] as u32,
+                _ => u16::from_le_bytes([bin[at], bin[at + 1]]) as u32,
+            };
+            let mut weights = std::collections::BTreeMap::new();
+            for m in 0..json["meshes"].as_array().unwrap().len() {
+                for p in 0..json["meshes"][m]["primitives"].as_array().unwrap().len() {
+                    let attrs = &json["meshes"][m]["primitives"][p]["attributes"];
+                    let Some(w) = attrs["WEIGHTS_0"].as_u64().map(|w| w as usize) else {
+                        continue;
+                    };
+                    let acc = match weights.get(&w) {
+                        Some(&acc) => acc,
+                        None => {
+                            assert_eq!(json["accessors"][w]["componentType"], 5126);
+                            let (start, stride) = accessor_bytes(&json, w, 16);
+                            let count = json["accessors"][w]["count"].as_u64().unwrap() as usize;
+                            while bin.len() % 4 != 0 {
+                                bin.push(0);
+                            }
+                            let at = bin.len();
+                            let mut units = Vec::with_capacity(4 * count);
+                            for i in 0..count {
+                                for c in 0..4 {
+                                    let b = start + i * stride + 4 * c;
+                                    let x = f32::from_le_bytes(bin[b..b + 4].try_into().unwrap());
+                                    units.push((x as f64 * unit as f64).round() as u32);
+                                }
+                            }
+                            for &k in &units {
+                                bin.extend_from_slice(&k.to_le_bytes()[..size]);
+                            }
+                            let views = json["bufferViews"].as_array_mut().unwrap();
+                            views.push(serde_json::json!({"buffer": 0, "byteOffset": at,
+                                "byteLength": units.len() * size, "target": 34962}));
+                            let view = views.len() - 1;
+                            let (lo, hi) = column_bounds(
+                                &units.iter().map(|&k| k as f64).collect::<Vec<_>>(),
+                                4,
+                            );
+                            let accs = json["accessors"].as_array_mut().unwrap();
+                            accs.push(serde_json::json!({"bufferView": view,
+                                "componentType": component, "normalized": true, "count": count,
+                                "type": "VEC4", "min": lo, "max": hi}));
+                            weights.insert(w, accs.len() - 1);
+                            accs.len() - 1
+                        }
+                    };
+                    json["meshes"][m]["primitives"][p]["attributes"]["WEIGHTS_0"] = acc.into();
+                }
+            }
+            json["buffers"][0]["byteLength"] = bin.len().into();
+            let case = format!("{name} {size}-byte");
+            let edited = dir.path().join("units.glb");
+            write_glb(&edited, &json, &bin);
+            let off = validate(&edited).map(|(errors, _, _)| errors);
+            assert!(
+                off.is_none_or(|e| e > 100),
+                "{case}: {off:?} errors in the input"
+            );
+            let out = dir.path().join("out.glb");
+            let (i, o) = (edited.to_str().unwrap(), out.to_str().unwrap());
+            run_ok(&["blend", i, "--clips", clips[0], clips[1], "-o", o, "-q"]);
+            if let Some((errors, _, line)) = validate(&out) {
+                assert_eq!(errors, 0, "{case}: {line}");
+            }
+            let written = Document::open(&out).unwrap();
+            let (wj, wb) = (&written.json, &written.buffers[0]);
+            for (&w, &acc) in &weights {
+                let count = json["accessors"][acc]["count"].as_u64().unwrap() as usize;
+                let (a, b) = (
+                    accessor_bytes(&json, acc, 4 * size),
+                    accessor_bytes(wj, acc, 4 * size),
+                );
+                assert_eq!(wj["accessors"][acc]["componentType"], component, "{case}");
+                for i in 0..count {
+                    let k = |bin: &[u8], (s, st): (usize, usize), c: usize| {
+                        read(bin, s + i * st + c * size)
+                    };
+                    let sum: u32 = (0..4).map(|c| k(wb, b, c)).sum();
+                    assert_eq!(sum, unit, "{case}: accessor {w}'s vertex {i}");
+                    for c in 0..4 {
+                        let (was, now) = (k(&bin, a, c), k(wb, b, c));
+                        assert!(was.abs_diff(now) <= 2, "{case}: vertex {i}: {was} -> {now}");
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Rotation keys off unit length (Fox with each float rotation key scaled by 0.9 to 1.1, as
 /// some exporters leave them; the validator refuses them beyond 0.0077): read as the rotations
 /// they stand for, so the blend's figures are the original's (a slerp between the raw keys

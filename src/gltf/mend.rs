@@ -16,18 +16,22 @@
 //! (glTF-Validator 2.0.0-dev.3.10, the one the tests run; its source's other rule, [`SUM_STEP`]
 //! times (influences / 2, rounded up, less one), exactly 1 for one or two influences, is
 //! checked too). A vertex that fails is divided by its sum and its largest weight then moved
-//! by single-precision steps until the sum passes; a joint with weight 0 is made joint 0 (the
-//! validator warns of one that is not, which Draco leaves where it rounds a small weight to
-//! nothing: RobotExpressive's hands, 5 warnings). Float weights only: normalized integer
-//! weights (gltfpack) are left as they are; a vertex with a negative weight, a joint twice or
-//! no weight at all is left too (normalizing cannot mend those).
+//! by single-precision steps until the sum passes. Normalized integer weights (8 or 16 bits) are
+//! read as the validator reads them, each over its type's largest value; a vertex that fails is
+//! made to sum to exactly that value, each weight its share rounded down and the units left
+//! over given to the largest remainders (an exporter that rounds each weight alone sums to
+//! 253/255-257/255: 202-320 errors on Fox and CesiumMan so written; gltfpack and glTF-Transform
+//! make their sums whole). A joint with weight 0 is made joint 0 (the validator warns of one
+//! that is not, which Draco leaves where it rounds a small weight to nothing: RobotExpressive's
+//! hands, 5 warnings). A vertex with a negative weight, a joint twice or no weight at all is
+//! left as it is (normalizing cannot mend those).
 //!
 //! **Accessor bounds** ([`bounds`]): a float accessor's declared `min` and `max` must be its
 //! values' (gltf-pipeline 4's Draco on a Blender morph file declared a target's max 0 where its
 //! values reach 1.2): each component whose declared bound, read as a float, differs from the
 //! values' is written as theirs; bounds right to a float's precision stay as written. SCALAR,
 //! VEC2 and VEC3 from the input's values; the VEC4 skin weights, joints and rotation keys the
-//! mends above may change, from the values written (assimp declares bounds on every accessor,
+//! mends above may change, from the values written (integers as stored) (assimp declares bounds on every accessor,
 //! right for its weights before they were divided by their sums: 18-21 errors per blend).
 //!
 //! **Sparse parts** ([`sparse_parts`]): a buffer view that only sparse parts use loses
@@ -140,7 +144,7 @@ impl Column {
         self.start + i * self.stride + c * self.size
     }
 
-    fn joint(&self, bytes: &[u8], i: usize, c: usize) -> u32 {
+    fn uint(&self, bytes: &[u8], i: usize, c: usize) -> u32 {
         let p = self.at(i, c);
         match self.component {
             5121 => bytes[p] as u32,
@@ -148,7 +152,7 @@ impl Column {
         }
     }
 
-    fn set_joint(&self, bytes: &mut [u8], i: usize, c: usize, j: u32) {
+    fn set_uint(&self, bytes: &mut [u8], i: usize, c: usize, j: u32) {
         let p = self.at(i, c);
         match self.component {
             5121 => bytes[p] = j as u8,
@@ -167,11 +171,12 @@ impl Column {
     }
 }
 
-/// Whether weights `w` of joints `j` sum to one as the validator reckons it: `None` where
-/// normalizing cannot mend them (a negative weight, a joint twice, no weight).
-fn sums_to_one(w: &[f32], j: &[u32]) -> Option<bool> {
-    let (mut sum, mut seen) = (0f32, Vec::with_capacity(w.len()));
-    for (&w, &j) in w.iter().zip(j) {
+/// Whether weights `w` of joints `j` (each as the validator reads it: a float's value, a
+/// normalized integer's over its type's largest) sum to one as the validator reckons it:
+/// `None` where normalizing cannot mend them (a negative weight, a joint twice, no weight).
+fn sums_to_one(w: impl IntoIterator<Item = f64>, j: &[u32]) -> Option<bool> {
+    let (mut sum, mut seen) = (0f32, Vec::with_capacity(j.len()));
+    for (w, &j) in w.into_iter().zip(j) {
         if w == 0.0 {
             continue;
         }
@@ -179,7 +184,7 @@ fn sums_to_one(w: &[f32], j: &[u32]) -> Option<bool> {
             return None;
         }
         seen.push(j);
-        sum = (sum as f64 + w as f64) as f32;
+        sum = (sum as f64 + w) as f32;
     }
     if seen.is_empty() {
         return None;
@@ -187,6 +192,38 @@ fn sums_to_one(w: &[f32], j: &[u32]) -> Option<bool> {
     let n = seen.len();
     let tolerance = (PER_INFLUENCE * n as f64).min(SUM_STEP * (n.div_ceil(2) - 1) as f64);
     Some((sum as f64 - 1.0).abs() <= tolerance)
+}
+
+/// [`sums_to_one`] of float weights.
+fn floats_sum_to_one(w: &[f32], j: &[u32]) -> Option<bool> {
+    sums_to_one(w.iter().map(|&x| x as f64), j)
+}
+
+/// [`sums_to_one`] of normalized integer weights `k`, `unit` their type's largest (255, 65535).
+fn units_sum_to_one(k: &[u32], unit: u32, j: &[u32]) -> Option<bool> {
+    sums_to_one(k.iter().map(|&x| x as f64 / unit as f64), j)
+}
+
+/// Normalized integer weights `k` scaled to sum to exactly `unit` (their type's largest):
+/// each its share rounded down, the units left over given to the largest remainders (the
+/// earlier first where they tie). Zero weights stay zero.
+fn normalized_units(k: &mut [u32], unit: u32) {
+    let sum: u64 = k.iter().map(|&x| x as u64).sum();
+    if sum == 0 {
+        return;
+    }
+    let share = |x: u32| x as u64 * unit as u64;
+    let mut order: Vec<usize> = (0..k.len()).collect();
+    // Remainders compared exactly, as numerators over `sum`.
+    order.sort_by_key(|&i| std::cmp::Reverse(share(k[i]) % sum));
+    let floors: Vec<u64> = k.iter().map(|&x| share(x) / sum).collect();
+    let left = unit as u64 - floors.iter().sum::<u64>();
+    for (i, f) in floors.iter().enumerate() {
+        k[i] = *f as u32;
+    }
+    for &i in order.iter().take(left as usize) {
+        k[i] += 1;
+    }
 }
 
 /// Weights `w` divided by their sum, their largest then stepped until [`sums_to_one`] passes.
@@ -197,7 +234,7 @@ fn normalized(w: &mut [f32], j: &[u32]) {
     }
     let k = (0..w.len()).fold(0, |k, i| if w[i] > w[k] { i } else { k });
     for _ in 0..64 {
-        if sums_to_one(w, j) != Some(false) {
+        if floats_sum_to_one(w, j) != Some(false) {
             return;
         }
         let rest: f64 = (w.iter().enumerate())
@@ -256,17 +293,15 @@ fn rebound_vec4(json: &mut Value, bin: &BinBuilder) {
             continue;
         }
         let count = acc["count"].as_u64().unwrap_or(0) as usize;
-        // Normalized integers (weights the mends leave as they are) keep theirs.
-        let Some(column) = Column::of(json, bin, a, count)
-            .filter(|c| count > 0 && (c.component == 5126 || acc["normalized"] != true))
-        else {
+        // Integers (joints, normalized weights) are bounded by their stored values.
+        let Some(column) = Column::of(json, bin, a, count).filter(|_| count > 0) else {
             continue;
         };
         let values: Vec<f32> = (0..count)
             .flat_map(|i| (0..4).map(move |c| (i, c)))
             .map(|(i, c)| match column.component {
                 5126 => column.float(&bin.bytes, i, c),
-                _ => column.joint(&bin.bytes, i, c) as f32,
+                _ => column.uint(&bin.bytes, i, c) as f32,
             })
             .collect();
         let (lo, hi) = min_max(&values, 4);
@@ -287,7 +322,7 @@ fn rebound_vec4(json: &mut Value, bin: &BinBuilder) {
     }
 }
 
-/// Make every float `WEIGHTS_n` set of the output sum to one per vertex (see the module
+/// Make every `WEIGHTS_n` set of the output (float or normalized integer) sum to one per vertex (see the module
 /// comment), in place in `bin`; returns a line for each mesh whose sums were off by more than
 /// quantization.
 pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
@@ -309,44 +344,82 @@ pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
                 continue;
             };
             let count = count as usize;
+            let normalized_int = |w: u64| json["accessors"][w as usize]["normalized"] == true;
             let columns: Option<Vec<(Column, Column)>> = (pairs.iter())
                 .map(|&(j, w)| {
-                    let j = Column::of(json, bin, j as usize, count)?;
-                    let w = Column::of(json, bin, w as usize, count)?;
-                    (j.component != 5126 && w.component == 5126).then_some((j, w))
+                    let jc = Column::of(json, bin, j as usize, count)?;
+                    let wc = Column::of(json, bin, w as usize, count)?;
+                    let readable = wc.component == 5126 || normalized_int(w);
+                    (jc.component != 5126 && readable).then_some((jc, wc))
                 })
                 .collect();
             let Some(columns) = columns.filter(|c| !c.is_empty()) else {
                 continue;
             };
-            let (mut w, mut j) = (vec![0f32; 4 * columns.len()], vec![0u32; 4 * columns.len()]);
+            // Float weights, or normalized integers of one type (their largest value is 1).
+            let unit = match columns[0].1.component {
+                5126 => None,
+                5121 => Some(255),
+                _ => Some(65535),
+            };
+            if columns
+                .iter()
+                .any(|c| c.1.component != columns[0].1.component)
+            {
+                continue;
+            }
+            let n = 4 * columns.len();
+            let (mut w, mut k, mut j) = (vec![0f32; n], vec![0u32; n], vec![0u32; n]);
             for i in 0..count {
                 for (s, (jc, wc)) in columns.iter().enumerate() {
                     for c in 0..4 {
-                        w[4 * s + c] = wc.float(&bin.bytes, i, c);
-                        j[4 * s + c] = jc.joint(&bin.bytes, i, c);
-                        // A joint with no weight is joint 0 (the validator warns of others):
-                        // Draco's quantization rounds a small weight to 0 and keeps its joint.
-                        if w[4 * s + c] == 0.0 && j[4 * s + c] != 0 {
-                            j[4 * s + c] = 0;
-                            jc.set_joint(&mut bin.bytes, i, c, 0);
+                        j[4 * s + c] = jc.uint(&bin.bytes, i, c);
+                        match unit {
+                            None => w[4 * s + c] = wc.float(&bin.bytes, i, c),
+                            Some(_) => k[4 * s + c] = wc.uint(&bin.bytes, i, c),
                         }
                     }
                 }
-                if sums_to_one(&w, &j) != Some(false) {
-                    continue;
+                let fits = match unit {
+                    None => floats_sum_to_one(&w, &j),
+                    Some(u) => units_sum_to_one(&k, u, &j),
+                };
+                if fits == Some(false) {
+                    let before: f64 = match unit {
+                        None => w.iter().map(|&x| x as f64).sum(),
+                        Some(u) => k.iter().map(|&x| x as f64).sum::<f64>() / u as f64,
+                    };
+                    match unit {
+                        None => normalized(&mut w, &j),
+                        Some(u) => normalized_units(&mut k, u),
+                    }
+                    for (s, (_, wc)) in columns.iter().enumerate() {
+                        for c in 0..4 {
+                            match unit {
+                                None => wc.set_float(&mut bin.bytes, i, c, w[4 * s + c]),
+                                Some(_) => wc.set_uint(&mut bin.bytes, i, c, k[4 * s + c]),
+                            }
+                        }
+                    }
+                    let e = said
+                        .entry(m)
+                        .or_insert((0, f64::INFINITY, f64::NEG_INFINITY));
+                    *e = (e.0 + 1, e.1.min(before), e.2.max(before));
                 }
-                let before: f64 = w.iter().map(|&x| x as f64).sum();
-                normalized(&mut w, &j);
-                for (s, (_, wc)) in columns.iter().enumerate() {
+                // A joint with no weight is joint 0 (the validator warns of others): Draco's
+                // quantization rounds a small weight to 0 and keeps its joint, and so may an
+                // integer weight's share above.
+                for (s, (jc, _)) in columns.iter().enumerate() {
                     for c in 0..4 {
-                        wc.set_float(&mut bin.bytes, i, c, w[4 * s + c]);
+                        let zero = match unit {
+                            None => w[4 * s + c] == 0.0,
+                            Some(_) => k[4 * s + c] == 0,
+                        };
+                        if zero && j[4 * s + c] != 0 {
+                            jc.set_uint(&mut bin.bytes, i, c, 0);
+                        }
                     }
                 }
-                let e = said
-                    .entry(m)
-                    .or_insert((0, f64::INFINITY, f64::NEG_INFINITY));
-                *e = (e.0 + 1, e.1.min(before), e.2.max(before));
             }
         }
     }
@@ -689,7 +762,7 @@ mod tests {
             let before: Vec<f64> = w.iter().map(|&x| x as f64).collect();
             let sum: f64 = before.iter().sum();
             normalized(&mut w, &j);
-            assert_eq!(sums_to_one(&w, &j), Some(true), "{before:?} -> {w:?}");
+            assert_eq!(floats_sum_to_one(&w, &j), Some(true), "{before:?} -> {w:?}");
             // Each weight within a few single-precision steps of its share.
             for (a, b) in w.iter().zip(&before) {
                 assert!((*a as f64 - b / sum).abs() < 1e-6, "{before:?} -> {w:?}");
@@ -697,12 +770,61 @@ mod tests {
         }
         // Two influences must sum to exactly 1 in single precision.
         let (mut w, j) = (vec![0.30001, 0.70012, 0.0, 0.0], vec![3, 5, 0, 0]);
-        assert_eq!(sums_to_one(&w, &j), Some(false));
+        assert_eq!(floats_sum_to_one(&w, &j), Some(false));
         normalized(&mut w, &j);
         assert_eq!(w[0] + w[1], 1.0);
         // What normalizing cannot mend is left.
-        assert_eq!(sums_to_one(&[0.5, 0.6, 0.0, 0.0], &[1, 1, 0, 0]), None);
-        assert_eq!(sums_to_one(&[-0.5, 1.5, 0.0, 0.0], &[1, 2, 0, 0]), None);
-        assert_eq!(sums_to_one(&[0.0; 4], &[0; 4]), None);
+        assert_eq!(
+            floats_sum_to_one(&[0.5, 0.6, 0.0, 0.0], &[1, 1, 0, 0]),
+            None
+        );
+        assert_eq!(
+            floats_sum_to_one(&[-0.5, 1.5, 0.0, 0.0], &[1, 2, 0, 0]),
+            None
+        );
+        assert_eq!(floats_sum_to_one(&[0.0; 4], &[0; 4]), None);
+    }
+
+    #[test]
+    fn whole_integer_sums_pass_and_off_ones_are_made_whole() {
+        let j = [0, 1, 2, 3];
+        // Every 8-bit set of four summing to 255 passes the validator's single-precision sum.
+        for a in 0..=255u32 {
+            for b in 0..=255 - a {
+                for c in 0..=255 - a - b {
+                    let k = [a, b, c, 255 - a - b - c];
+                    assert_eq!(units_sum_to_one(&k, 255, &j), Some(true), "{k:?}");
+                }
+            }
+        }
+        let mut lcg = crate::dev::synth::Lcg(5);
+        for case in 0..20_000 {
+            let unit = [255, 65535][case % 2];
+            let n = 1 + case / 2 % 8;
+            let mut k: Vec<u32> = (0..8)
+                .map(|i| match i < n {
+                    true => (lcg.unit() * 1.2 * unit as f64 / n as f64) as u32,
+                    false => 0,
+                })
+                .collect();
+            let (before, j): (Vec<u32>, Vec<u32>) = (k.clone(), (0..8).collect());
+            let sum: u32 = before.iter().sum();
+            if sum == 0 {
+                continue;
+            }
+            normalized_units(&mut k, unit);
+            assert_eq!(k.iter().sum::<u32>(), unit, "{before:?} -> {k:?}");
+            assert_eq!(
+                units_sum_to_one(&k, unit, &j),
+                Some(true),
+                "{before:?} -> {k:?}"
+            );
+            // Each within a unit of its share; zeros stay zero.
+            for (now, was) in k.iter().zip(&before) {
+                let share = *was as f64 * unit as f64 / sum as f64;
+                assert!((*now as f64 - share).abs() < 1.0, "{before:?} -> {k:?}");
+                assert!(*was != 0 || *now == 0, "{before:?} -> {k:?}");
+            }
+        }
     }
 }
