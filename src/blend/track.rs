@@ -23,9 +23,17 @@ pub const LOOP_TOLERANCE: f64 = 0.03;
 /// its 24 frames a second, one frame short of the loop, ends 2.5 spacings short.
 pub const MAX_SEAM_STEPS: f64 = 3.0;
 
+/// Longest seam in seconds that [`close_open_loop`] closes, however fine the keys (where it
+/// is longer than [`MAX_SEAM_STEPS`] key spacings): one spacing of the coarsest bake read as
+/// animation, 12 keys a second (animation on twos), as a loop so baked and then resampled
+/// finer keeps it (Blender's every-other-frame FBX through FBX2glTF's 60 per second bake;
+/// Fox's run so: 4.3 spacings at 60 a second, 8.6 at 120).
+pub const MAX_SEAM_SECONDS: f64 = 1.0 / 12.0;
+
 /// How well the motion at a clip's ends must explain its seam for [`close_open_loop`]: the
 /// worst joint's miss within this part of the largest joint step there (or within
-/// [`LOOP_TOLERANCE`]). Loops baked short measure 0.09-0.28 (Blender's every-other-frame
+/// [`LOOP_TOLERANCE`], or within the distance the fastest joint covers across the seam: see
+/// [`close_open_loop`]). Loops baked short measure 0.09-0.28 (Blender's every-other-frame
 /// samples at 12 a second, FBX2glTF's at 60); clips that do not loop, 2.7 and more, save a
 /// jump that lands where it took off (0.41).
 pub const SEAM_FIT: f64 = 1.0 / 3.0;
@@ -140,18 +148,25 @@ pub fn loops(rig: &Rig, clip: &Clip, size: f64) -> bool {
 
 /// `clip` closed into a loop where its last key stops short of its first pose (an exclusive
 /// end, as a loop resampled on a grid that its period does not fit leaves it: Blender's
-/// re-export of Fox's run, 1.158 s on a 120 per second grid, keys every 1/24 s to 1.125 s).
-/// The skeleton's joints (relative to the root, as [`loops`]) must come back to the first pose
-/// across a seam of `f` key spacings at the mean of their velocities at the two ends (the last
-/// key step and the first: a seam crossed at the speed the motion leaves and comes back with;
-/// least squares over the joints; at most [`MAX_SEAM_STEPS`]), the worst joint within
-/// [`SEAM_FIT`] of the largest joint step there or within [`LOOP_TOLERANCE`]. Every channel
-/// then gets a key `f` spacings after the clip's end: its first value again, or, for a
-/// translation that carrying on takes nearer its last key than its first (root motion), its
-/// last step's value carried on, so that the loop moves on. None when the clip loops already,
-/// has three key spacings or fewer, or does not come round so (Blender's Fox run: f = 0.58,
-/// the true seam 0.79; its every-other-frame samples of the walk at 12 a second: 0.42, true
-/// 0.5, the worst joint 0.22 of a step off; FBX2glTF's run at 60 a second: 1.96, true 2.5).
+/// re-export of Fox's run, 1.158 s on a 120 per second grid, keys every 1/24 s to 1.125 s; or
+/// as a cycle is exported without the key that repeats its first, so that it plays without a
+/// doubled frame: Fox's walk so, 17 keys at 24 a second, one spacing short). The skeleton's
+/// joints (relative to the root, as [`loops`]) must come back to the first pose across a seam
+/// of `f` key spacings at the mean of their velocities at the two ends (the last key step and
+/// the first: a seam crossed at the speed the motion leaves and comes back with; least squares
+/// over the joints; at most [`MAX_SEAM_STEPS`] spacings or [`MAX_SEAM_SECONDS`]), the worst
+/// joint within [`SEAM_FIT`] of the largest joint step there, within [`LOOP_TOLERANCE`], or
+/// within what the fastest joint covers across the seam (`f` times the largest step: a miss
+/// smaller than the motion across the seam, whatever the key rate; Fox's walk one spacing
+/// short misses by 0.52 of that where a paw touches down in the seam, RobotExpressive's walk
+/// at 12 a second resampled at 60 by 0.86, while a jump that lands where it took off misses
+/// by 4.3). Every channel then gets a key `f` spacings after the clip's end: its first value
+/// again, or, for a translation that carrying on takes nearer its last key than its first
+/// (root motion), its last step's value carried on, so that the loop moves on. None when the
+/// clip loops already, has three key spacings or fewer, or does not come round so (Blender's
+/// Fox run: f = 0.58, the true seam 0.79; its every-other-frame samples of the walk at 12 a
+/// second: 0.42, true 0.5, the worst joint 0.22 of a step off; FBX2glTF's run at 60 a second:
+/// 1.96, true 2.5).
 pub fn close_open_loop(rig: &Rig, clip: &Clip, size: f64) -> Option<Clip> {
     let step = 1.0 / clip.key_rate;
     let (start, end) = (clip.start, clip.end);
@@ -177,14 +192,14 @@ pub fn close_open_loop(rig: &Rig, clip: &Clip, size: f64) -> Option<Clip> {
         (n + seam.dot(*v), d + v.dot(*v))
     });
     let f = num / den;
-    if !(f > 0.0 && f <= MAX_SEAM_STEPS) {
+    if !(f > 0.0 && f * step <= (MAX_SEAM_STEPS * step).max(MAX_SEAM_SECONDS)) {
         return None;
     }
     let worst = (parts.iter())
         .map(|(seam, v, _)| (*seam - f * *v).length())
         .fold(0.0, f64::max);
     let largest_step = parts.iter().map(|p| p.2).fold(0.0, f64::max);
-    if worst > (LOOP_TOLERANCE * size).max(SEAM_FIT * largest_step) {
+    if worst > (LOOP_TOLERANCE * size).max(SEAM_FIT.max(f) * largest_step) {
         return None;
     }
     let mut closed = clip.clone();
