@@ -473,6 +473,52 @@ fn normalized_integer_skin_weights_are_written_summing_to_one() {
     }
 }
 
+/// A key time repeated (glTF asks for increasing times; an exporter's hold, or two samples of
+/// a bake rounded to one time: Fox's walk with its sixth time set to its fifth, 21 validator
+/// errors) was refused ("the key times ... do not increase"). It is read as a step to the
+/// later key there, as players read it, and written a single-precision step later, the
+/// accessor's bounds kept, said in a line; the output passes the validator.
+#[test]
+fn a_repeated_key_time_is_read_as_a_step_and_written_increasing() {
+    let Some((dir, _, json, mut bin)) = editable("Fox") else {
+        return;
+    };
+    let walk = (json["animations"].as_array().unwrap().iter())
+        .find(|a| a["name"] == "Walk")
+        .unwrap();
+    let input = walk["samplers"][0]["input"].as_u64().unwrap() as usize;
+    let (start, _) = accessor_bytes(&json, input, 4);
+    let time = |bin: &[u8], start: usize, k: usize| {
+        f32::from_le_bytes(bin[start + 4 * k..start + 4 * k + 4].try_into().unwrap())
+    };
+    let fifth = time(&bin, start, 4);
+    bin[start + 20..start + 24].copy_from_slice(&fifth.to_le_bytes());
+    let edited = dir.path().join("repeated.glb");
+    write_glb(&edited, &json, &bin);
+    let out = dir.path().join("out.glb");
+    let (i, o) = (edited.to_str().unwrap(), out.to_str().unwrap());
+    let r = run_ok(&["blend", i, "--clips", "Walk", "Run", "-o", o]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("animation \"Walk\": 1 key time equal to the one before"),
+        "{err}"
+    );
+    if let Some((errors, _, line)) = validate(&out) {
+        assert_eq!(errors, 0, "{line}");
+    }
+    let written = Document::open(&out).unwrap();
+    let (wj, wb) = (&written.json, &written.buffers[0]);
+    let (at, _) = accessor_bytes(wj, input, 4);
+    let count = wj["accessors"][input]["count"].as_u64().unwrap() as usize;
+    let times: Vec<f32> = (0..count).map(|k| time(wb, at, k)).collect();
+    assert!(times.windows(2).all(|w| w[1] > w[0]), "{times:?}");
+    assert_eq!(times[5], fifth.next_up());
+    assert_eq!(
+        wj["accessors"][input]["max"],
+        json["accessors"][input]["max"]
+    );
+}
+
 /// Rotation keys off unit length (Fox with each float rotation key scaled by 0.9 to 1.1, as
 /// some exporters leave them; the validator refuses them beyond 0.0077): read as the rotations
 /// they stand for, so the blend's figures are the original's (a slerp between the raw keys

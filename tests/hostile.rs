@@ -251,7 +251,7 @@ fn each_crash_found_by_mutation_is_a_clean_refusal() {
     // 2. Key times in decreasing order.
     let f = p("decreasing.glb");
     poke_f32(&fox, &f, times, 1, 0, -5.0);
-    blend(&f, "do not increase");
+    blend(&f, "key times of accessor 27 decrease");
     // 4. A key time of 1e30.
     let doc = inbetween::gltf::Document::open(&fox).unwrap();
     let last = doc.json["accessors"][times]["count"].as_u64().unwrap() as usize - 1;

@@ -203,9 +203,11 @@ pub fn read_channels(
         if times.is_empty() {
             bail!(doc.err(format!("animation {name:?} has a sampler without keys")));
         }
-        if times.windows(2).any(|w| w[1] <= w[0]) {
+        // Equal times (glTF asks for increasing ones; some writers repeat a time) are a step
+        // to the later key there, as `Channel::sample` and players read them.
+        if times.windows(2).any(|w| w[1] < w[0]) {
             bail!(doc.err(format!(
-                "animation {name:?}: the key times of accessor {input} do not increase"
+                "animation {name:?}: the key times of accessor {input} decrease"
             )));
         }
         let per_key_values =
