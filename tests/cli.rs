@@ -1440,6 +1440,55 @@ fn a_gltf_s_external_images_count_with_its_input() {
     assert_eq!(doc.input_bytes, 56_657);
 }
 
+/// Bounds glTF requires and a writer left out (every morph target's POSITION and the weights'
+/// key times of Parrot without their min/max: 13 validator errors, carried into the output):
+/// written from the values, said in a line, the targets' the same as the original file
+/// declares (the weights' key times are the frames' own in the output).
+#[test]
+fn required_bounds_a_writer_left_out_are_written() {
+    let Some(fx) = fixtures() else { return };
+    let parrot = fx.join("morph-keyframes/Parrot.glb");
+    let original = Document::open(&parrot).unwrap();
+    let mut bounded = Vec::new();
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("unbounded.glb");
+    edited_glb(&parrot, &input, |j| {
+        let p = &j["meshes"][0]["primitives"][0];
+        let mut which: Vec<u64> = (p["targets"].as_array().unwrap().iter())
+            .map(|t| t["POSITION"].as_u64().unwrap())
+            .collect();
+        bounded = which.iter().map(|&a| a as usize).collect();
+        which.push(j["animations"][0]["samplers"][0]["input"].as_u64().unwrap());
+        for a in which {
+            let acc = j["accessors"][a as usize].as_object_mut().unwrap();
+            assert!(acc.remove("min").is_some() && acc.remove("max").is_some());
+        }
+    });
+    let out = dir.path().join("out.glb");
+    let told = run_ok(&["tween", s(&input), "-o", s(&out)]);
+    assert_valid(&out);
+    let err = String::from_utf8_lossy(&told.stderr);
+    assert!(
+        err.contains("13 accessors") && err.contains("had no min/max, which glTF requires"),
+        "{err}"
+    );
+    let (written, _) = glb_parts(&out);
+    for a in bounded {
+        for k in ["min", "max"] {
+            let (w, o) = (
+                &written["accessors"][a][k],
+                &original.json["accessors"][a][k],
+            );
+            let as_f32 = |v: &serde_json::Value| -> Vec<f32> {
+                (v.as_array().unwrap().iter())
+                    .map(|x| x.as_f64().unwrap() as f32)
+                    .collect()
+            };
+            assert_eq!(as_f32(w), as_f32(o), "accessor {a} {k}");
+        }
+    }
+}
+
 /// Bounds and sparse storage a writer got wrong, as gltf-pipeline 4's Draco writes a Blender
 /// morph file (a target's max declared 0 where its values reach 1.2, kept as a sparse accessor
 /// whose index and value views other accessors read as vertex data): mended on write, so the

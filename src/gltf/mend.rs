@@ -33,6 +33,8 @@
 //! VEC2 and VEC3 from the input's values; the VEC4 skin weights, joints and rotation keys the
 //! mends above may change, from the values written (integers as stored) (assimp declares bounds on every accessor,
 //! right for its weights before they were divided by their sums: 18-21 errors per blend).
+//! Bounds glTF requires and a writer left out (every POSITION's, a morph target's included,
+//! and every sampler's key times) are written from the values of a float accessor.
 //!
 //! **Sparse parts** ([`sparse_parts`]): a buffer view that only sparse parts use loses
 //! `byteStride` and `target` (only vertex data may have them); a float sparse accessor whose
@@ -569,7 +571,8 @@ pub fn rotations(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
 /// decodes (see the module comment), in `json` (the input's JSON, copied); returns a line when
 /// any bound was wrong.
 pub fn bounds(doc: &Document, json: &mut Value) -> Vec<String> {
-    let mut wrong = Vec::new();
+    let (mut wrong, mut missing) = (Vec::new(), Vec::new());
+    let required = bounded_by_rule(json);
     for i in 0..arr(json, "accessors").len() {
         let a = &json["accessors"][i];
         let ncomp = match a["type"].as_str() {
@@ -586,7 +589,8 @@ pub fn bounds(doc: &Document, json: &mut Value) -> Vec<String> {
             continue;
         }
         let (min, max) = (declared("min"), declared("max"));
-        if min.is_none() && max.is_none() {
+        let absent = a.get("min").is_none() && a.get("max").is_none();
+        if min.is_none() && max.is_none() && !(absent && required.contains(&i)) {
             continue;
         }
         let Ok((values, _)) = doc.read_f64(i) else {
@@ -594,6 +598,12 @@ pub fn bounds(doc: &Document, json: &mut Value) -> Vec<String> {
         };
         let values: Vec<f32> = values.iter().map(|&x| x as f32).collect();
         let (lo, hi) = min_max(&values, ncomp);
+        if absent {
+            json["accessors"][i]["min"] = f32_json(&lo);
+            json["accessors"][i]["max"] = f32_json(&hi);
+            missing.push(i.to_string());
+            continue;
+        }
         let mut mended = false;
         for (key, found, actual) in [("min", min, lo), ("max", max, hi)] {
             let Some(found) = found else {
@@ -610,9 +620,33 @@ pub fn bounds(doc: &Document, json: &mut Value) -> Vec<String> {
             wrong.push(i.to_string());
         }
     }
-    said_of(&wrong, |n, s, its, which| {
+    let mut lines = said_of(&wrong, |n, s, its, which| {
         format!("the declared min/max of {n} accessor{s} ({which}) did not match {its} values; written as the values are")
-    })
+    });
+    lines.extend(said_of(&missing, |n, s, its, which| {
+        format!("{n} accessor{s} ({which}) of positions or key times had no min/max, which glTF requires; written from {its} values")
+    }));
+    lines
+}
+
+/// The accessors glTF requires `min` and `max` of: every primitive's and morph target's
+/// POSITION, and every animation sampler's key times.
+fn bounded_by_rule(json: &Value) -> std::collections::BTreeSet<usize> {
+    let mut required = std::collections::BTreeSet::new();
+    for mesh in arr(json, "meshes") {
+        for p in arr(mesh, "primitives") {
+            let targets = arr(p, "targets").iter();
+            for attrs in std::iter::once(&p["attributes"]).chain(targets) {
+                required.extend(attrs["POSITION"].as_u64().map(|a| a as usize));
+            }
+        }
+    }
+    for anim in arr(json, "animations") {
+        for sampler in arr(anim, "samplers") {
+            required.extend(sampler["input"].as_u64().map(|a| a as usize));
+        }
+    }
+    required
 }
 
 /// A line about the accessors `which` (none: no line), `say` given their count, the plural's
