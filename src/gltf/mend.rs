@@ -31,8 +31,9 @@
 //! values reach 1.2): each component whose declared bound, read as a float, differs from the
 //! values' is written as theirs; bounds right to a float's precision stay as written. SCALAR,
 //! VEC2 and VEC3 from the input's values; the VEC4 skin weights, joints and rotation keys the
-//! mends above may change, from the values written (integers as stored) (assimp declares bounds on every accessor,
-//! right for its weights before they were divided by their sums: 18-21 errors per blend).
+//! mends above may change, from the values written, integers as stored (assimp declares bounds
+//! on every accessor, right for its weights before they were divided by their sums: 18-21
+//! errors per blend).
 //! Bounds glTF requires and a writer left out (every POSITION's, a morph target's included,
 //! and every sampler's key times) are written from the values of a float accessor.
 //!
