@@ -1440,6 +1440,71 @@ fn a_gltf_s_external_images_count_with_its_input() {
     assert_eq!(doc.input_bytes, 56_657);
 }
 
+/// A channel that repeats another's target and sampler (glTF allows one channel a target; the
+/// validator refuses the repeat): left out of the output, which plays the same keys, said in a
+/// line. Parrot's weights channel repeated tweens to the frames of the original; Fox's walk
+/// with two of its channels repeated blends to the very bytes of the original's blend.
+#[test]
+fn a_channel_repeating_another_is_left_out() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let repeat = |file: &str, anim: usize, channels: &[usize]| -> PathBuf {
+        let name = Path::new(file).file_name().unwrap().to_str().unwrap();
+        let out = dir.path().join(format!("repeated_{name}"));
+        edited_glb(&fx.join(file), &out, |j| {
+            let list = j["animations"][anim]["channels"].as_array_mut().unwrap();
+            for &c in channels {
+                let copy = list[c].clone();
+                list.push(copy);
+            }
+        });
+        out
+    };
+    let parrot = repeat("morph-keyframes/Parrot.glb", 0, &[0]);
+    let (a, b) = (dir.path().join("a.glb"), dir.path().join("b.glb"));
+    let told = run_ok(&["tween", s(&parrot), "-o", s(&a)]);
+    let err = String::from_utf8_lossy(&told.stderr);
+    assert!(
+        err.contains("1 channel repeating another's target and sampler"),
+        "{err}"
+    );
+    assert_valid(&a);
+    run_ok(&[
+        "tween",
+        s(&fx.join("morph-keyframes/Parrot.glb")),
+        "-o",
+        s(&b),
+        "-q",
+    ]);
+    let (ja, ba) = glb_parts(&a);
+    let (jb, bb) = glb_parts(&b);
+    assert_eq!(ja["animations"], jb["animations"]);
+    assert_eq!(ba, bb);
+    let fox = repeat("skinned/Fox.glb", 1, &[3, 5]);
+    run_ok(&[
+        "blend",
+        s(&fox),
+        "--clips",
+        "Walk",
+        "Run",
+        "-o",
+        s(&a),
+        "-q",
+    ]);
+    let original = fx.join("skinned/Fox.glb");
+    run_ok(&[
+        "blend",
+        s(&original),
+        "--clips",
+        "Walk",
+        "Run",
+        "-o",
+        s(&b),
+        "-q",
+    ]);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
+
 /// Bounds glTF requires and a writer left out (every morph target's POSITION and the weights'
 /// key times of Parrot without their min/max: 13 validator errors, carried into the output):
 /// written from the values, said in a line, the targets' the same as the original file
