@@ -473,6 +473,76 @@ fn normalized_integer_skin_weights_are_written_summing_to_one() {
     }
 }
 
+/// A joint named twice by one vertex (the validator's ACCESSOR_JOINTS_INDEX_DUPLICATE: Fox
+/// with 40 two-joint vertices written as joints a, b, a with the first weight halved between
+/// the two a's) is written with its weights added: the blend is the original's, byte for byte.
+#[test]
+fn a_joint_named_twice_by_a_vertex_gets_its_weights_added() {
+    let Some((dir, _, json, mut bin)) = editable("Fox") else {
+        return;
+    };
+    let p = &json["meshes"][0]["primitives"][0]["attributes"];
+    let (ja, wa) = (
+        p["JOINTS_0"].as_u64().unwrap(),
+        p["WEIGHTS_0"].as_u64().unwrap(),
+    );
+    let size = match json["accessors"][ja as usize]["componentType"].as_u64() {
+        Some(5121) => 1,
+        _ => 2,
+    };
+    let (js, jstride) = accessor_bytes(&json, ja as usize, 4 * size);
+    let (ws, wstride) = accessor_bytes(&json, wa as usize, 16);
+    let count = json["accessors"][wa as usize]["count"].as_u64().unwrap() as usize;
+    let mut edited = 0;
+    for i in 0..count {
+        let w = |bin: &[u8], c: usize| {
+            let at = ws + i * wstride + 4 * c;
+            f32::from_le_bytes(bin[at..at + 4].try_into().unwrap())
+        };
+        if w(&bin, 0) == 0.0 || w(&bin, 1) == 0.0 || w(&bin, 2) != 0.0 || w(&bin, 3) != 0.0 {
+            continue;
+        }
+        let half = w(&bin, 0) / 2.0;
+        for c in [0, 2] {
+            let at = ws + i * wstride + 4 * c;
+            bin[at..at + 4].copy_from_slice(&half.to_le_bytes());
+        }
+        let j = js + i * jstride;
+        let first = bin[j..j + size].to_vec();
+        bin[j + 2 * size..j + 3 * size].copy_from_slice(&first);
+        edited += 1;
+        if edited == 40 {
+            break;
+        }
+    }
+    assert_eq!(edited, 40);
+    let input = dir.path().join("twice.glb");
+    write_glb(&input, &json, &bin);
+    if let Some((errors, _, line)) = validate(&input) {
+        assert!(
+            line.contains("ACCESSOR_JOINTS_INDEX_DUPLICATE"),
+            "{errors}: {line}"
+        );
+    }
+    let (out, original) = (dir.path().join("out.glb"), dir.path().join("original.glb"));
+    let blend = |input: &Path, out: &Path| {
+        let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+        let r = run_ok(&["blend", i, "--clips", "Walk", "Run", "-o", o]);
+        String::from_utf8_lossy(&r.stderr).into_owned()
+    };
+    let err = blend(&input, &out);
+    assert!(
+        err.contains("40 vertices name a joint more than once"),
+        "{err}"
+    );
+    let fox = fixtures().unwrap().join("skinned/Fox.glb");
+    blend(&fox, &original);
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        std::fs::read(&original).unwrap()
+    );
+}
+
 /// A key time repeated (glTF asks for increasing times; an exporter's hold, or two samples of
 /// a bake rounded to one time: Fox's walk with its sixth time set to its fifth, 21 validator
 /// errors) was refused ("the key times ... do not increase"). It is read as a step to the

@@ -23,8 +23,10 @@
 //! 253/255-257/255: 202-320 errors on Fox and CesiumMan so written; gltfpack and glTF-Transform
 //! make their sums whole). A joint with weight 0 is made joint 0 (the validator warns of one
 //! that is not, which Draco leaves where it rounds a small weight to nothing: RobotExpressive's
-//! hands, 5 warnings). A vertex with a negative weight, a joint twice or no weight at all is
-//! left as it is (normalizing cannot mend those).
+//! hands, 5 warnings). A joint a vertex names twice (the validator's
+//! ACCESSOR_JOINTS_INDEX_DUPLICATE) gets the two weights added in its first place (skinning
+//! is linear in each joint's weight: the same pose). A vertex with a negative weight or no
+//! weight at all is left as it is (normalizing cannot mend those).
 //!
 //! **Accessor bounds** ([`bounds`]): a float accessor's declared `min` and `max` must be its
 //! values' (gltf-pipeline 4's Draco on a Blender morph file declared a target's max 0 where its
@@ -340,8 +342,10 @@ fn rebound_vec4(json: &mut Value, bin: &BinBuilder) {
 /// comment), in place in `bin`; returns a line for each mesh whose sums were off by more than
 /// quantization.
 pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
-    // Mesh -> (vertices mended, the sums' range before), for the lines.
+    // Mesh -> (vertices mended, the sums' range before), and vertices with a joint named
+    // twice, for the lines.
     let mut said: BTreeMap<usize, (usize, f64, f64)> = BTreeMap::new();
+    let mut repeated: BTreeMap<usize, usize> = BTreeMap::new();
     for (m, mesh) in arr(json, "meshes").iter().enumerate() {
         for p in arr(mesh, "primitives") {
             let attrs = &p["attributes"];
@@ -394,6 +398,13 @@ pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
                         }
                     }
                 }
+                let merged = match unit {
+                    None => merge_repeated_joints(&mut w, &j),
+                    Some(_) => merge_repeated_joints(&mut k, &j),
+                };
+                if merged {
+                    *repeated.entry(m).or_insert(0) += 1;
+                }
                 let fits = match unit {
                     None => floats_sum_to_one(&w, &j),
                     Some(u) => units_sum_to_one(&k, u, &j),
@@ -407,6 +418,12 @@ pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
                         None => normalized(&mut w, &j),
                         Some(u) => normalized_units(&mut k, u),
                     }
+                    let e = said
+                        .entry(m)
+                        .or_insert((0, f64::INFINITY, f64::NEG_INFINITY));
+                    *e = (e.0 + 1, e.1.min(before), e.2.max(before));
+                }
+                if merged || fits == Some(false) {
                     for (s, (_, wc)) in columns.iter().enumerate() {
                         for c in 0..4 {
                             match unit {
@@ -415,10 +432,6 @@ pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
                             }
                         }
                     }
-                    let e = said
-                        .entry(m)
-                        .or_insert((0, f64::INFINITY, f64::NEG_INFINITY));
-                    *e = (e.0 + 1, e.1.min(before), e.2.max(before));
                 }
                 // A joint with no weight is joint 0 (the validator warns of others): Draco's
                 // quantization rounds a small weight to 0 and keeps its joint, and so may an
@@ -437,15 +450,49 @@ pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
             }
         }
     }
-    said.into_iter()
-        .filter(|&(_, (_, lo, hi))| (1.0 - lo).max(hi - 1.0) > SAID_ABOVE)
-        .map(|(m, (n, lo, hi))| {
-            let name = quoted_name(&json["meshes"][m], || format!("{m}"));
+    let mesh = |m: usize| quoted_name(&json["meshes"][m], || format!("{m}"));
+    let mut lines: Vec<String> = (repeated.into_iter())
+        .map(|(m, n)| {
             format!(
-                "mesh {name}: the skin weights of {n} vertices summed to {lo:.4}-{hi:.4}, not 1 as glTF requires; written divided by their sums"
+                "mesh {}: {n} vertices name a joint more than once (glTF allows it once); written with its weights added",
+                mesh(m)
             )
         })
-        .collect()
+        .collect();
+    lines.extend(
+        (said.into_iter())
+            .filter(|&(_, (_, lo, hi))| (1.0 - lo).max(hi - 1.0) > SAID_ABOVE)
+            .map(|(m, (n, lo, hi))| {
+                format!(
+                    "mesh {}: the skin weights of {n} vertices summed to {lo:.4}-{hi:.4}, not 1 as glTF requires; written divided by their sums",
+                    mesh(m)
+                )
+            }),
+    );
+    lines
+}
+
+/// Weights `w` of joints `j` with each joint named once: a weight on a joint named earlier
+/// added to that one and made 0 (skinning is linear in each joint's weight, so the pose is
+/// the same); whether any was.
+fn merge_repeated_joints<T>(w: &mut [T], j: &[u32]) -> bool
+where
+    T: Copy + PartialEq + Default + std::ops::AddAssign,
+{
+    let zero = T::default();
+    let mut merged = false;
+    for x in 0..w.len() {
+        if w[x] == zero {
+            continue;
+        }
+        if let Some(y) = (0..x).find(|&y| w[y] != zero && j[y] == j[x]) {
+            let v = w[x];
+            w[y] += v;
+            w[x] = zero;
+            merged = true;
+        }
+    }
+    merged
 }
 
 /// Times `t` made increasing where a time equals the one before, each moved by
