@@ -338,8 +338,9 @@ fn rebound_vec4(json: &mut Value, bin: &BinBuilder) {
     }
 }
 
-/// Make every `WEIGHTS_n` set of the output (float or normalized integer) sum to one per vertex (see the module
-/// comment), in place in `bin`; returns a line for each mesh whose sums were off by more than
+/// Make every `WEIGHTS_n` set of the output (float or normalized integer) sum to one per
+/// vertex, each joint named once (see the module comment), in place in `bin`; returns a line
+/// for each mesh with joints named twice, and each whose sums were off by more than
 /// quantization.
 pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
     // Mesh -> (vertices mended, the sums' range before), and vertices with a joint named
@@ -375,74 +376,45 @@ pub fn weights(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
                 continue;
             };
             // Float weights, or normalized integers of one type (their largest value is 1).
-            let unit = match columns[0].1.component {
-                5126 => None,
-                5121 => Some(255),
-                _ => Some(65535),
+            let n = 4 * columns.len();
+            let mut w = match columns[0].1.component {
+                5126 => VertexWeights::Floats(vec![0.0; n]),
+                5121 => VertexWeights::Units(vec![0; n], 255),
+                _ => VertexWeights::Units(vec![0; n], 65535),
             };
-            if columns
-                .iter()
-                .any(|c| c.1.component != columns[0].1.component)
-            {
+            if (columns.iter()).any(|c| c.1.component != columns[0].1.component) {
                 continue;
             }
-            let n = 4 * columns.len();
-            let (mut w, mut k, mut j) = (vec![0f32; n], vec![0u32; n], vec![0u32; n]);
+            let mut j = vec![0u32; n];
             for i in 0..count {
-                for (s, (jc, wc)) in columns.iter().enumerate() {
+                for (s, (jc, _)) in columns.iter().enumerate() {
                     for c in 0..4 {
                         j[4 * s + c] = jc.uint(&bin.bytes, i, c);
-                        match unit {
-                            None => w[4 * s + c] = wc.float(&bin.bytes, i, c),
-                            Some(_) => k[4 * s + c] = wc.uint(&bin.bytes, i, c),
-                        }
                     }
                 }
-                let merged = match unit {
-                    None => merge_repeated_joints(&mut w, &j),
-                    Some(_) => merge_repeated_joints(&mut k, &j),
-                };
+                w.read(&columns, &bin.bytes, i);
+                let merged = w.merge_repeated_joints(&j);
                 if merged {
                     *repeated.entry(m).or_insert(0) += 1;
                 }
-                let fits = match unit {
-                    None => floats_sum_to_one(&w, &j),
-                    Some(u) => units_sum_to_one(&k, u, &j),
-                };
+                let fits = w.sums_to_one(&j);
                 if fits == Some(false) {
-                    let before: f64 = match unit {
-                        None => w.iter().map(|&x| x as f64).sum(),
-                        Some(u) => k.iter().map(|&x| x as f64).sum::<f64>() / u as f64,
-                    };
-                    match unit {
-                        None => normalized(&mut w, &j),
-                        Some(u) => normalized_units(&mut k, u),
-                    }
+                    let before = w.sum();
+                    w.normalize(&j);
                     let e = said
                         .entry(m)
                         .or_insert((0, f64::INFINITY, f64::NEG_INFINITY));
                     *e = (e.0 + 1, e.1.min(before), e.2.max(before));
                 }
                 if merged || fits == Some(false) {
-                    for (s, (_, wc)) in columns.iter().enumerate() {
-                        for c in 0..4 {
-                            match unit {
-                                None => wc.set_float(&mut bin.bytes, i, c, w[4 * s + c]),
-                                Some(_) => wc.set_uint(&mut bin.bytes, i, c, k[4 * s + c]),
-                            }
-                        }
-                    }
+                    w.write(&columns, &mut bin.bytes, i);
                 }
                 // A joint with no weight is joint 0 (the validator warns of others): Draco's
                 // quantization rounds a small weight to 0 and keeps its joint, and so may an
                 // integer weight's share above.
                 for (s, (jc, _)) in columns.iter().enumerate() {
                     for c in 0..4 {
-                        let zero = match unit {
-                            None => w[4 * s + c] == 0.0,
-                            Some(_) => k[4 * s + c] == 0,
-                        };
-                        if zero && j[4 * s + c] != 0 {
+                        if w.is_zero(4 * s + c) && j[4 * s + c] != 0 {
                             jc.set_uint(&mut bin.bytes, i, c, 0);
                         }
                     }
@@ -493,6 +465,78 @@ where
         }
     }
     merged
+}
+
+/// One vertex's skin weights as stored, across its `WEIGHTS_n` sets: floats, or normalized
+/// integers with their type's largest value (255, 65535: the validator's 1).
+enum VertexWeights {
+    Floats(Vec<f32>),
+    Units(Vec<u32>, u32),
+}
+
+impl VertexWeights {
+    /// Vertex `i`'s weights from the weights columns of `columns` (joints, weights).
+    fn read(&mut self, columns: &[(Column, Column)], bytes: &[u8], i: usize) {
+        for (s, (_, wc)) in columns.iter().enumerate() {
+            for c in 0..4 {
+                match self {
+                    VertexWeights::Floats(w) => w[4 * s + c] = wc.float(bytes, i, c),
+                    VertexWeights::Units(k, _) => k[4 * s + c] = wc.uint(bytes, i, c),
+                }
+            }
+        }
+    }
+
+    /// Vertex `i`'s weights written back into `columns`.
+    fn write(&self, columns: &[(Column, Column)], bytes: &mut [u8], i: usize) {
+        for (s, (_, wc)) in columns.iter().enumerate() {
+            for c in 0..4 {
+                match self {
+                    VertexWeights::Floats(w) => wc.set_float(bytes, i, c, w[4 * s + c]),
+                    VertexWeights::Units(k, _) => wc.set_uint(bytes, i, c, k[4 * s + c]),
+                }
+            }
+        }
+    }
+
+    fn merge_repeated_joints(&mut self, j: &[u32]) -> bool {
+        match self {
+            VertexWeights::Floats(w) => merge_repeated_joints(w, j),
+            VertexWeights::Units(k, _) => merge_repeated_joints(k, j),
+        }
+    }
+
+    fn sums_to_one(&self, j: &[u32]) -> Option<bool> {
+        match self {
+            VertexWeights::Floats(w) => floats_sum_to_one(w, j),
+            VertexWeights::Units(k, unit) => units_sum_to_one(k, *unit, j),
+        }
+    }
+
+    /// The weights' sum, as the validator reads them.
+    fn sum(&self) -> f64 {
+        match self {
+            VertexWeights::Floats(w) => w.iter().map(|&x| x as f64).sum(),
+            VertexWeights::Units(k, unit) => {
+                k.iter().map(|&x| x as f64).sum::<f64>() / *unit as f64
+            }
+        }
+    }
+
+    /// The weights made to sum to one ([`normalized`], [`normalized_units`]).
+    fn normalize(&mut self, j: &[u32]) {
+        match self {
+            VertexWeights::Floats(w) => normalized(w, j),
+            VertexWeights::Units(k, unit) => normalized_units(k, *unit),
+        }
+    }
+
+    fn is_zero(&self, x: usize) -> bool {
+        match self {
+            VertexWeights::Floats(w) => w[x] == 0.0,
+            VertexWeights::Units(k, _) => k[x] == 0,
+        }
+    }
 }
 
 /// Times `t` made increasing where a time equals the one before, each moved by
