@@ -1500,6 +1500,93 @@ fn a_channel_repeating_another_is_left_out() {
     );
 }
 
+/// An index accessor holding its type's largest value (255 in 8 bits, 65535 in 16: the
+/// primitive restart index, which WebGL 2 always applies and the validator refuses), as a
+/// writer numbering a 16 x 16 grid's 256 vertices in 8 bits (or a 256 x 256 grid's in 16)
+/// leaves it: the triangles of the last vertex were dropped by browsers, and the error carried
+/// into the output. Written as 32-bit indices, the same values, said in a line.
+#[test]
+fn indices_holding_the_restart_value_are_written_in_32_bits() {
+    use serde_json::json;
+    let n = 16u32;
+    let mut bin = Vec::new();
+    let mut push = |bytes: Vec<u8>| -> (usize, usize) {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let at = bin.len();
+        bin.extend(bytes);
+        (at, bin.len() - at)
+    };
+    let grid = |z: &dyn Fn(f32, f32) -> f32| -> Vec<u8> {
+        (0..n * n)
+            .flat_map(|v| {
+                let (x, y) = ((v % n) as f32 / 15.0, (v / n) as f32 / 15.0);
+                [x, y, z(x, y)]
+            })
+            .flat_map(f32::to_le_bytes)
+            .collect()
+    };
+    let indices: Vec<u8> = (0..n - 1)
+        .flat_map(|y| (0..n - 1).map(move |x| (y * n + x) as u8))
+        .flat_map(|a| [a, a + 16, a + 1, a + 1, a + 16, a.wrapping_add(17)])
+        .collect();
+    assert!(indices.contains(&255));
+    let views: Vec<(usize, usize)> = vec![
+        push(grid(&|_, _| 0.0)),
+        push(grid(&|_, y| 0.2 * y)),
+        push(grid(&|x, _| (x * 3.0).sin() * 0.3)),
+        push(indices.clone()),
+        push([0f32, 1.0].iter().flat_map(|t| t.to_le_bytes()).collect()),
+        push(
+            [1f32, 0.0, 0.0, 1.0]
+                .iter()
+                .flat_map(|t| t.to_le_bytes())
+                .collect(),
+        ),
+    ];
+    let view =
+        |(at, len): (usize, usize)| json!({ "buffer": 0, "byteOffset": at, "byteLength": len });
+    let vec3 = |v: usize, hi: f32| {
+        json!({ "bufferView": v, "componentType": 5126, "count": n * n,
+        "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, hi] })
+    };
+    let (t1, t2) = (0.2, (8.0f32 / 15.0 * 3.0).sin() * 0.3);
+    let j = json!({
+        "asset": { "version": "2.0" }, "scene": 0, "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 3,
+            "targets": [{ "POSITION": 1 }, { "POSITION": 2 }] }], "weights": [0, 0] }],
+        "animations": [{ "channels": [{ "sampler": 0, "target": { "node": 0, "path": "weights" } }],
+            "samplers": [{ "input": 4, "output": 5 }] }],
+        "accessors": [
+            vec3(0, 0.0), vec3(1, t1), vec3(2, t2),
+            { "bufferView": 3, "componentType": 5121, "count": indices.len(), "type": "SCALAR" },
+            { "bufferView": 4, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1] },
+            { "bufferView": 5, "componentType": 5126, "count": 4, "type": "SCALAR" }
+        ],
+        "bufferViews": views.iter().map(|&v| view(v)).collect::<Vec<_>>(),
+        "buffers": [{ "byteLength": bin.len() }]
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("grid.glb"), dir.path().join("out.glb"));
+    write_glb(&input, &j, &bin);
+    if let Some((_, _, line)) = validate(&input) {
+        assert!(line.contains("ACCESSOR_INDEX_PRIMITIVE_RESTART"), "{line}");
+    }
+    let told = run_ok(&["tween", s(&input), "-o", s(&out)]);
+    let err = String::from_utf8_lossy(&told.stderr);
+    assert!(
+        err.contains("1 index accessor (3) held its type's largest value"),
+        "{err}"
+    );
+    assert_valid(&out);
+    let written = Document::open(&out).unwrap();
+    assert_eq!(written.json["accessors"][3]["componentType"], 5125);
+    let read: Vec<u32> = written.read_indices(3).unwrap();
+    assert_eq!(read, indices.iter().map(|&i| i as u32).collect::<Vec<_>>());
+}
+
 /// Bounds glTF requires and a writer left out (every morph target's POSITION and the weights'
 /// key times of Parrot without their min/max: 13 validator errors, carried into the output):
 /// written from the values, said in a line, the targets' the same as the original file
