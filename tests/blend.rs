@@ -543,6 +543,79 @@ fn a_joint_named_twice_by_a_vertex_gets_its_weights_added() {
     );
 }
 
+/// A byteStride on views that no vertex data reads (the validator's
+/// ANIMATION_SAMPLER_ACCESSOR_WITH_BYTESTRIDE and SKIN_IBM_ACCESSOR_WITH_BYTESTRIDE, as
+/// Sketchfab's exports and the old Khronos Fox stride their animation data) was carried into
+/// the output. Left out: Fox with its inverse bind matrices' view strided 64 and its walk's
+/// key times' 4 blends to the original's bytes; with the key times interleaved (stride 8, a
+/// junk float between times) they are written packed into a view of their own, read the same.
+#[test]
+fn a_stride_on_animation_and_skin_views_is_left_out() {
+    let Some((dir, doc, mut json, mut bin)) = editable("Fox") else {
+        return;
+    };
+    let ibm = json["skins"][0]["inverseBindMatrices"].as_u64().unwrap() as usize;
+    let walk = (json["animations"].as_array().unwrap().iter())
+        .position(|a| a["name"] == "Walk")
+        .unwrap();
+    let times = json["animations"][walk]["samplers"][0]["input"]
+        .as_u64()
+        .unwrap() as usize;
+    let view_of = |json: &Value, a: usize| json["accessors"][a]["bufferView"].as_u64().unwrap();
+    let blend = |input: &Path, name: &str| {
+        let out = dir.path().join(name);
+        let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+        let r = run_ok(&["blend", i, "--clips", "Walk", "Run", "-o", o]);
+        if let Some((errors, _, line)) = validate(&out) {
+            assert_eq!(errors, 0, "{line}");
+        }
+        (out, String::from_utf8_lossy(&r.stderr).into_owned())
+    };
+    let (original, _) = blend(&fixtures().unwrap().join("skinned/Fox.glb"), "original.glb");
+    for (a, stride) in [(ibm, 64), (times, 4)] {
+        let v = view_of(&json, a) as usize;
+        json["bufferViews"][v]["byteStride"] = stride.into();
+    }
+    let strided = dir.path().join("strided.glb");
+    write_glb(&strided, &json, &bin);
+    let (out, err) = blend(&strided, "strided_out.glb");
+    assert!(
+        err.contains("2 buffer views") && err.contains("had a byteStride"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        std::fs::read(&original).unwrap()
+    );
+    // The walk's times interleaved with a junk float each, in a view of their own.
+    let (want, _) = doc.read_f64(times).unwrap();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let at = bin.len();
+    for t in &want {
+        bin.extend((*t as f32).to_le_bytes());
+        bin.extend(7.5f32.to_le_bytes());
+    }
+    let views = json["bufferViews"].as_array_mut().unwrap();
+    views.push(
+        serde_json::json!({ "buffer": 0, "byteOffset": at, "byteLength": 8 * want.len(),
+        "byteStride": 8 }),
+    );
+    json["accessors"][times]["bufferView"] = (views.len() - 1).into();
+    json["accessors"][times]
+        .as_object_mut()
+        .unwrap()
+        .remove("byteOffset");
+    json["buffers"][0]["byteLength"] = bin.len().into();
+    let interleaved = dir.path().join("interleaved.glb");
+    write_glb(&interleaved, &json, &bin);
+    let (out, err) = blend(&interleaved, "interleaved_out.glb");
+    assert!(err.contains("had a byteStride"), "{err}");
+    let written = Document::open(&out).unwrap();
+    assert_eq!(written.read_f64(times).unwrap().0, want);
+}
+
 /// A key time repeated (glTF asks for increasing times; an exporter's hold, or two samples of
 /// a bake rounded to one time: Fox's walk with its sixth time set to its fifth, 21 validator
 /// errors) was refused ("the key times ... do not increase"). It is read as a step to the
