@@ -6,8 +6,9 @@
 //! triangles; [`channel`]: animation channels read and evaluated, nodes' rest transforms;
 //! [`skin`]: skinned points at any pose; [`instancing`]: a node's mesh instances) ... the
 //! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`];
-//! [`mend`]: skin weights that do not sum to one and rotation keys off unit length mended as
-//! the input is copied) -> [`mod@reorder`] (with meshopt: triangles and vertices in mesh
+//! [`mend`]: what the input breaks of glTF's rules, one mend a file, made right as it is
+//! copied: skin weights, rotation keys, key times, indices, strides, bounds, normals, sparse
+//! parts, repeated channels and empty clips) -> [`mod@reorder`] (with meshopt: triangles and vertices in mesh
 //! order) -> [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`]
 //! (meshopt compression, when asked for) -> [`write`] (`.glb` or `.gltf` with its `.bin` and
 //! images, staged as one all-or-nothing set of files).
