@@ -616,6 +616,61 @@ fn a_stride_on_animation_and_skin_views_is_left_out() {
     assert_eq!(written.read_f64(times).unwrap().0, want);
 }
 
+/// A clip whose key times start before 0 s (the validator's ACCESSOR_ANIMATION_INPUT_NEGATIVE,
+/// which Blender's exports have carried: Fox's walk 0.5 s earlier, 273 errors) was copied into
+/// the output as it was. It is written moved later as a whole, its first key at 0 s, said in a
+/// line: the blend as the original's, the walk's times the original's.
+#[test]
+fn a_clip_starting_before_zero_is_written_from_zero() {
+    let Some((dir, doc, mut json, mut bin)) = editable("Fox") else {
+        return;
+    };
+    let walk = (json["animations"].as_array().unwrap().iter())
+        .position(|a| a["name"] == "Walk")
+        .unwrap();
+    let times = json["animations"][walk]["samplers"][0]["input"]
+        .as_u64()
+        .unwrap() as usize;
+    let (original, _) = doc.read_f64(times).unwrap();
+    let (start, _) = accessor_bytes(&json, times, 4);
+    for (k, t) in original.iter().enumerate() {
+        let at = start + 4 * k;
+        bin[at..at + 4].copy_from_slice(&((t - 0.5) as f32).to_le_bytes());
+    }
+    for key in ["min", "max"] {
+        let v = json["accessors"][times][key][0].as_f64().unwrap();
+        json["accessors"][times][key] = serde_json::json!([(v - 0.5) as f32]);
+    }
+    let early = dir.path().join("early.glb");
+    write_glb(&early, &json, &bin);
+    let (out, a) = (dir.path().join("out.glb"), dir.path().join("a.glb"));
+    let (i, o) = (early.to_str().unwrap(), out.to_str().unwrap());
+    let r = run_ok(&["blend", i, "--clips", "Walk", "Run", "-o", o]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("animation \"Walk\": key times from -0.5000 s"),
+        "{err}"
+    );
+    if let Some((errors, _, line)) = validate(&out) {
+        assert_eq!(errors, 0, "{line}");
+    }
+    let written = Document::open(&out).unwrap();
+    let moved = written.json["animations"][walk]["samplers"][0]["input"].as_u64();
+    let (got, _) = written.read_f64(moved.unwrap() as usize).unwrap();
+    for (g, t) in got.iter().zip(&original) {
+        assert!((g - t).abs() < 1e-6, "{g} against {t}");
+    }
+    let fox = fixtures().unwrap().join("skinned/Fox.glb");
+    let rep = |input: &Path, out: &Path| blend_report(input, "Walk", "Run", 0.5, out, &[]);
+    let (x, y) = (rep(&early, &out), rep(&fox, &a));
+    assert_eq!(x["result"]["frames"], y["result"]["frames"]);
+    // The same blend but for the times' single-precision rounding (-0.5 and back).
+    let (fx, fy) = (report_figures(&x), report_figures(&y));
+    for (p, q) in [(fx.0, fy.0), (fx.2, fy.2), (fx.3, fy.3)] {
+        assert!((p - q).abs() < 1e-6, "{p} against {q}");
+    }
+}
+
 /// A key time repeated (glTF asks for increasing times; an exporter's hold, or two samples of
 /// a bake rounded to one time: Fox's walk with its sixth time set to its fifth, 21 validator
 /// errors) was refused ("the key times ... do not increase"). It is read as a step to the

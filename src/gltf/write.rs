@@ -59,6 +59,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     mended.extend(mend::sparse_parts(doc, &mut json, &mut bin));
     mended.extend(mend::empty_animations(&json));
     mended.extend(mend::repeated_channels(&json));
+    mended.extend(mend::negative_times(&json, &bin));
     Ok(Output {
         json,
         bin,
@@ -214,6 +215,7 @@ pub fn glb_bytes(mut out: Output, path: &Path) -> Result<Vec<u8>> {
 /// Finish `out`'s JSON for writing: meshopt compression where asked, the views and buffers in
 /// place; returns the binary chunk (padded to 4 bytes) and, for a `.gltf`, the `.bin`'s name.
 fn assemble(out: &mut Output, container: Container, path: &Path) -> (Vec<u8>, Option<String>) {
+    mend::start_at_zero(&mut out.json, &mut out.bin);
     mend::drop_repeated_channels(&mut out.json);
     mend::drop_empty_animations(&mut out.json);
     let fallback = if out.meshopt { encode::meshopt(out) } else { 0 };

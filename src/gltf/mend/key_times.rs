@@ -2,12 +2,16 @@
 //! hold, two samples of a bake rounded to one time), which the readers take as a step to the
 //! later key, is moved a single-precision step on (the run's last back from a clip's end), the
 //! first and last times kept so the accessor's bounds hold. A time that goes back is left (the
-//! readers refuse it on a node's channel).
+//! readers refuse it on a node's channel). A clip whose times start before 0 s (Blender's
+//! exports have written such) is moved later as a whole when the output is written
+//! ([`start_at_zero`]; `tween` moves a clip it tweens with its frames already), said at the
+//! start ([`negative_times`]).
 
 use super::Column;
-use crate::gltf::build::BinBuilder;
+use crate::gltf::build::{set_bounds, BinBuilder};
 use crate::gltf::read::{arr, quoted_name};
 use serde_json::Value;
+use std::collections::BTreeMap;
 
 /// Times `t` made increasing where a time equals the one before, each moved by
 /// single-precision steps, the first and last kept (so the accessor's bounds hold): later ones
@@ -73,6 +77,91 @@ pub fn key_times(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
         }
     }
     lines
+}
+
+/// The key times of every sampler of animation `anim` in `json`/`bin` (float accessors), by
+/// input accessor; `None` where one does not read so.
+fn sampler_times(
+    json: &Value,
+    bin: &BinBuilder,
+    anim: &Value,
+) -> Option<BTreeMap<usize, Vec<f32>>> {
+    let mut times = BTreeMap::new();
+    for sampler in arr(anim, "samplers") {
+        let input = sampler["input"].as_u64()? as usize;
+        let count = json["accessors"][input]["count"].as_u64()? as usize;
+        let column =
+            Column::of_width(json, bin, input, count, 1).filter(|c| c.component == 5126)?;
+        times.insert(
+            input,
+            (0..count).map(|i| column.float(&bin.bytes, i, 0)).collect(),
+        );
+    }
+    Some(times)
+}
+
+/// The earliest key time of `times`, where it is before 0 s.
+fn negative_start(times: &BTreeMap<usize, Vec<f32>>) -> Option<f64> {
+    let first = (times.values().flatten()).fold(f64::INFINITY, |m, &t| m.min(t as f64));
+    (first < 0.0).then_some(first)
+}
+
+/// A line for each animation of the input whose key times start before 0 s (glTF's times may
+/// not be negative; Blender's exports have written such clips): [`start_at_zero`] moves it when
+/// the output is written.
+pub fn negative_times(json: &Value, bin: &BinBuilder) -> Vec<String> {
+    let mut lines = Vec::new();
+    for (a, anim) in arr(json, "animations").iter().enumerate() {
+        let Some(first) = sampler_times(json, bin, anim).and_then(|t| negative_start(&t)) else {
+            continue;
+        };
+        let name = quoted_name(anim, || format!("{a}"));
+        lines.push(format!(
+            "animation {name}: key times from {first:.4} s, before the 0 s glTF starts at; written {:.4} s later, the clip as a whole",
+            -first
+        ));
+    }
+    lines
+}
+
+/// Every animation whose key times still start before 0 s when the output is written (one
+/// `tween` did not move with its frames, or one copied as it was) moved later as a whole, its
+/// first key at 0 s: each sampler's times into an accessor of their own (an accessor may be
+/// shared with other clips), declared bounds with them.
+pub fn start_at_zero(json: &mut Value, bin: &mut BinBuilder) {
+    for a in 0..arr(json, "animations").len() {
+        let anim = &json["animations"][a];
+        let Some(times) = sampler_times(json, bin, anim) else {
+            continue;
+        };
+        let Some(first) = negative_start(&times) else {
+            continue;
+        };
+        let mut moved = BTreeMap::new();
+        for (input, t) in times {
+            let t: Vec<f32> = t.iter().map(|&x| (x as f64 - first) as f32).collect();
+            let t = increasing_times(&t).unwrap_or(t);
+            let view = bin.push_f32_view(&t, None);
+            let mut acc = serde_json::json!({ "bufferView": view, "componentType": 5126,
+                "count": t.len(), "type": "SCALAR" });
+            set_bounds(&mut acc, &t, 1);
+            let list = json["accessors"]
+                .as_array_mut()
+                .expect("the accessors were read");
+            list.push(acc);
+            moved.insert(input, list.len() - 1);
+        }
+        for sampler in json["animations"][a]["samplers"]
+            .as_array_mut()
+            .into_iter()
+            .flatten()
+        {
+            let input = sampler["input"].as_u64().unwrap_or(u64::MAX) as usize;
+            if let Some(&m) = moved.get(&input) {
+                sampler["input"] = m.into();
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -6,8 +6,8 @@
 //! The mends, one a file, in the order `begin` runs them: [`weights`] (and joints named twice),
 //! [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the bounds of the VEC4
 //! data these change) in [`all`]; then [`bounds`], [`normals`], [`sparse_parts`], and the
-//! animations ([`empty_animations`], [`repeated_channels`]: the channels and clips left out
-//! when the output is written).
+//! animations ([`empty_animations`], [`repeated_channels`], [`negative_times`]: the channels and
+//! clips left out, and the clips moved to start at 0 s, when the output is written).
 
 mod animations;
 mod bounds;
@@ -24,7 +24,7 @@ pub use animations::{
 };
 pub use bounds::bounds;
 pub use indices::restart_indices;
-pub use key_times::key_times;
+pub use key_times::{key_times, negative_times, start_at_zero};
 pub use normals::normals;
 pub use rotations::rotations;
 pub use sparse::sparse_parts;
