@@ -555,12 +555,7 @@ fn a_stride_on_animation_and_skin_views_is_left_out() {
         return;
     };
     let ibm = json["skins"][0]["inverseBindMatrices"].as_u64().unwrap() as usize;
-    let walk = (json["animations"].as_array().unwrap().iter())
-        .position(|a| a["name"] == "Walk")
-        .unwrap();
-    let times = json["animations"][walk]["samplers"][0]["input"]
-        .as_u64()
-        .unwrap() as usize;
+    let (_, times) = walk_times(&json);
     let view_of = |json: &Value, a: usize| json["accessors"][a]["bufferView"].as_u64().unwrap();
     let blend = |input: &Path, name: &str| {
         let out = dir.path().join(name);
@@ -625,12 +620,7 @@ fn a_clip_starting_before_zero_is_written_from_zero() {
     let Some((dir, doc, mut json, mut bin)) = editable("Fox") else {
         return;
     };
-    let walk = (json["animations"].as_array().unwrap().iter())
-        .position(|a| a["name"] == "Walk")
-        .unwrap();
-    let times = json["animations"][walk]["samplers"][0]["input"]
-        .as_u64()
-        .unwrap() as usize;
+    let (walk, times) = walk_times(&json);
     let (original, _) = doc.read_f64(times).unwrap();
     let (start, _) = accessor_bytes(&json, times, 4);
     for (k, t) in original.iter().enumerate() {
@@ -644,17 +634,8 @@ fn a_clip_starting_before_zero_is_written_from_zero() {
     let early = dir.path().join("early.glb");
     write_glb(&early, &json, &bin);
     let (out, a) = (dir.path().join("out.glb"), dir.path().join("a.glb"));
-    let (i, o) = (early.to_str().unwrap(), out.to_str().unwrap());
-    let r = run_ok(&["blend", i, "--clips", "Walk", "Run", "-o", o]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert!(
-        err.contains("animation \"Walk\": key times from -0.5000 s"),
-        "{err}"
-    );
-    if let Some((errors, _, line)) = validate(&out) {
-        assert_eq!(errors, 0, "{line}");
-    }
-    let written = Document::open(&out).unwrap();
+    let said = "animation \"Walk\": key times from -0.5000 s";
+    let written = walk_run_saying(&early, &out, said);
     let moved = written.json["animations"][walk]["samplers"][0]["input"].as_u64();
     let (got, _) = written.read_f64(moved.unwrap() as usize).unwrap();
     for (g, t) in got.iter().zip(&original) {
@@ -694,17 +675,8 @@ fn a_repeated_key_time_is_read_as_a_step_and_written_increasing() {
     let edited = dir.path().join("repeated.glb");
     write_glb(&edited, &json, &bin);
     let out = dir.path().join("out.glb");
-    let (i, o) = (edited.to_str().unwrap(), out.to_str().unwrap());
-    let r = run_ok(&["blend", i, "--clips", "Walk", "Run", "-o", o]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert!(
-        err.contains("animation \"Walk\": 1 key time equal to the one before"),
-        "{err}"
-    );
-    if let Some((errors, _, line)) = validate(&out) {
-        assert_eq!(errors, 0, "{line}");
-    }
-    let written = Document::open(&out).unwrap();
+    let said = "animation \"Walk\": 1 key time equal to the one before";
+    let written = walk_run_saying(&edited, &out, said);
     let (wj, wb) = (&written.json, &written.buffers[0]);
     let (at, _) = accessor_bytes(wj, input, 4);
     let count = wj["accessors"][input]["count"].as_u64().unwrap() as usize;
@@ -2328,6 +2300,28 @@ fn editable(name: &str) -> Option<(tempfile::TempDir, Document, Value, Vec<u8>)>
     let doc = Document::open(&fixtures()?.join(format!("skinned/{name}.glb"))).unwrap();
     let (json, bin) = (doc.json.clone(), doc.buffers[0].clone());
     Some((tempfile::tempdir().unwrap(), doc, json, bin))
+}
+
+/// Fox's walk in `json`: its animation's index and its first sampler's key-time accessor.
+fn walk_times(json: &Value) -> (usize, usize) {
+    let walk = (json["animations"].as_array().unwrap().iter())
+        .position(|a| a["name"] == "Walk")
+        .unwrap();
+    let times = json["animations"][walk]["samplers"][0]["input"].as_u64();
+    (walk, times.unwrap() as usize)
+}
+
+/// `blend` of the Walk and Run of `input` (Fox edited) to `out`, which must say `said` and pass
+/// the validator; the written document.
+fn walk_run_saying(input: &Path, out: &Path, said: &str) -> Document {
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let r = run_ok(&["blend", i, "--clips", "Walk", "Run", "-o", o]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains(said), "{err}");
+    if let Some((errors, _, line)) = validate(out) {
+        assert_eq!(errors, 0, "{line}");
+    }
+    Document::open(out).unwrap()
 }
 
 /// `blend` of RobotExpressive's Walking and Running in `input` to `out`; what it said on stderr.
