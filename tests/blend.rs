@@ -652,6 +652,70 @@ fn a_clip_starting_before_zero_is_written_from_zero() {
     }
 }
 
+/// A node given by a matrix (glTF's other way to place a node; Sketchfab's exports write
+/// them) that the sources leave still but the blend moves (Fox's `_rootJoint`, which the
+/// alignment carries) got a translation channel beside its matrix: the validator's
+/// ANIMATION_CHANNEL_TARGET_NODE_MATRIX, a channel players leave unplayed. It is written as the
+/// translation, rotation and scale it is; the blend as the original's.
+#[test]
+fn a_node_given_by_a_matrix_that_the_blend_moves_is_written_as_trs() {
+    let Some((dir, _, mut json, bin)) = editable("Fox") else {
+        return;
+    };
+    let animated: std::collections::BTreeSet<u64> = (json["animations"].as_array().unwrap())
+        .iter()
+        .flat_map(|a| a["channels"].as_array().unwrap().iter())
+        .filter_map(|c| c["target"]["node"].as_u64())
+        .collect();
+    let num = |v: &Value, k: usize, d: f64| v.get(k).and_then(Value::as_f64).unwrap_or(d);
+    let mut converted = Vec::new();
+    for (i, node) in json["nodes"].as_array_mut().unwrap().iter_mut().enumerate() {
+        if animated.contains(&(i as u64)) {
+            continue;
+        }
+        let o = node.as_object_mut().unwrap();
+        let (t, r, s) = (
+            o.remove("translation").unwrap_or(Value::Null),
+            o.remove("rotation").unwrap_or(Value::Null),
+            o.remove("scale").unwrap_or(Value::Null),
+        );
+        let m = glam::DMat4::from_scale_rotation_translation(
+            glam::DVec3::new(num(&s, 0, 1.0), num(&s, 1, 1.0), num(&s, 2, 1.0)),
+            glam::DQuat::from_xyzw(
+                num(&r, 0, 0.0),
+                num(&r, 1, 0.0),
+                num(&r, 2, 0.0),
+                num(&r, 3, 1.0),
+            ),
+            glam::DVec3::new(num(&t, 0, 0.0), num(&t, 1, 0.0), num(&t, 2, 0.0)),
+        );
+        o.insert("matrix".into(), serde_json::json!(m.to_cols_array()));
+        converted.push(i);
+    }
+    assert!(converted.contains(&2), "{converted:?}");
+    let input = dir.path().join("matrices.glb");
+    write_glb(&input, &json, &bin);
+    if let Some((errors, _, line)) = validate(&input) {
+        assert_eq!(errors, 0, "{line}");
+    }
+    let (out, a) = (dir.path().join("out.glb"), dir.path().join("a.glb"));
+    let written = walk_run_saying(&input, &out, "");
+    let root = &written.json["nodes"][2];
+    assert!(
+        root.get("matrix").is_none() && root.get("translation").is_some(),
+        "{root}"
+    );
+    let fox = fixtures().unwrap().join("skinned/Fox.glb");
+    let rep = |input: &Path, out: &Path| blend_report(input, "Walk", "Run", 0.5, out, &[]);
+    let (x, y) = (
+        report_figures(&rep(&input, &out)),
+        report_figures(&rep(&fox, &a)),
+    );
+    for (p, q) in [(x.0, y.0), (x.2, y.2), (x.3, y.3)] {
+        assert!((p - q).abs() < 1e-9, "{p} against {q}");
+    }
+}
+
 /// A key time repeated (glTF asks for increasing times; an exporter's hold, or two samples of
 /// a bake rounded to one time: Fox's walk with its sixth time set to its fifth, 21 validator
 /// errors) was refused ("the key times ... do not increase"). It is read as a step to the

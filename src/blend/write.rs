@@ -1,11 +1,13 @@
 //! The blended clip as one more animation of the input document: one time accessor shared by
 //! LINEAR samplers, a channel for every property either source animates and for every joint the
-//! alignment or the clean-up moved. Nothing else in the document changes.
+//! alignment or the clean-up moved. Nothing else in the document changes, but a node given by
+//! a matrix that a channel now animates, which is written as its translation, rotation and
+//! scale (glTF animates those alone).
 
 use super::rig::{Path, Pose, Rig, Trs};
 use crate::gltf::Output;
-use glam::DQuat;
-use serde_json::json;
+use glam::{DMat4, DQuat};
+use serde_json::{json, Value};
 use std::collections::BTreeSet;
 
 /// A property whose values stay within this of the rest value is not given a channel (unless a
@@ -43,6 +45,28 @@ pub fn channels(
         }
     }
     out
+}
+
+/// Node `node` of `out` with its `matrix`, if it has one, written as the translation, rotation
+/// and scale it is (as [`super::rig`] reads it): glTF animates those alone, so a channel on a
+/// node given by a matrix (a joint the sources leave still, which the alignment or the
+/// clean-up moves) is refused by the validator and left unplayed by players.
+fn trs_instead_of_matrix(out: &mut Output, node: usize) {
+    let n = &mut out.json["nodes"][node];
+    let Some(m) = n.get("matrix").and_then(Value::as_array) else {
+        return;
+    };
+    let cols: Vec<f64> = (0..16)
+        .map(|k| m.get(k).and_then(Value::as_f64).unwrap_or(0.0))
+        .collect();
+    let trs = Trs::from_matrix(&DMat4::from_cols_slice(&cols));
+    let o = n
+        .as_object_mut()
+        .expect("a node with a matrix is an object");
+    o.remove("matrix");
+    o.insert("translation".into(), json!(trs.t.to_array()));
+    o.insert("rotation".into(), json!(trs.r.normalize().to_array()));
+    o.insert("scale".into(), json!(trs.s.to_array()));
 }
 
 /// Append the clip as animation `name`; returns its index.
@@ -99,6 +123,9 @@ pub fn append_animation(
                 (v, "SCALAR", 1)
             }
         };
+        if path != Path::Weights {
+            trs_instead_of_matrix(out, node);
+        }
         let output = out.push_f32(&data, ty, ncomp, false, None);
         samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
         chans.push(json!({
