@@ -6,8 +6,8 @@
 
 use super::rig::{Path, Pose, Rig, Trs};
 use crate::gltf::Output;
-use glam::{DMat4, DQuat};
-use serde_json::{json, Value};
+use glam::DQuat;
+use serde_json::json;
 use std::collections::BTreeSet;
 
 /// A property whose values stay within this of the rest value is not given a channel (unless a
@@ -48,25 +48,22 @@ pub fn channels(
 }
 
 /// Node `node` of `out` with its `matrix`, if it has one, written as the translation, rotation
-/// and scale it is (as [`super::rig`] reads it): glTF animates those alone, so a channel on a
+/// and scale it is ([`crate::gltf::rest_trs`]): glTF animates those alone, so a channel on a
 /// node given by a matrix (a joint the sources leave still, which the alignment or the
 /// clean-up moves) is refused by the validator and left unplayed by players.
 fn trs_instead_of_matrix(out: &mut Output, node: usize) {
     let n = &mut out.json["nodes"][node];
-    let Some(m) = n.get("matrix").and_then(Value::as_array) else {
+    if n.get("matrix").is_none() {
         return;
-    };
-    let cols: Vec<f64> = (0..16)
-        .map(|k| m.get(k).and_then(Value::as_f64).unwrap_or(0.0))
-        .collect();
-    let trs = Trs::from_matrix(&DMat4::from_cols_slice(&cols));
+    }
+    let (t, r, s) = crate::gltf::rest_trs(n);
     let o = n
         .as_object_mut()
         .expect("a node with a matrix is an object");
     o.remove("matrix");
-    o.insert("translation".into(), json!(trs.t.to_array()));
-    o.insert("rotation".into(), json!(trs.r.normalize().to_array()));
-    o.insert("scale".into(), json!(trs.s.to_array()));
+    o.insert("translation".into(), json!(t.to_array()));
+    o.insert("rotation".into(), json!(r.to_array()));
+    o.insert("scale".into(), json!(s.to_array()));
 }
 
 /// Append the clip as animation `name`; returns its index.

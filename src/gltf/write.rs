@@ -215,7 +215,7 @@ pub fn glb_bytes(mut out: Output, path: &Path) -> Result<Vec<u8>> {
 /// Finish `out`'s JSON for writing: meshopt compression where asked, the views and buffers in
 /// place; returns the binary chunk (padded to 4 bytes) and, for a `.gltf`, the `.bin`'s name.
 fn assemble(out: &mut Output, container: Container, path: &Path) -> (Vec<u8>, Option<String>) {
-    mend::start_at_zero(&mut out.json, &mut out.bin);
+    mend::start_at_zero(out);
     mend::drop_repeated_channels(&mut out.json);
     mend::drop_empty_animations(&mut out.json);
     let fallback = if out.meshopt { encode::meshopt(out) } else { 0 };

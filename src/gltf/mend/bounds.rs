@@ -9,7 +9,7 @@
 //! Bounds glTF requires and a writer left out (every POSITION's, a morph target's included,
 //! and every sampler's key times) are written from the values of a float accessor.
 
-use super::{said_of, Column};
+use super::{attribute_sets, said_of, Column};
 use crate::gltf::build::{f32_json, min_max, BinBuilder};
 use crate::gltf::read::{arr, Document};
 use serde_json::Value;
@@ -140,13 +140,8 @@ pub fn bounds(doc: &Document, json: &mut Value) -> Vec<String> {
 /// POSITION, and every animation sampler's key times.
 fn bounded_by_rule(json: &Value) -> std::collections::BTreeSet<usize> {
     let mut required = std::collections::BTreeSet::new();
-    for mesh in arr(json, "meshes") {
-        for p in arr(mesh, "primitives") {
-            let targets = arr(p, "targets").iter();
-            for attrs in std::iter::once(&p["attributes"]).chain(targets) {
-                required.extend(attrs["POSITION"].as_u64().map(|a| a as usize));
-            }
-        }
+    for attrs in attribute_sets(json) {
+        required.extend(attrs["POSITION"].as_u64().map(|a| a as usize));
     }
     for anim in arr(json, "animations") {
         for sampler in arr(anim, "samplers") {

@@ -8,7 +8,7 @@
 //! start ([`negative_times`]).
 
 use super::Column;
-use crate::gltf::build::{set_bounds, BinBuilder};
+use crate::gltf::build::{BinBuilder, Output};
 use crate::gltf::read::{arr, quoted_name};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -38,6 +38,15 @@ fn increasing_times(t: &[f32]) -> Option<Vec<f32>> {
     m.windows(2).all(|w| w[1] > w[0]).then_some(m)
 }
 
+/// Key-time accessor `input` of `json` in `bin` (a plain float SCALAR accessor): where it lies,
+/// and its times.
+fn times_of(json: &Value, bin: &BinBuilder, input: usize) -> Option<(Column, Vec<f32>)> {
+    let count = json["accessors"][input]["count"].as_u64()? as usize;
+    let column = Column::of_width(json, bin, input, count, 1).filter(|c| c.component == 5126)?;
+    let times = (0..count).map(|i| column.float(&bin.bytes, i, 0)).collect();
+    Some((column, times))
+}
+
 /// Make every float key-time accessor of the output's animations increasing (see
 /// [`increasing_times`]), in place in `bin`; returns a line for each animation with such
 /// times. A repeated time is a step between its keys, which the moved time keeps within a
@@ -51,13 +60,10 @@ pub fn key_times(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
             let Some(input) = sampler["input"].as_u64().map(|i| i as usize) else {
                 continue;
             };
-            let count = json["accessors"][input]["count"].as_u64().unwrap_or(0) as usize;
-            let column =
-                Column::of_width(json, bin, input, count, 1).filter(|c| c.component == 5126);
-            let Some(column) = column.filter(|_| done.insert(input)) else {
+            let Some((column, t)) = times_of(json, bin, input).filter(|_| done.insert(input))
+            else {
                 continue;
             };
-            let t: Vec<f32> = (0..count).map(|i| column.float(&bin.bytes, i, 0)).collect();
             let Some(m) = increasing_times(&t) else {
                 continue;
             };
@@ -89,13 +95,7 @@ fn sampler_times(
     let mut times = BTreeMap::new();
     for sampler in arr(anim, "samplers") {
         let input = sampler["input"].as_u64()? as usize;
-        let count = json["accessors"][input]["count"].as_u64()? as usize;
-        let column =
-            Column::of_width(json, bin, input, count, 1).filter(|c| c.component == 5126)?;
-        times.insert(
-            input,
-            (0..count).map(|i| column.float(&bin.bytes, i, 0)).collect(),
-        );
+        times.insert(input, times_of(json, bin, input)?.1);
     }
     Some(times)
 }
@@ -128,10 +128,10 @@ pub fn negative_times(json: &Value, bin: &BinBuilder) -> Vec<String> {
 /// `tween` did not move with its frames, or one copied as it was) moved later as a whole, its
 /// first key at 0 s: each sampler's times into an accessor of their own (an accessor may be
 /// shared with other clips), declared bounds with them.
-pub fn start_at_zero(json: &mut Value, bin: &mut BinBuilder) {
-    for a in 0..arr(json, "animations").len() {
-        let anim = &json["animations"][a];
-        let Some(times) = sampler_times(json, bin, anim) else {
+pub fn start_at_zero(out: &mut Output) {
+    for a in 0..arr(&out.json, "animations").len() {
+        let anim = &out.json["animations"][a];
+        let Some(times) = sampler_times(&out.json, &out.bin, anim) else {
             continue;
         };
         let Some(first) = negative_start(&times) else {
@@ -141,17 +141,9 @@ pub fn start_at_zero(json: &mut Value, bin: &mut BinBuilder) {
         for (input, t) in times {
             let t: Vec<f32> = t.iter().map(|&x| (x as f64 - first) as f32).collect();
             let t = increasing_times(&t).unwrap_or(t);
-            let view = bin.push_f32_view(&t, None);
-            let mut acc = serde_json::json!({ "bufferView": view, "componentType": 5126,
-                "count": t.len(), "type": "SCALAR" });
-            set_bounds(&mut acc, &t, 1);
-            let list = json["accessors"]
-                .as_array_mut()
-                .expect("the accessors were read");
-            list.push(acc);
-            moved.insert(input, list.len() - 1);
+            moved.insert(input, out.push_f32(&t, "SCALAR", 1, true, None));
         }
-        for sampler in json["animations"][a]["samplers"]
+        for sampler in out.json["animations"][a]["samplers"]
             .as_array_mut()
             .into_iter()
             .flatten()

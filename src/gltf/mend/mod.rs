@@ -32,7 +32,7 @@ pub use strides::strides;
 pub use weights::weights;
 
 use super::build::BinBuilder;
-use super::read::listed;
+use super::read::{arr, listed};
 use serde_json::Value;
 
 /// Where one accessor's elements (SCALAR, VEC3 or VEC4) lie in the output buffer.
@@ -145,6 +145,13 @@ pub fn all(json: &mut Value, bin: &mut BinBuilder) -> Vec<String> {
     lines.extend(strides(json, bin));
     bounds::rebound_vec4(json, bin);
     lines
+}
+
+/// Every primitive's vertex attributes and each of its morph targets', in the file's order.
+fn attribute_sets(json: &Value) -> impl Iterator<Item = &Value> {
+    (arr(json, "meshes").iter())
+        .flat_map(|mesh| arr(mesh, "primitives"))
+        .flat_map(|p| std::iter::once(&p["attributes"]).chain(arr(p, "targets")))
 }
 
 /// A line about the accessors `which` (none: no line), `say` given their count, the plural's

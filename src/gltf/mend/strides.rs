@@ -3,7 +3,7 @@
 //! exports and the old Khronos Fox stride their animation data), an accessor there whose
 //! elements it spaced out first copied packed into a view of its own.
 
-use super::said_of;
+use super::{attribute_sets, said_of};
 use crate::gltf::build::BinBuilder;
 use crate::gltf::read::arr;
 use serde_json::Value;
@@ -12,12 +12,8 @@ use serde_json::Value;
 /// `EXT_mesh_gpu_instancing`'s): the only ones glTF lets have a `byteStride`.
 fn vertex_views(json: &Value) -> std::collections::BTreeSet<u64> {
     let mut accessors = Vec::new();
-    for mesh in arr(json, "meshes") {
-        for p in arr(mesh, "primitives") {
-            for attrs in std::iter::once(&p["attributes"]).chain(arr(p, "targets")) {
-                accessors.extend(attrs.as_object().into_iter().flatten().map(|(_, a)| a));
-            }
-        }
+    for attrs in attribute_sets(json) {
+        accessors.extend(attrs.as_object().into_iter().flatten().map(|(_, a)| a));
     }
     for node in arr(json, "nodes") {
         let attrs = &node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
@@ -69,9 +65,10 @@ pub fn strides(json: &mut Value, bin: &mut BinBuilder) -> Vec<String> {
             if stride < size || end > bin.bytes.len() {
                 continue;
             }
-            let packed: Vec<u8> = (0..count)
-                .flat_map(|i| bin.bytes[start + i * stride..][..size].to_vec())
-                .collect();
+            let mut packed = Vec::with_capacity(count * size);
+            for i in 0..count {
+                packed.extend_from_slice(&bin.bytes[start + i * stride..][..size]);
+            }
             let target = bin.views[v]["target"].as_u64().map(|t| t as u32);
             let view = bin.push_view(&packed, target);
             let acc = &mut json["accessors"][a];
