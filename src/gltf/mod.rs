@@ -1,17 +1,18 @@
 //! glTF in and out.
 //!
 //! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
-//! container, buffers; [`uri`] says what external files it may read) -> [`decode`] (meshopt
-//! and Draco compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`,
-//! triangles; [`channel`]: animation channels read and evaluated, nodes' rest transforms;
-//! [`skin`]: skinned points at any pose; [`instancing`]: a node's mesh instances) ... the
-//! command's own work ... -> [`build`] (new accessors and buffer views on an [`Output`];
-//! [`mend`]: what the input breaks of glTF's rules, one mend a file, made right as it is
-//! copied: skin weights, rotation keys, key times, indices, strides, bounds, normals, sparse
-//! parts, repeated channels and empty clips) -> [`mod@reorder`] (with meshopt: triangles and
-//! vertices in mesh order) -> [`compact`] (channels and accessors nothing uses any more
-//! dropped) -> [`encode`] (meshopt compression, when asked for) -> [`write`] (`.glb` or
-//! `.gltf` with its `.bin` and images, staged as one all-or-nothing set of files).
+//! container, buffers; [`uri`] says what external files it may read; [`spelling`]: a byte-order
+//! mark read past, whole decimals read as the integers glTF asks) -> [`decode`] (meshopt and Draco
+//! compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles; [`channel`]:
+//! animation channels read and evaluated, nodes' rest transforms; [`skin`]: skinned points at any
+//! pose; [`instancing`]: a node's mesh instances) ... the command's own work ... -> [`build`] (new
+//! accessors and buffer views on an [`Output`]; [`mend`]: what the input breaks of glTF's rules,
+//! one mend a file, made right as it is copied: skin weights, rotation keys, key times, indices,
+//! strides, bounds, normals, sparse parts, repeated channels, empty clips and empty lists) ->
+//! [`mod@reorder`] (with meshopt: triangles and vertices in mesh order) -> [`compact`] (channels
+//! and accessors nothing uses any more dropped) -> [`encode`] (meshopt compression, when asked for)
+//! -> [`write`] (`.glb` or `.gltf` with its `.bin` and images, staged as one all-or-nothing set of
+//! files).
 
 mod accessor;
 mod build;
@@ -24,6 +25,7 @@ mod mend;
 mod read;
 mod reorder;
 mod skin;
+mod spelling;
 mod uri;
 mod write;
 

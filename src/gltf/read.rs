@@ -5,6 +5,7 @@
 //! Accessors are decoded in [`super::accessor`].
 
 use super::decode::decode;
+use super::spelling;
 use super::uri::{
     image_mime, read_image, read_prefix, reference, regular_file, uri_error, Access, Reference,
 };
@@ -26,6 +27,9 @@ pub struct Document {
     pub input_bytes: u64,
     /// The compression extensions decoded on read (no longer in the JSON).
     pub decoded: Vec<String>,
+    /// Whether the JSON began with a UTF-8 byte-order mark, which glTF asks writers to leave
+    /// out (read past: [`super::spelling`]).
+    pub byte_order_mark: bool,
     /// The largest element count of an accessor its buffer view holds (found once, when an
     /// accessor without a buffer view is read).
     pub(crate) largest_backed: std::sync::OnceLock<usize>,
@@ -130,8 +134,10 @@ impl Document {
         } else {
             (bytes, None)
         };
-        let json: Value =
+        let (json_bytes, byte_order_mark) = spelling::past_byte_order_mark(json_bytes);
+        let mut json: Value =
             serde_json::from_slice(json_bytes).map_err(|e| not_gltf(path, bytes, e))?;
+        spelling::integers(&mut json);
         if !json.is_object() || !json.get("asset").is_some_and(Value::is_object) {
             return Err(at(path, "not a glTF file (no \"asset\" object)"));
         }
@@ -156,7 +162,6 @@ impl Document {
                 input_bytes += buffers[i].len() as u64;
             }
         }
-        let mut json = json;
         let decoded = decode(&mut json, &mut buffers).map_err(|e| at(path, e))?;
         // Images are read only when an output needs them, but every reference is checked now.
         for (i, img) in arr(&json, "images").iter().enumerate() {
@@ -189,6 +194,7 @@ impl Document {
             access: access.clone(),
             input_bytes,
             decoded,
+            byte_order_mark,
             largest_backed: std::sync::OnceLock::new(),
         })
     }

@@ -54,12 +54,18 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     }
     embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
     let mut mended = mend::all(&mut json, &mut bin);
+    if doc.byte_order_mark {
+        mended.push(
+            "a byte-order mark ahead of the JSON (glTF asks writers for none): read past, the output written without it".into(),
+        );
+    }
     mended.extend(mend::bounds(doc, &mut json));
     mended.extend(mend::normals(doc, &mut json, &mut bin));
     mended.extend(mend::sparse_parts(doc, &mut json, &mut bin));
     mended.extend(mend::empty_animations(&json));
     mended.extend(mend::repeated_channels(&json));
     mended.extend(mend::negative_times(&json, &bin));
+    mended.extend(mend::empty_lists(&json));
     Ok(Output {
         json,
         bin,
@@ -218,6 +224,7 @@ fn assemble(out: &mut Output, container: Container, path: &Path) -> (Vec<u8>, Op
     mend::start_at_zero(out);
     mend::drop_repeated_channels(&mut out.json);
     mend::drop_empty_animations(&mut out.json);
+    mend::drop_empty_lists(&mut out.json);
     let fallback = if out.meshopt { encode::meshopt(out) } else { 0 };
     encode::clear_marks(out);
     let views = std::mem::take(&mut out.bin.views);

@@ -7,10 +7,12 @@
 //! [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the bounds of the VEC4
 //! data these change) in [`all`]; then [`bounds`], [`normals`], [`sparse_parts`], and the
 //! animations ([`empty_animations`], [`repeated_channels`], [`negative_times`]: the channels and
-//! clips left out, and the clips moved to start at 0 s, when the output is written).
+//! clips left out, and the clips moved to start at 0 s, when the output is written), and the
+//! [`empty_lists`] and meshes with no primitive (left out when the output is written).
 
 mod animations;
 mod bounds;
+mod empty;
 mod indices;
 mod key_times;
 mod normals;
@@ -23,6 +25,7 @@ pub use animations::{
     drop_empty_animations, drop_repeated_channels, empty_animations, repeated_channels,
 };
 pub use bounds::bounds;
+pub use empty::{drop_empty_lists, empty_lists};
 pub use indices::restart_indices;
 pub use key_times::{key_times, negative_times, start_at_zero};
 pub use normals::normals;
