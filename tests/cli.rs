@@ -1661,6 +1661,82 @@ fn integers_written_as_decimals_and_a_byte_order_mark_are_read() {
     assert_eq!(glb_parts(&a), glb_parts(&b));
 }
 
+/// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
+/// and as an external file of a `.gltf`), extensions used but not named in `extensionsUsed`
+/// (one of them required), a scene listing a child beside its ancestor and a root twice. Fox
+/// so written blends validator-clean (7 errors in) to the original's binary, each said in a
+/// line; the extensions named, the image declared PNG, the scene listing its two roots.
+#[test]
+fn declarations_a_writer_got_wrong_are_written_as_the_file_is() {
+    use serde_json::json;
+    let Some(fx) = fixtures() else { return };
+    let fox = fx.join("skinned/Fox.glb");
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("mislabelled.glb");
+    edited_glb(&fox, &input, |j| {
+        j["images"][0]["mimeType"] = json!("image/jpeg");
+        j["materials"][0]["extensions"] = json!({ "KHR_materials_unlit": {} });
+        j["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+            json!({ "KHR_texture_transform": { "offset": [0.5, 0.0] } });
+        j["extensionsRequired"] = json!(["KHR_materials_unlit"]);
+        assert_eq!(j["nodes"][0]["children"], json!([2]));
+        j["scenes"][0]["nodes"] = json!([0, 1, 2, 1]);
+    });
+    let (a, b) = (dir.path().join("a.glb"), dir.path().join("b.glb"));
+    let blend = |input: &Path, out: &Path| {
+        run_ok(&["blend", s(input), "--clips", "Walk", "Run", "-o", s(out)])
+    };
+    let told = blend(&input, &a);
+    let err = String::from_utf8_lossy(&told.stderr);
+    for line in [
+        "image 0 (image/jpeg, its bytes image/png) declared another type",
+        "extensions \"KHR_texture_transform\", \"KHR_materials_unlit\" are used but not named in extensionsUsed",
+        "nodes \"_rootJoint\", \"fox\" listed by a scene again or beside an ancestor",
+    ] {
+        assert!(err.contains(line), "{line} in {err}");
+    }
+    assert_valid(&a);
+    blend(&fox, &b);
+    let (ja, ba) = glb_parts(&a);
+    let (jb, bb) = glb_parts(&b);
+    assert_eq!(ba, bb);
+    assert_eq!(ja["animations"], jb["animations"]);
+    assert_eq!(ja["images"][0]["mimeType"], "image/png");
+    assert_eq!(
+        ja["extensionsUsed"],
+        json!(["KHR_texture_transform", "KHR_materials_unlit"])
+    );
+    assert_eq!(ja["scenes"][0]["nodes"], json!([0, 1]));
+    // The same image as a file beside a `.gltf`, labelled JPEG: declared PNG in a `.gltf` (the
+    // file copied beside it) and in a `.glb` (embedded).
+    let (doc_json, doc_bin) = glb_parts(&fox);
+    let mut j = doc_json.clone();
+    let view = &j["bufferViews"][j["images"][0]["bufferView"].as_u64().unwrap() as usize];
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let png = &doc_bin[start..start + view["byteLength"].as_u64().unwrap() as usize];
+    std::fs::write(dir.path().join("fox tex.png"), png).unwrap();
+    std::fs::write(dir.path().join("fox.bin"), &doc_bin).unwrap();
+    j["images"][0] = json!({ "uri": "fox%20tex.png", "mimeType": "image/jpeg" });
+    j["buffers"][0]["uri"] = json!("fox.bin");
+    let gltf = dir.path().join("fox.gltf");
+    std::fs::write(&gltf, serde_json::to_vec(&j).unwrap()).unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    for name in ["f.gltf", "f.glb"] {
+        let written = out.join(name);
+        let told = blend(&gltf, &written);
+        let err = String::from_utf8_lossy(&told.stderr);
+        assert!(err.contains("its bytes image/png"), "{err}");
+        assert_valid(&written);
+        let j = match name {
+            "f.glb" => glb_parts(&written).0,
+            _ => read_json(&written),
+        };
+        assert_eq!(j["images"][0]["mimeType"], "image/png", "{name}");
+    }
+    assert_eq!(std::fs::read(out.join("fox tex.png")).unwrap(), png);
+}
+
 /// An index accessor holding its type's largest value (255 in 8 bits, 65535 in 16: the
 /// primitive restart index, which WebGL 2 always applies and the validator refuses), as a
 /// writer numbering a 16 x 16 grid's 256 vertices in 8 bits (or a 256 x 256 grid's in 16)

@@ -62,6 +62,9 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     mended.extend(mend::bounds(doc, &mut json));
     mended.extend(mend::normals(doc, &mut json, &mut bin));
     mended.extend(mend::sparse_parts(doc, &mut json, &mut bin));
+    mended.extend(mend::image_types(doc, &mut json, &bin));
+    mended.extend(mend::undeclared_extensions(&mut json));
+    mended.extend(mend::scene_roots(&mut json));
     mended.extend(mend::empty_animations(&json));
     mended.extend(mend::repeated_channels(&json));
     mended.extend(mend::negative_times(&json, &bin));

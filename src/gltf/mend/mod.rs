@@ -4,19 +4,23 @@
 //! names it where it is more than a codec's rounding.
 //!
 //! The mends, one a file, in the order `begin` runs them: [`weights`] (and joints named twice),
-//! [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the bounds of the VEC4
-//! data these change) in [`all`]; then [`bounds`], [`normals`], [`sparse_parts`], and the
-//! animations ([`empty_animations`], [`repeated_channels`], [`negative_times`]: the channels and
-//! clips left out, and the clips moved to start at 0 s, when the output is written), and the
-//! [`empty_lists`] and meshes with no primitive (left out when the output is written).
+//! [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the bounds of the VEC4 data
+//! these change) in [`all`]; then [`bounds`], [`normals`], [`sparse_parts`], [`image_types`],
+//! [`undeclared_extensions`], [`scene_roots`], and the animations ([`empty_animations`],
+//! [`repeated_channels`], [`negative_times`]: the channels and clips left out, and the clips moved
+//! to start at 0 s, when the output is written), and the [`empty_lists`] and meshes with no
+//! primitive (left out when the output is written).
 
 mod animations;
 mod bounds;
 mod empty;
+mod extensions;
+mod images;
 mod indices;
 mod key_times;
 mod normals;
 mod rotations;
+mod scenes;
 mod sparse;
 mod strides;
 mod weights;
@@ -26,10 +30,13 @@ pub use animations::{
 };
 pub use bounds::bounds;
 pub use empty::{drop_empty_lists, empty_lists};
+pub use extensions::undeclared_extensions;
+pub use images::image_types;
 pub use indices::restart_indices;
 pub use key_times::{key_times, negative_times, start_at_zero};
 pub use normals::normals;
 pub use rotations::rotations;
+pub use scenes::scene_roots;
 pub use sparse::sparse_parts;
 pub use strides::strides;
 pub use weights::weights;
