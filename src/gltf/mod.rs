@@ -8,11 +8,11 @@
 //! pose; [`instancing`]: a node's mesh instances) ... the command's own work ... -> [`build`] (new
 //! accessors and buffer views on an [`Output`]; [`mend`]: what the input breaks of glTF's rules,
 //! one mend a file, made right as it is copied: skin weights, rotation keys, key times, indices,
-//! strides, bounds, normals, sparse parts, image types, undeclared extensions, scene roots,
-//! repeated channels, empty clips and empty lists) -> [`mod@reorder`] (with meshopt: triangles and
-//! vertices in mesh order) -> [`compact`] (channels and accessors nothing uses any more dropped) ->
-//! [`encode`] (meshopt compression, when asked for) -> [`write`] (`.glb` or `.gltf` with its `.bin`
-//! and images, staged as one all-or-nothing set of files).
+//! strides, bounds, normals, tangents, sparse parts, image types, undeclared extensions, scene
+//! roots, repeated channels, empty clips and empty lists) -> [`mod@reorder`] (with meshopt:
+//! triangles and vertices in mesh order) -> [`compact`] (channels and accessors nothing uses any
+//! more dropped) -> [`encode`] (meshopt compression, when asked for) -> [`write`] (`.glb` or
+//! `.gltf` with its `.bin` and images, staged as one all-or-nothing set of files).
 
 mod accessor;
 mod build;

@@ -61,6 +61,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     }
     mended.extend(mend::bounds(doc, &mut json));
     mended.extend(mend::normals(doc, &mut json, &mut bin));
+    mended.extend(mend::tangents(doc, &mut json, &mut bin));
     mended.extend(mend::sparse_parts(doc, &mut json, &mut bin));
     mended.extend(mend::image_types(doc, &mut json, &bin));
     mended.extend(mend::undeclared_extensions(&mut json));

@@ -5,11 +5,11 @@
 //!
 //! The mends, one a file, in the order `begin` runs them: [`weights`] (and joints named twice),
 //! [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the bounds of the VEC4 data
-//! these change) in [`all`]; then [`bounds`], [`normals`], [`sparse_parts`], [`image_types`],
-//! [`undeclared_extensions`], [`scene_roots`], and the animations ([`empty_animations`],
-//! [`repeated_channels`], [`negative_times`]: the channels and clips left out, and the clips moved
-//! to start at 0 s, when the output is written), and the [`empty_lists`] and meshes with no
-//! primitive (left out when the output is written).
+//! these change) in [`all`]; then [`bounds`], [`normals`], [`tangents`], [`sparse_parts`],
+//! [`image_types`], [`undeclared_extensions`], [`scene_roots`], and the animations
+//! ([`empty_animations`], [`repeated_channels`], [`negative_times`]: the channels and clips left
+//! out, and the clips moved to start at 0 s, when the output is written), and the [`empty_lists`]
+//! and meshes with no primitive (left out when the output is written).
 
 mod animations;
 mod bounds;
@@ -23,6 +23,7 @@ mod rotations;
 mod scenes;
 mod sparse;
 mod strides;
+mod tangents;
 mod weights;
 
 pub use animations::{
@@ -39,6 +40,7 @@ pub use rotations::rotations;
 pub use scenes::scene_roots;
 pub use sparse::sparse_parts;
 pub use strides::strides;
+pub use tangents::tangents;
 pub use weights::weights;
 
 use super::build::BinBuilder;

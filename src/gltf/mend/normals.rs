@@ -16,6 +16,12 @@ use serde_json::Value;
 /// passes, 1.0068 and 0.993 fail), with a margin.
 const UNIT_NORMAL: f64 = 0.006;
 
+/// Whether vector `v` is farther from unit length than the validator allows (or not finite).
+pub(super) fn off_unit(v: glam::DVec3) -> bool {
+    let length = v.length();
+    !(length.is_finite() && (length - 1.0).abs() <= UNIT_NORMAL)
+}
+
 /// Make every float NORMAL attribute of the output a unit vector (see the module comment), in
 /// place in `bin` (the views placed by `write::begin`), from the values `doc` reads; returns a
 /// line for each mesh with such normals.
@@ -41,10 +47,7 @@ pub fn normals(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<St
             let Ok((values, 3)) = doc.read_f64(acc) else {
                 continue;
             };
-            let off = |v: &[f64]| {
-                let length = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-                !(length.is_finite() && (length - 1.0).abs() <= UNIT_NORMAL)
-            };
+            let off = |v: &[f64]| off_unit(glam::DVec3::from_slice(v));
             if !values.chunks_exact(3).any(off) {
                 continue;
             }
