@@ -2293,8 +2293,9 @@ fn declared_bounds_follow_the_mended_weights_joints_and_rotations() {
 /// Normals must be unit vectors: Babylon.js 9's export of Fox wrote zero normals (994 validator
 /// errors its blends carried). A character's normals off unit length are written divided by
 /// their lengths, zero ones as the normals of their faces, with a line saying so; the output
-/// passes the validator. CesiumMan with 40 of its normals zeroed and 40 doubled, its declared
-/// bounds those of the broken values.
+/// passes the validator. CesiumMan with 35 of its normals zeroed, 5 made NaN (a zero divided
+/// by its length: assimp's exporter wrote such before its pull request 3214) and 40 doubled, its
+/// declared bounds those of the broken values.
 #[test]
 fn normals_off_unit_length_are_written_as_unit() {
     let Some((dir, doc, mut json, mut bin)) = editable("CesiumMan") else {
@@ -2307,7 +2308,11 @@ fn normals_off_unit_length_are_written_as_unit() {
     let (start, stride) = accessor_bytes(&json, acc, 12);
     let mut broken = original.clone();
     for v in 0..80 {
-        let scale = if v < 40 { 0.0 } else { 2.0 };
+        let scale = match v {
+            0..5 => f64::NAN,
+            5..40 => 0.0,
+            _ => 2.0,
+        };
         for c in 0..3 {
             broken[3 * v + c] *= scale;
             let at = start + v * stride + 4 * c;
@@ -2324,7 +2329,9 @@ fn normals_off_unit_length_are_written_as_unit() {
     let r = run_ok(&["blend", &p(&input), &p(&input), "-o", &p(&out)]);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
-        err.contains("80 normals were not of unit length as glTF requires (40 of them zero)"),
+        err.contains(
+            "80 normals were not of unit length as glTF requires (40 of them zero or not numbers)"
+        ),
         "{err}"
     );
     if let Some((errors, _, line)) = validate(&out) {
@@ -2350,9 +2357,10 @@ fn normals_off_unit_length_are_written_as_unit() {
 
 /// Tangents must be unit vectors with a sign of 1 or -1: UnityGLTF wrote signs of -0.998, and
 /// MikkTSpace zero tangents on sliver triangles (glTF-Transform's `tangents`, Blender's
-/// exporter). CesiumMan given tangents across its normals, 40 of their signs made -0.998, 10
-/// made 0, 40 vectors lengthened by 1.1 and 30 zeroed: blended validator-clean (120 errors
-/// in), said in a line, the signs -1 and 1, the lengthened ones as they were, the zero ones
+/// exporter; and NaN, a zero divided by its length: the Unity OBJ importer's, glTF-Transform
+/// issue 928). CesiumMan given tangents across its normals, 40 of their signs made -0.998, 10
+/// made 0, 40 vectors lengthened by 1.1, 25 zeroed and 5 made NaN: blended validator-clean
+/// (140 errors in), said in a line, the signs -1 and 1, the lengthened ones as they were, the zero ones
 /// across their normals and near their neighbours' (within 30 degrees of what they were).
 #[test]
 fn tangents_off_unit_length_or_sign_are_written_as_unit() {
@@ -2372,7 +2380,8 @@ fn tangents_off_unit_length_or_sign_are_written_as_unit() {
             0..40 => (t, -0.998),
             40..50 => (t, 0.0),
             50..90 => (t * 1.1, 1.0),
-            90..120 => (glam::DVec3::ZERO, 1.0),
+            90..95 => (glam::DVec3::NAN, f32::NAN),
+            95..120 => (glam::DVec3::ZERO, 1.0),
             _ => (t, 1.0),
         };
         values.extend([t.x as f32, t.y as f32, t.z as f32, w]);
@@ -2386,7 +2395,7 @@ fn tangents_off_unit_length_or_sign_are_written_as_unit() {
     let r = run_ok(&["blend", &p(&input), &p(&input), "-o", &p(&out)]);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
-        err.contains("50 tangent signs were not 1 or -1 and 70 tangents not of unit length as glTF requires (30 of them zero)"),
+        err.contains("55 tangent signs were not 1 or -1 and 70 tangents not of unit length as glTF requires (30 of them zero or not numbers)"),
         "{err}"
     );
     if let Some((errors, _, line)) = validate(&out) {

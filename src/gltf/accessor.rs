@@ -12,6 +12,19 @@ impl Document {
     /// Every size is checked against the bytes behind it before anything is allocated, and
     /// every value must be finite.
     pub fn read_f64(&self, index: usize) -> Result<(Vec<f64>, usize)> {
+        let (out, ncomp) = self.read_f64_as_stored(index)?;
+        if let Some(k) = out.iter().position(|v| !v.is_finite()) {
+            bail!(self.err(format!(
+                "accessor {index} has a NaN or infinite value at element {}",
+                k / ncomp
+            )));
+        }
+        Ok((out, ncomp))
+    }
+
+    /// [`Document::read_f64`] with NaN and infinite values kept as stored, for the mends that
+    /// write them right (a normal or tangent an exporter divided by a zero length).
+    pub fn read_f64_as_stored(&self, index: usize) -> Result<(Vec<f64>, usize)> {
         let acc = self.accessor(index)?;
         let ncomp = acc.ncomp;
         let backing = match acc.view {
@@ -44,12 +57,6 @@ impl Document {
         }
         if let Some(sparse) = self.json["accessors"][index].get("sparse") {
             self.apply_sparse(index, &acc, sparse, &mut out)?;
-        }
-        if let Some(k) = out.iter().position(|v| !v.is_finite()) {
-            bail!(self.err(format!(
-                "accessor {index} has a NaN or infinite value at element {}",
-                k / ncomp
-            )));
         }
         Ok((out, ncomp))
     }

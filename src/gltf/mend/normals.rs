@@ -1,7 +1,9 @@
 //! Normals ([`normals`]) must be unit vectors: a float NORMAL attribute's vector farther
 //! from unit length than the validator allows ([`UNIT_NORMAL`]) is divided by its length; a
 //! zero (or not finite) one, which no division mends, is its vertex's area-weighted face normal
-//! in its primitive (Babylon.js 9's export of Fox: 994 zero normals its outputs carried). What
+//! in its primitive (Babylon.js 9's export of Fox: 994 zero normals its outputs carried; NaN,
+//! a zero divided by its length, as assimp's exporter wrote before its pull request 3214, was
+//! carried too, and refused by the USD writer). What
 //! a renderer shows there was undefined, black in three.js. Primitives without morph targets
 //! only: a morph primitive's targets (and the frames `tween` adds) carry NORMAL deltas from
 //! its normals as they were, which a different base would turn.
@@ -44,7 +46,7 @@ pub fn normals(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<St
             let Some(column) = column.filter(|_| done.insert(acc)) else {
                 continue;
             };
-            let Ok((values, 3)) = doc.read_f64(acc) else {
+            let Ok((values, 3)) = doc.read_f64_as_stored(acc) else {
                 continue;
             };
             let off = |v: &[f64]| off_unit(glam::DVec3::from_slice(v));
@@ -78,7 +80,7 @@ pub fn normals(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<St
         if scaled + zero > 0 {
             let name = quoted_name(mesh, || format!("{m}"));
             lines.push(format!(
-                "mesh {name}: {} normals were not of unit length as glTF requires ({zero} of them zero); written divided by their lengths, the zero ones as the normals of their faces",
+                "mesh {name}: {} normals were not of unit length as glTF requires ({zero} of them zero or not numbers); written divided by their lengths, the others as the normals of their faces",
                 scaled + zero
             ));
         }

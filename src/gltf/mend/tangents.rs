@@ -36,7 +36,7 @@ pub fn tangents(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<S
             let Some(column) = column.filter(|_| done.insert(acc)) else {
                 continue;
             };
-            let Ok((values, 4)) = doc.read_f64(acc) else {
+            let Ok((values, 4)) = doc.read_f64_as_stored(acc) else {
                 continue;
             };
             let off = |v: &[f64]| !morph && off_unit(DVec3::from_slice(v));
@@ -76,7 +76,7 @@ pub fn tangents(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<S
         if signs + scaled + zero > 0 {
             let name = quoted_name(mesh, || format!("{m}"));
             lines.push(format!(
-                "mesh {name}: {signs} tangent signs were not 1 or -1 and {} tangents not of unit length as glTF requires ({zero} of them zero); written as their signs, divided by their lengths, the zero ones along their neighbours' across the normal",
+                "mesh {name}: {signs} tangent signs were not 1 or -1 and {} tangents not of unit length as glTF requires ({zero} of them zero or not numbers); written as their signs, divided by their lengths, the others along their neighbours' across the normal",
                 scaled + zero
             ));
         }
