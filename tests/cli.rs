@@ -1737,6 +1737,86 @@ fn declarations_a_writer_got_wrong_are_written_as_the_file_is() {
     assert_eq!(std::fs::read(out.join("fox tex.png")).unwrap(), png);
 }
 
+/// Keys that stand for no pose (a NaN or infinite time or value, as exporters that divide a
+/// zero by its length write; the whole file was refused, even for a clip the command does not
+/// use): left out, the keys beside them played across, said in a line. Fox with a NaN
+/// rotation key in its Walk, a NaN time shared by all of the Walk's samplers and an infinite
+/// key in its Survey blends validator-clean, the Walk written with one key fewer on every
+/// sampler (two on the one with both); Parrot with a NaN weight at one of its 13 keys tweens on the other 12.
+#[test]
+fn undefined_keys_are_left_out() {
+    let Some(fx) = fixtures() else { return };
+    let fox = fx.join("skinned/Fox.glb");
+    let doc = Document::open(&fox).unwrap();
+    let clip = |name: &str| {
+        (doc.json["animations"].as_array().unwrap().iter())
+            .position(|a| a["name"] == name)
+            .unwrap()
+    };
+    let (walk, survey) = (clip("Walk"), clip("Survey"));
+    let sampler = |a: usize, k: &str| {
+        doc.json["animations"][a]["samplers"][0][k]
+            .as_u64()
+            .unwrap() as usize
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (one, two, three) = (
+        dir.path().join("1.glb"),
+        dir.path().join("2.glb"),
+        dir.path().join("3.glb"),
+    );
+    poke_f32(&fox, &one, sampler(walk, "output"), 3, 1, f32::NAN);
+    poke_f32(&one, &two, sampler(walk, "input"), 7, 0, f32::NAN);
+    poke_f32(&two, &three, sampler(survey, "output"), 5, 0, f32::INFINITY);
+    let out = dir.path().join("out.glb");
+    let told = run_ok(&["blend", s(&three), "--clips", "Walk", "Run", "-o", s(&out)]);
+    let err = String::from_utf8_lossy(&told.stderr);
+    for line in [
+        "animation \"Survey\": 1 key NaN, infinite or a zero rotation (no pose) left out",
+        "animation \"Walk\": ",
+    ] {
+        assert!(err.contains(line), "{line} in {err}");
+    }
+    assert_valid(&out);
+    let written = Document::open(&out).unwrap();
+    let keys = |a: usize| -> Vec<u64> {
+        (written.json["animations"][a]["samplers"]
+            .as_array()
+            .unwrap()
+            .iter())
+        .map(|s| {
+            written.json["accessors"][s["input"].as_u64().unwrap() as usize]["count"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect()
+    };
+    let before = doc.json["accessors"][sampler(walk, "input")]["count"]
+        .as_u64()
+        .unwrap();
+    // Key 7's time on every sampler, and key 3's rotation on the first.
+    let mut expected = vec![before - 1; keys(walk).len()];
+    expected[0] -= 1;
+    assert_eq!(keys(walk), expected, "of {before}");
+    // Parrot: a NaN weight at key 4 of 13.
+    let parrot = fx.join("morph-keyframes/Parrot.glb");
+    let pdoc = Document::open(&parrot).unwrap();
+    let weights = pdoc.json["animations"][0]["samplers"][0]["output"]
+        .as_u64()
+        .unwrap() as usize;
+    let targets = pdoc.json["meshes"][0]["primitives"][0]["targets"]
+        .as_array()
+        .unwrap()
+        .len();
+    let nan = dir.path().join("parrot.glb");
+    poke_f32(&parrot, &nan, weights, 4 * targets + 2, 0, f32::NAN);
+    let tweened = dir.path().join("parrot_out.glb");
+    let told = run_ok(&["tween", s(&nan), "-o", s(&tweened)]);
+    let said = String::from_utf8_lossy(&told.stdout) + String::from_utf8_lossy(&told.stderr);
+    assert!(said.contains("12 keys ->"), "{said}");
+    assert_valid(&tweened);
+}
+
 /// An index accessor holding its type's largest value (255 in 8 bits, 65535 in 16: the
 /// primitive restart index, which WebGL 2 always applies and the validator refuses), as a
 /// writer numbering a 16 x 16 grid's 256 vertices in 8 bits (or a 256 x 256 grid's in 16)

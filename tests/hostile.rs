@@ -235,12 +235,9 @@ fn each_crash_found_by_mutation_is_a_clean_refusal() {
         )
     };
     let (times, rotations) = walk_sampler("rotation");
-    // 1. An infinite or NaN rotation value, and a rotation accessor without its buffer view.
-    for (k, v) in [f32::INFINITY, f32::NAN].into_iter().enumerate() {
-        let f = p(&format!("rotation{k}.glb"));
-        poke_f32(&fox, &f, rotations, 3, 1, v);
-        blend(&f, "NaN or infinite");
-    }
+    // 1. A rotation accessor without its buffer view: every key a zero quaternion. (An
+    // infinite or NaN key among defined ones is left out, its neighbours played across:
+    // `cli::undefined_keys_are_left_out`.)
     edited_glb(&fox, &p("noview.glb"), |j| {
         j["accessors"][rotations]
             .as_object_mut()
@@ -258,10 +255,6 @@ fn each_crash_found_by_mutation_is_a_clean_refusal() {
     let f = p("late.glb");
     poke_f32(&fox, &f, times, last, 0, 1e30);
     blend(&f, "samples to analyse");
-    // 6. A NaN key time.
-    let f = p("nantime.glb");
-    poke_f32(&fox, &f, times, 1, 0, f32::NAN);
-    blend(&f, "NaN or infinite");
     // 3 again, on the blend path.
     edited_glb(&fox, &p("foxcount.glb"), |j| {
         j["accessors"][times]["count"] = json!(4294967295u64);

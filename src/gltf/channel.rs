@@ -198,17 +198,10 @@ pub fn read_channels(
         };
         let input = s["input"].as_u64().unwrap_or(u64::MAX) as usize;
         let output = s["output"].as_u64().unwrap_or(u64::MAX) as usize;
-        let (times, _) = doc.read_f64(input)?;
-        let (mut values, ncomp) = doc.read_f64(output)?;
+        let (times, _) = doc.read_f64_as_stored(input)?;
+        let (values, ncomp) = doc.read_f64_as_stored(output)?;
         if times.is_empty() {
             bail!(doc.err(format!("animation {name:?} has a sampler without keys")));
-        }
-        // Equal times (glTF asks for increasing ones; some writers repeat a time) are a step
-        // to the later key there, as `Channel::sample` and players read them.
-        if times.windows(2).any(|w| w[1] < w[0]) {
-            bail!(doc.err(format!(
-                "animation {name:?}: the key times of accessor {input} decrease"
-            )));
         }
         let per_key_values =
             values.len() / times.len() / if interp == Interp::Cubic { 3 } else { 1 };
@@ -224,19 +217,28 @@ pub fn read_channels(
                 times.len()
             )));
         }
-        if path == Path::Rotation {
-            let (per_key, mid) = match interp {
-                Interp::Cubic => (12, 4),
-                _ => (4, 0),
-            };
-            let zero = values
-                .chunks_exact(per_key)
-                .position(|k| DQuat::from_slice(&k[mid..mid + 4]).length() < MIN_QUATERNION);
-            if let Some(k) = zero {
-                bail!(doc.err(format!(
-                    "animation {name:?}: rotation key {k} of node {node} (accessor {output}) is not a unit quaternion"
-                )));
-            }
+        let (per_key, mid) = match interp {
+            Interp::Cubic => (3 * width, width),
+            _ => (width, 0),
+        };
+        let rotation = (path == Path::Rotation).then_some(mid);
+        let defined = defined_keys(&times, &values, per_key, rotation);
+        if !defined.contains(&true) {
+            bail!(doc.err(format!(
+                "animation {name:?}: no {} key of node {node} (accessor {output}) is defined: each is NaN, infinite{}",
+                path.name(),
+                if rotation.is_some() { " or not a unit quaternion" } else { "" }
+            )));
+        }
+        let (times, mut values) = defined_only(&times, &values, per_key, &defined);
+        // Equal times (glTF asks for increasing ones; some writers repeat a time) are a step
+        // to the later key there, as `Channel::sample` and players read them.
+        if times.windows(2).any(|w| w[1] < w[0]) {
+            bail!(doc.err(format!(
+                "animation {name:?}: the key times of accessor {input} decrease"
+            )));
+        }
+        if let Some(mid) = rotation {
             unit_keys(&mut values, per_key, mid);
         }
         channels.push(Channel {
@@ -249,6 +251,44 @@ pub fn read_channels(
         });
     }
     Ok(channels)
+}
+
+/// Which keys of a sampler are defined: the key's time and every value of it (`per_key` a key,
+/// a CUBICSPLINE key's tangents with it) finite, and where `rotation` gives where a key's
+/// quaternion starts, that quaternion not zero. An exporter that divides a zero by its length
+/// writes NaN keys (COLLADA2GLTF's of a Modo character: glTF issue 219; ValveResourceFormat's
+/// bones, its issue 309), which players turn into no pose at all (three.js draws nothing
+/// there); the readers and the output leave them out, the keys beside them played across.
+pub fn defined_keys(
+    times: &[f64],
+    values: &[f64],
+    per_key: usize,
+    rotation: Option<usize>,
+) -> Vec<bool> {
+    (times.iter().zip(values.chunks_exact(per_key.max(1))))
+        .map(|(t, k)| {
+            t.is_finite()
+                && k.iter().all(|x| x.is_finite())
+                && rotation
+                    .is_none_or(|at| DQuat::from_slice(&k[at..at + 4]).length() >= MIN_QUATERNION)
+        })
+        .collect()
+}
+
+/// The times and values (`per_key` a key) of the keys `defined` marks.
+pub fn defined_only(
+    times: &[f64],
+    values: &[f64],
+    per_key: usize,
+    defined: &[bool],
+) -> (Vec<f64>, Vec<f64>) {
+    let kept = |i: &usize| defined[*i];
+    let times = (0..times.len()).filter(kept).map(|i| times[i]).collect();
+    let values = (0..defined.len())
+        .filter(kept)
+        .flat_map(|i| values[i * per_key..(i + 1) * per_key].iter().copied())
+        .collect();
+    (times, values)
 }
 
 /// A rotation key farther from unit length than float32 rounding leaves one: some exporters

@@ -7,12 +7,12 @@
 //! animation channels read and evaluated, nodes' rest transforms; [`skin`]: skinned points at any
 //! pose; [`instancing`]: a node's mesh instances) ... the command's own work ... -> [`build`] (new
 //! accessors and buffer views on an [`Output`]; [`mend`]: what the input breaks of glTF's rules,
-//! one mend a file, made right as it is copied: skin weights, rotation keys, key times, indices,
-//! strides, bounds, normals, tangents, sparse parts, image types, undeclared extensions, scene
-//! roots, repeated channels, empty clips and empty lists) -> [`mod@reorder`] (with meshopt:
-//! triangles and vertices in mesh order) -> [`compact`] (channels and accessors nothing uses any
-//! more dropped) -> [`encode`] (meshopt compression, when asked for) -> [`write`] (`.glb` or
-//! `.gltf` with its `.bin` and images, staged as one all-or-nothing set of files).
+//! one mend a file, made right as it is copied: undefined keys, skin weights, rotation keys, key
+//! times, indices, strides, bounds, normals, tangents, sparse parts, image types, undeclared
+//! extensions, scene roots, repeated channels, empty clips and empty lists) -> [`mod@reorder`]
+//! (with meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors
+//! nothing uses any more dropped) -> [`encode`] (meshopt compression, when asked for) -> [`write`]
+//! (`.glb` or `.gltf` with its `.bin` and images, staged as one all-or-nothing set of files).
 
 mod accessor;
 mod build;
@@ -32,8 +32,8 @@ mod write;
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{set_bounds, BinBuilder, Output, Storage};
 pub use channel::{
-    clip_name, close_keys, local_at, node_parents, push_key, read_channels, rest_matrix, rest_trs,
-    slerp, Channel, Interp, Path, MIN_QUATERNION,
+    clip_name, close_keys, defined_keys, defined_only, local_at, node_parents, push_key,
+    read_channels, rest_matrix, rest_trs, slerp, Channel, Interp, Path, MIN_QUATERNION,
 };
 pub(crate) use compact::{compact, drop_channels, AccessorRefs, PASSED_THROUGH};
 pub use encode::{

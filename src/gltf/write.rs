@@ -53,30 +53,34 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         bin.views[idx] = view;
     }
     embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
-    let mut mended = mend::all(&mut json, &mut bin);
+    let mut out = Output {
+        json,
+        bin,
+        copies,
+        meshopt: false,
+        mended: Vec::new(),
+    };
+    let mut mended = mend::undefined_keys(&mut out);
+    let (json, bin) = (&mut out.json, &mut out.bin);
+    mended.extend(mend::all(json, bin));
     if doc.byte_order_mark {
         mended.push(
             "a byte-order mark ahead of the JSON (glTF asks writers for none): read past, the output written without it".into(),
         );
     }
-    mended.extend(mend::bounds(doc, &mut json));
-    mended.extend(mend::normals(doc, &mut json, &mut bin));
-    mended.extend(mend::tangents(doc, &mut json, &mut bin));
-    mended.extend(mend::sparse_parts(doc, &mut json, &mut bin));
-    mended.extend(mend::image_types(doc, &mut json, &bin));
-    mended.extend(mend::undeclared_extensions(&mut json));
-    mended.extend(mend::scene_roots(&mut json));
-    mended.extend(mend::empty_animations(&json));
-    mended.extend(mend::repeated_channels(&json));
-    mended.extend(mend::negative_times(&json, &bin));
-    mended.extend(mend::empty_lists(&json));
-    Ok(Output {
-        json,
-        bin,
-        copies,
-        meshopt: false,
-        mended,
-    })
+    mended.extend(mend::bounds(doc, json));
+    mended.extend(mend::normals(doc, json, bin));
+    mended.extend(mend::tangents(doc, json, bin));
+    mended.extend(mend::sparse_parts(doc, json, bin));
+    mended.extend(mend::image_types(doc, json, bin));
+    mended.extend(mend::undeclared_extensions(json));
+    mended.extend(mend::scene_roots(json));
+    mended.extend(mend::empty_animations(json));
+    mended.extend(mend::repeated_channels(json));
+    mended.extend(mend::negative_times(json, bin));
+    mended.extend(mend::empty_lists(json));
+    out.mended = mended;
+    Ok(out)
 }
 
 /// Images referenced by file: embedded in a `.glb`, or (read, checked and) copied to the same

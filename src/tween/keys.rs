@@ -6,8 +6,8 @@
 
 use super::timegrid::snap;
 use crate::gltf::{
-    arr, listed, mesh_nodes, quoted_name, read_attribute, read_attribute3, read_triangles,
-    read_vec3, weights_target, Document, WeightsTarget,
+    arr, defined_keys, defined_only, listed, mesh_nodes, quoted_name, read_attribute,
+    read_attribute3, read_triangles, read_vec3, weights_target, Document, WeightsTarget,
 };
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -607,26 +607,32 @@ fn read_weight_keys(
         (Some(i), Some(o)) => (i as usize, o as usize),
         _ => bail!(doc.err(format!("{what} has no input or output accessor"))),
     };
-    let (times, _) = doc.read_f64(input)?;
-    let (values, _) = doc.read_f64(output)?;
-    let k = times.len();
-    if k == 0 {
-        bail!(doc.err(format!("{what} has no keys")));
-    }
-    if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
-        bail!(doc.err(format!("{what} key times are not increasing")));
-    }
+    let (times, _) = doc.read_f64_as_stored(input)?;
+    let (values, _) = doc.read_f64_as_stored(output)?;
     let cubic = s["interpolation"].as_str() == Some("CUBICSPLINE");
     let per_key = if cubic {
         3 * target_count
     } else {
         target_count
     };
-    if values.len() != k * per_key {
+    if values.len() != times.len() * per_key {
         bail!(doc.err(format!(
-            "{what} has {} weight values for {k} keys and {target_count} targets",
-            values.len()
+            "{what} has {} weight values for {} keys and {target_count} targets",
+            values.len(),
+            times.len()
         )));
+    }
+    // Keys holding a NaN or infinite time or weight are left out (`defined_keys`).
+    let defined = defined_keys(&times, &values, per_key, None);
+    let (times, values) = defined_only(&times, &values, per_key, &defined);
+    let k = times.len();
+    if k == 0 {
+        bail!(doc.err(format!(
+            "{what} has no keys (none whose time and weights are numbers)"
+        )));
+    }
+    if times.windows(2).any(|w| w[1] < w[0]) {
+        bail!(doc.err(format!("{what} key times are not increasing")));
     }
     let weights = (0..k)
         .map(|i| {

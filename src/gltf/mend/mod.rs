@@ -3,7 +3,7 @@
 //! write. Each fix is what every viewer that copes with the broken data does anyway; a line
 //! names it where it is more than a codec's rounding.
 //!
-//! The mends, one a file, in the order `begin` runs them: [`weights`] (and joints named twice),
+//! The mends, one a file, in the order `begin` runs them: [`undefined_keys`], [`weights`] (and joints named twice),
 //! [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the bounds of the VEC4 data
 //! these change) in [`all`]; then [`bounds`], [`normals`], [`tangents`], [`sparse_parts`],
 //! [`image_types`], [`undeclared_extensions`], [`scene_roots`], and the animations
@@ -18,6 +18,7 @@ mod extensions;
 mod images;
 mod indices;
 mod key_times;
+mod keys;
 mod normals;
 mod rotations;
 mod scenes;
@@ -35,6 +36,7 @@ pub use extensions::undeclared_extensions;
 pub use images::image_types;
 pub use indices::restart_indices;
 pub use key_times::{key_times, negative_times, start_at_zero};
+pub use keys::undefined_keys;
 pub use normals::normals;
 pub use rotations::rotations;
 pub use scenes::scene_roots;
