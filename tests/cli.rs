@@ -161,6 +161,68 @@ fn everything_else_comes_through() {
     }
 }
 
+/// Target names a primitive carries (`primitives[].extras.targetNames`: assimp's exporter and
+/// UniVRM's VRM 0 files put them there, not on the mesh), or each target (early UniVRM's
+/// `targets[i].extras.targetName`, an entry glTF refuses: 24 validator errors on Parrot) are
+/// the authored names too: Parrot so written tweens (plain and `--compact`) validator-clean to
+/// its 12 authored names and then its frames' on the mesh, a primitive's list naming the same;
+/// `inspect` lists them. (The authored names were written as target_0 ... on the mesh.)
+#[test]
+fn target_names_a_primitive_carries_are_kept() {
+    let Some(fx) = fixtures() else { return };
+    let parrot = fx.join("morph-keyframes/Parrot.glb");
+    let doc = Document::open(&parrot).unwrap();
+    let authored = doc.json["meshes"][0]["extras"]["targetNames"].clone();
+    let dir = tempfile::tempdir().unwrap();
+    for each in [false, true] {
+        let input = dir.path().join("named.glb");
+        edited_glb(&parrot, &input, |j| {
+            let mesh = j["meshes"][0].as_object_mut().unwrap();
+            let extras = mesh.remove("extras").unwrap();
+            let p = &mut j["meshes"][0]["primitives"][0];
+            match each {
+                // Early UniVRM: each target names itself.
+                true => {
+                    let targets = p["targets"].as_array_mut().unwrap();
+                    for (t, n) in targets
+                        .iter_mut()
+                        .zip(extras["targetNames"].as_array().unwrap())
+                    {
+                        t["extras"] = serde_json::json!({ "targetName": n });
+                    }
+                }
+                false => p["extras"] = extras,
+            }
+        });
+        let listed = run_ok(&["inspect", s(&input)]);
+        let listed = String::from_utf8_lossy(&listed.stdout);
+        assert!(
+            listed.contains("12 targets (parrot_A_001, parrot_A_002"),
+            "{listed}"
+        );
+        for extra in [&[][..], &["--compact"][..]] {
+            let out = dir.path().join("out.glb");
+            run_ok(&[&["tween", s(&input), "-o", s(&out), "-q"][..], extra].concat());
+            assert_valid(&out);
+            let (j, _) = glb_parts(&out);
+            let names = j["meshes"][0]["extras"]["targetNames"]
+                .as_array()
+                .unwrap()
+                .clone();
+            let prim = &j["meshes"][0]["primitives"][0];
+            assert_eq!(
+                names.len(),
+                prim["targets"].as_array().unwrap().len(),
+                "{extra:?}"
+            );
+            assert_eq!(&names[..12], &authored.as_array().unwrap()[..], "{extra:?}");
+            if !each {
+                assert_eq!(prim["extras"]["targetNames"], serde_json::json!(names));
+            }
+        }
+    }
+}
+
 /// flag_wave with texture-coordinate deltas in every target (VEC2) and colour deltas in the
 /// first (VEC4, the others lacking them), as a UV-animating face rig has.
 fn flag_with_uv_and_colour_deltas(path: &Path) {

@@ -42,7 +42,7 @@ pub use encode::{
 pub use instancing::{instances, Instances};
 pub use read::{
     arr, at, listed, listed_or_none, mesh_nodes, node_target, quoted_name, starts_like_bvh,
-    weights_target, Document, WeightsTarget,
+    target_names, weights_target, Document, WeightsTarget,
 };
 pub use reorder::reorder;
 pub use skin::{Skeleton, Skinning};

@@ -66,6 +66,37 @@ pub fn quoted_name(part: &Value, fallback: impl FnOnce() -> String) -> String {
         .map_or_else(fallback, |n| format!("{n:?}"))
 }
 
+/// The names of a mesh's morph targets: its `extras.targetNames` (Blender's and most tools'
+/// place), else a primitive's (where assimp's exporter and UniVRM's VRM 0 files put them:
+/// glTF issue 1036's first sketch), else each target's own `extras.targetName` (early
+/// UniVRM's, which `mend::target_extras` moves to the mesh); empty where none names them.
+pub fn target_names(mesh: &Value) -> Vec<String> {
+    let names = |v: &Value| -> Vec<String> {
+        arr(&v["extras"], "targetNames")
+            .iter()
+            .map(|n| n.as_str().unwrap_or("").to_string())
+            .collect()
+    };
+    let own = names(mesh);
+    if !own.is_empty() {
+        return own;
+    }
+    let each = |p: &Value| -> Vec<String> {
+        let own: Vec<String> = (arr(p, "targets").iter())
+            .map(|t| t["extras"]["targetName"].as_str().unwrap_or("").to_string())
+            .collect();
+        match own.iter().any(|n| !n.is_empty()) {
+            true => own,
+            false => Vec::new(),
+        }
+    };
+    let primitives = arr(mesh, "primitives");
+    (primitives.iter().map(names))
+        .chain(primitives.iter().map(each))
+        .find(|n| !n.is_empty())
+        .unwrap_or_default()
+}
+
 /// How many names [`listed`] shows.
 const LISTED: usize = 8;
 

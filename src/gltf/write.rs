@@ -75,6 +75,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     mended.extend(mend::image_types(doc, json, bin));
     mended.extend(mend::undeclared_extensions(json));
     mended.extend(mend::scene_roots(json));
+    mended.extend(mend::target_extras(json));
     mended.extend(mend::empty_animations(json));
     mended.extend(mend::repeated_channels(json));
     mended.extend(mend::negative_times(json, bin));

@@ -6,7 +6,9 @@
 //! required extensions with whether they are decoded. For a BVH
 //! capture, see [`bvh`]. Text, or JSON (`schemas/inspect.schema.json`).
 
-use crate::gltf::{arr, listed, quoted_name, weights_target, Access, Document, PASSED_THROUGH};
+use crate::gltf::{
+    arr, listed, quoted_name, target_names, weights_target, Access, Document, PASSED_THROUGH,
+};
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, targets_given_normals, KeyOptions, KeySource,
     MorphMesh, TrackOrigin, TweenOptions,
@@ -306,11 +308,7 @@ fn morph_meshes(doc: &Document) -> Vec<MorphMeshInfo> {
                 vertices,
                 triangles,
                 targets,
-                target_names: arr(&m["extras"], "targetNames")
-                    .iter()
-                    .filter_map(Value::as_str)
-                    .map(str::to_owned)
-                    .collect(),
+                target_names: target_names(m),
             })
         })
         .collect()

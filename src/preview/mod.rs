@@ -20,7 +20,7 @@ pub use camera::View;
 pub use clips::posed;
 pub use raster::{Picture, Shading, BACKGROUND};
 
-use crate::gltf::{arr, mesh_nodes, node_parents, rest_matrix, Access, Document};
+use crate::gltf::{arr, mesh_nodes, node_parents, rest_matrix, target_names, Access, Document};
 use crate::output::Outputs;
 use crate::progress::Progress;
 use crate::tween::{
@@ -314,9 +314,8 @@ fn draw_bands(scene: &Scene, camera: &Camera, cell: (usize, usize), shading: Sha
 /// Whether the file is a tween output: a mesh has targets named as `tween` names its frames
 /// (`f0007_t0.2917`).
 fn is_tween_output(doc: &Document) -> bool {
-    let frame_name = |n: &Value| {
-        n.as_str()
-            .and_then(|n| n.strip_prefix('f'))
+    let frame_name = |n: &String| {
+        n.strip_prefix('f')
             .and_then(|n| n.split_once("_t"))
             .is_some_and(|(f, t)| {
                 !f.is_empty() && f.bytes().all(|b| b.is_ascii_digit()) && t.parse::<f64>().is_ok()
@@ -324,7 +323,7 @@ fn is_tween_output(doc: &Document) -> bool {
     };
     arr(&doc.json, "meshes")
         .iter()
-        .any(|m| arr(&m["extras"], "targetNames").iter().any(frame_name))
+        .any(|m| target_names(m).iter().any(frame_name))
 }
 
 fn image_kind(path: &Path, allowed: &[&str], what: &str) -> Result<String> {

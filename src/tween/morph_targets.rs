@@ -691,10 +691,7 @@ fn name_targets(
     };
     let mesh_json = &out.json["meshes"][m.mesh];
     let weights = pad(mesh_json);
-    let mut names: Vec<String> = arr(&mesh_json["extras"], "targetNames")
-        .iter()
-        .map(|n| n.as_str().unwrap_or("").to_string())
-        .collect();
+    let mut names = gltf::target_names(mesh_json);
     names.resize_with(kept, String::new);
     for (i, name) in names.iter_mut().enumerate() {
         if name.is_empty() {
@@ -722,6 +719,12 @@ fn name_targets(
         mesh["extras"] = json!({});
     }
     mesh["extras"]["targetNames"] = json!(names);
+    // A primitive that names the targets too (assimp's exporter, VRM 0) names the new ones.
+    for p in mesh["primitives"].as_array_mut().into_iter().flatten() {
+        if p["extras"].get("targetNames").is_some() {
+            p["extras"]["targetNames"] = json!(names);
+        }
+    }
     for &i in carriers {
         let n = &mut out.json["nodes"][i];
         if n.get("weights").is_some() {

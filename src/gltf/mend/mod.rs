@@ -3,13 +3,14 @@
 //! write. Each fix is what every viewer that copes with the broken data does anyway; a line
 //! names it where it is more than a codec's rounding.
 //!
-//! The mends, one a file, in the order `begin` runs them: [`undefined_keys`], [`weights`] (and joints named twice),
-//! [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the bounds of the VEC4 data
-//! these change) in [`all`]; then [`bounds`], [`normals`], [`tangents`], [`sparse_parts`],
-//! [`image_types`], [`undeclared_extensions`], [`scene_roots`], and the animations
-//! ([`empty_animations`], [`repeated_channels`], [`negative_times`]: the channels and clips left
-//! out, and the clips moved to start at 0 s, when the output is written), and the [`empty_lists`]
-//! and meshes with no primitive (left out when the output is written).
+//! The mends, one a file, in the order `begin` runs them: [`undefined_keys`], [`weights`] (and
+//! joints named twice), [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the
+//! bounds of the VEC4 data these change) in [`all`]; then [`bounds`], [`normals`], [`tangents`],
+//! [`sparse_parts`], [`image_types`], [`undeclared_extensions`], [`scene_roots`],
+//! [`target_extras`], and the animations ([`empty_animations`], [`repeated_channels`],
+//! [`negative_times`]: the channels and clips left out, and the clips moved to start at 0 s, when
+//! the output is written), and the [`empty_lists`] and meshes with no primitive (left out when the
+//! output is written).
 
 mod animations;
 mod bounds;
@@ -25,6 +26,7 @@ mod scenes;
 mod sparse;
 mod strides;
 mod tangents;
+mod targets;
 mod weights;
 
 pub use animations::{
@@ -43,6 +45,7 @@ pub use scenes::scene_roots;
 pub use sparse::sparse_parts;
 pub use strides::strides;
 pub use tangents::tangents;
+pub use targets::target_extras;
 pub use weights::weights;
 
 use super::build::BinBuilder;
