@@ -267,11 +267,11 @@ impl TimingArgs {
 
 #[derive(Args)]
 pub struct TweenArgs {
-    /// Input .gltf (embedded or external buffers) or .glb.
+    /// Input .gltf (embedded or external buffers) or .glb (.vrm too: a GLB).
     input: PathBuf,
-    /// Output file; the format follows the extension (.glb, .gltf, .usda, .usdc or .usdz). A
-    /// USD output carries the materials as UsdPreviewSurface, their PNG and JPEG textures written
-    /// beside a .usda/.usdc as <stem>_<image>.png|jpg or packed inside a .usdz.
+    /// Output file; the format follows the extension (.glb or .vrm, .gltf, .usda, .usdc or
+    /// .usdz). A USD output carries the materials as UsdPreviewSurface, their PNG and JPEG
+    /// textures written beside a .usda/.usdc as <stem>_<image>.png|jpg or packed inside a .usdz.
     #[arg(short, long)]
     output: PathBuf,
     #[command(flatten)]

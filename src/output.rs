@@ -29,13 +29,14 @@ impl Format {
             .unwrap_or("")
             .to_ascii_lowercase();
         let format = match ext.as_str() {
-            "glb" => Format::Glb,
+            // A VRM avatar is a GLB file (its VRM extension passed through).
+            "glb" | "vrm" => Format::Glb,
             "gltf" => Format::Gltf,
             "usda" => Format::Usda,
             "usdc" | "usd" => Format::Usdc,
             "usdz" => Format::Usdz,
             _ => bail!(
-                "{}: unknown output extension {ext:?} (use .glb, .gltf, .usda, .usdc or .usdz)",
+                "{}: unknown output extension {ext:?} (use .glb, .gltf, .usda, .usdc or .usdz; .vrm is written as the GLB it is)",
                 path.display()
             ),
         };

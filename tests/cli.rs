@@ -223,6 +223,21 @@ fn target_names_a_primitive_carries_are_kept() {
     }
 }
 
+/// A VRM avatar (a face rig's usual home) is a GLB file: read as one, and `-o face.vrm`
+/// written as one, the same bytes as `-o face.glb` (it was refused: "unknown output
+/// extension").
+#[test]
+fn a_vrm_is_read_and_written_as_the_glb_it_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let vrm = dir.path().join("face.vrm");
+    std::fs::copy(sample("flag_wave.glb"), &vrm).unwrap();
+    let (a, b) = (dir.path().join("out.vrm"), dir.path().join("out.glb"));
+    run_ok(&["tween", s(&vrm), "-o", s(&a), "-q"]);
+    run_ok(&["tween", s(&vrm), "-o", s(&b), "-q"]);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    assert_valid(&b);
+}
+
 /// flag_wave with texture-coordinate deltas in every target (VEC2) and colour deltas in the
 /// first (VEC4, the others lacking them), as a UV-animating face rig has.
 fn flag_with_uv_and_colour_deltas(path: &Path) {
@@ -1724,7 +1739,8 @@ fn integers_written_as_decimals_and_a_byte_order_mark_are_read() {
 }
 
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
-/// and as an external file of a `.gltf`), extensions used but not named in `extensionsUsed`
+/// and as an external file of a `.gltf`; another named by a Windows path, `tex\\fox.png`, as
+/// AWS iot-app-kit's pull request 417 met them), extensions used but not named in `extensionsUsed`
 /// (one of them required), a scene listing a child beside its ancestor and a root twice. Fox
 /// so written blends validator-clean (7 errors in) to the original's binary, each said in a
 /// line; the extensions named, the image declared PNG, the scene listing its two roots.
@@ -1770,33 +1786,53 @@ fn declarations_a_writer_got_wrong_are_written_as_the_file_is() {
     );
     assert_eq!(ja["scenes"][0]["nodes"], json!([0, 1]));
     // The same image as a file beside a `.gltf`, labelled JPEG: declared PNG in a `.gltf` (the
-    // file copied beside it) and in a `.glb` (embedded).
+    // file copied beside it) and in a `.glb` (embedded); and in a folder named with a Windows
+    // path's backslash (`tex\\fox.png`, which was not found): read there, its URI written
+    // with a slash.
     let (doc_json, doc_bin) = glb_parts(&fox);
-    let mut j = doc_json.clone();
-    let view = &j["bufferViews"][j["images"][0]["bufferView"].as_u64().unwrap() as usize];
+    let view =
+        &doc_json["bufferViews"][doc_json["images"][0]["bufferView"].as_u64().unwrap() as usize];
     let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
     let png = &doc_bin[start..start + view["byteLength"].as_u64().unwrap() as usize];
-    std::fs::write(dir.path().join("fox tex.png"), png).unwrap();
     std::fs::write(dir.path().join("fox.bin"), &doc_bin).unwrap();
-    j["images"][0] = json!({ "uri": "fox%20tex.png", "mimeType": "image/jpeg" });
-    j["buffers"][0]["uri"] = json!("fox.bin");
-    let gltf = dir.path().join("fox.gltf");
-    std::fs::write(&gltf, serde_json::to_vec(&j).unwrap()).unwrap();
-    let out = dir.path().join("out");
-    std::fs::create_dir(&out).unwrap();
-    for name in ["f.gltf", "f.glb"] {
-        let written = out.join(name);
-        let told = blend(&gltf, &written);
-        let err = String::from_utf8_lossy(&told.stderr);
-        assert!(err.contains("its bytes image/png"), "{err}");
-        assert_valid(&written);
-        let j = match name {
-            "f.glb" => glb_parts(&written).0,
-            _ => read_json(&written),
-        };
-        assert_eq!(j["images"][0]["mimeType"], "image/png", "{name}");
+    std::fs::create_dir(dir.path().join("tex")).unwrap();
+    for (uri, file, mime, written_uri) in [
+        (
+            "fox%20tex.png",
+            "fox tex.png",
+            "image/jpeg",
+            "fox%20tex.png",
+        ),
+        ("tex\\fox.png", "tex/fox.png", "image/png", "tex/fox.png"),
+    ] {
+        std::fs::write(dir.path().join(file), png).unwrap();
+        let mut j = doc_json.clone();
+        j["images"][0] = json!({ "uri": uri, "mimeType": mime });
+        j["buffers"][0]["uri"] = json!("fox.bin");
+        let gltf = dir.path().join("fox.gltf");
+        std::fs::write(&gltf, serde_json::to_vec(&j).unwrap()).unwrap();
+        let out = tempfile::tempdir().unwrap();
+        for name in ["f.gltf", "f.glb"] {
+            let written = out.path().join(name);
+            let told = blend(&gltf, &written);
+            let err = String::from_utf8_lossy(&told.stderr);
+            assert_eq!(
+                err.contains("its bytes image/png"),
+                mime != "image/png",
+                "{err}"
+            );
+            assert_valid(&written);
+            let j = match name {
+                "f.glb" => glb_parts(&written).0,
+                _ => read_json(&written),
+            };
+            assert_eq!(j["images"][0]["mimeType"], "image/png", "{name}");
+            if name == "f.gltf" {
+                assert_eq!(j["images"][0]["uri"], written_uri);
+            }
+        }
+        assert_eq!(std::fs::read(out.path().join(file)).unwrap(), png);
     }
-    assert_eq!(std::fs::read(out.join("fox tex.png")).unwrap(), png);
 }
 
 /// Keys that stand for no pose (a NaN or infinite time or value, as exporters that divide a

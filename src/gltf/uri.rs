@@ -73,6 +73,10 @@ pub fn reference(uri: &str) -> Result<Reference, String> {
             return Err("is an absolute URI (only relative references are read)".into());
         }
     }
+    // A backslash is no URI character: Windows exporters write their paths' separators so
+    // (`textures\wood.png`: AWS iot-app-kit's pull request 417), read as the folders they
+    // are (`%5C`, a backslash escaped, stays a character of a name).
+    let uri = uri.replace('\\', "/");
     let path = percent_decode(uri.split(['?', '#']).next().unwrap_or(""));
     if path.contains('\0') {
         return Err("holds a NUL character".into());
@@ -217,12 +221,21 @@ mod tests {
         };
         assert_eq!(inside("a/./b/../c.bin"), PathBuf::from("a/c.bin"));
         assert_eq!(inside("My%20File.bin"), PathBuf::from("My File.bin"));
+        // A Windows path's backslashes are folders; an escaped one is a name's character.
+        assert_eq!(
+            inside("textures\\wood.png"),
+            PathBuf::from("textures/wood.png")
+        );
+        assert_eq!(inside("a%5Cb.png"), PathBuf::from("a\\b.png"));
         for outside in [
             "/etc/hostname",
             "../a.bin",
             "a/../../b.bin",
             "%2e%2e/secret",
             "%2Fetc%2Fpasswd",
+            "..\\..\\secret",
+            "\\etc\\hostname",
+            "a\\..\\..\\b.bin",
         ] {
             assert!(
                 matches!(reference(outside), Ok(Reference::Outside(..))),
@@ -230,6 +243,7 @@ mod tests {
             );
         }
         for bad in [
+            "C:\\Users\\a.bin",
             "file:///etc/hostname",
             "FILE:x",
             "http://example.com/a.bin",

@@ -135,6 +135,10 @@ fn embed_or_copy_images(
                     if !same_file(&doc.folder().join(&rel), &dst) {
                         copies.push((doc.read_image(i, &uri)?.0, dst));
                     }
+                    // A Windows path's separators written as a URI's.
+                    if uri.contains('\\') {
+                        img["uri"] = json!(uri.replace('\\', "/"));
+                    }
                 }
                 // Outside the input's folder (allowed by --allow-external): copied beside the
                 // output under its own name, and referred to by that name.

@@ -1,14 +1,15 @@
-//! Empty lists ([`empty_lists`], [`drop_empty_lists`]): glTF gives every list it names at
-//! least one entry (the validator's EMPTY_ENTITY), and writers leave empty ones: Babylon's 3ds
-//! Max exporter `extensionsUsed` (BabylonJS/Exporters issue 152), COLLADA2GLTF and a Vulkan
-//! exporter `children` and top-level lists (glTF-Sample-Models issue 52), three.js's exporter
-//! a scene's `nodes` (three.js pull request 18933), UniVRM and gltf-rs a mesh with no
-//! `primitives` (UniVRM issue 2612, gltf pull request 300). An optional list that is empty is
-//! left out of the output, which reads the same; a mesh with no primitive, which draws nothing,
-//! is left out with the nodes' references to it (and their `skin` and `weights`, which need
-//! one). Like the empty animations, they go when the output is written: until then the other
-//! stages address the meshes by their index in the input.
+//! Empty lists ([`empty_lists`], [`drop_empty_lists`]): glTF gives every list it names at least one
+//! entry (the validator's EMPTY_ENTITY), and writers leave empty ones: Babylon's 3ds Max exporter
+//! `extensionsUsed` (BabylonJS/Exporters issue 152), COLLADA2GLTF and a Vulkan exporter `children`
+//! and top-level lists (glTF-Sample-Models issue 52), three.js's exporter a scene's `nodes`
+//! (three.js pull request 18933), UniVRM and gltf-rs a mesh with no `primitives` (UniVRM issue
+//! 2612, gltf pull request 300). An optional list that is empty is left out of the output, which
+//! reads the same; a mesh with no primitive, which draws nothing, is left out with the nodes'
+//! references to it (and their `skin` and `weights`, which need one), unless an extension might
+//! refer to meshes by index. Like the empty animations, they go when the output is written: until
+//! then the other stages address the meshes by their index in the input.
 
+use crate::gltf::compact::PASSED_THROUGH;
 use crate::gltf::read::{arr, listed, quoted_name};
 use serde_json::Value;
 
@@ -70,8 +71,17 @@ fn empty_in(json: &Value) -> Vec<(String, &'static str)> {
     found
 }
 
-/// The meshes of `json` with no primitive (none, or an empty list).
+/// The meshes of `json` with no primitive (none, or an empty list); none where an extension
+/// might refer to meshes by index (one not known to refer to none: VRM's blend shape binds,
+/// KHR_animation_pointer's `/meshes/N/weights`), which leaving one out would renumber.
 fn hollow_meshes(json: &Value) -> Vec<usize> {
+    let known = |e: &Value| {
+        e.as_str()
+            .is_some_and(|e| PASSED_THROUGH.contains(&e) && e != "KHR_animation_pointer")
+    };
+    if !arr(json, "extensionsUsed").iter().all(known) {
+        return Vec::new();
+    }
     (arr(json, "meshes").iter().enumerate())
         .filter(|(_, m)| arr(m, "primitives").is_empty())
         .map(|(i, _)| i)
