@@ -2325,23 +2325,9 @@ fn normals_off_unit_length_are_written_as_unit() {
     let input = dir.path().join("broken.glb");
     write_glb(&input, &json, &bin);
     let out = dir.path().join("out.glb");
-    let p = |f: &Path| f.to_str().unwrap().to_string();
-    let r = run_ok(&["blend", &p(&input), &p(&input), "-o", &p(&out)]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert!(
-        err.contains(
-            "80 normals were not of unit length as glTF requires (40 of them zero or not numbers)"
-        ),
-        "{err}"
-    );
-    if let Some((errors, _, line)) = validate(&out) {
-        assert_eq!(errors, 0, "{line}");
-    }
-    let written = Document::open(&out).unwrap();
-    let acc = written.json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"]
-        .as_u64()
-        .unwrap() as usize;
-    let (normals, _) = written.read_f64(acc).unwrap();
+    let said =
+        "80 normals were not of unit length as glTF requires (40 of them zero or not numbers)";
+    let normals = blended_attribute(&input, &out, said, "NORMAL");
     let at = |v: &[f64], i: usize| glam::DVec3::from_slice(&v[3 * i..3 * i + 3]);
     for i in 0..normals.len() / 3 {
         let (n, o) = (at(&normals, i), at(&original, i));
@@ -2391,21 +2377,8 @@ fn tangents_off_unit_length_or_sign_are_written_as_unit() {
     let input = dir.path().join("tangents.glb");
     write_glb(&input, &json, &bin);
     let out = dir.path().join("out.glb");
-    let p = |f: &Path| f.to_str().unwrap().to_string();
-    let r = run_ok(&["blend", &p(&input), &p(&input), "-o", &p(&out)]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert!(
-        err.contains("55 tangent signs were not 1 or -1 and 70 tangents not of unit length as glTF requires (30 of them zero or not numbers)"),
-        "{err}"
-    );
-    if let Some((errors, _, line)) = validate(&out) {
-        assert_eq!(errors, 0, "{line}");
-    }
-    let written = Document::open(&out).unwrap();
-    let acc = written.json["meshes"][0]["primitives"][0]["attributes"]["TANGENT"]
-        .as_u64()
-        .unwrap() as usize;
-    let (tangents, _) = written.read_f64(acc).unwrap();
+    let said = "55 tangent signs were not 1 or -1 and 70 tangents not of unit length as glTF requires (30 of them zero or not numbers)";
+    let tangents = blended_attribute(&input, &out, said, "TANGENT");
     for (i, &n) in normals.iter().enumerate() {
         let t = glam::DVec3::from_slice(&tangents[4 * i..4 * i + 3]);
         let w = tangents[4 * i + 3];
@@ -2422,6 +2395,23 @@ fn tangents_off_unit_length_or_sign_are_written_as_unit() {
             assert!(t.dot(n.normalize()).abs() < 1e-6, "{i}: {t} along {n}");
         }
     }
+}
+
+/// `blend` of `input` (a character with one clip) with itself to `out`, which must say `said`
+/// and pass the validator; the values written of its first primitive's `attribute`.
+fn blended_attribute(input: &Path, out: &Path, said: &str, attribute: &str) -> Vec<f64> {
+    let p = |f: &Path| f.to_str().unwrap().to_string();
+    let r = run_ok(&["blend", &p(input), &p(input), "-o", &p(out)]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains(said), "{said} in {err}");
+    if let Some((errors, _, line)) = validate(out) {
+        assert_eq!(errors, 0, "{line}");
+    }
+    let written = Document::open(out).unwrap();
+    let acc = written.json["meshes"][0]["primitives"][0]["attributes"][attribute]
+        .as_u64()
+        .unwrap() as usize;
+    written.read_f64(acc).unwrap().0
 }
 
 /// Where accessor `acc` of `json` starts in its buffer, and its byte stride (`elem` bytes

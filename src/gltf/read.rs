@@ -127,7 +127,7 @@ fn not_gltf(path: &Path, bytes: &[u8], e: serde_json::Error) -> anyhow::Error {
 }
 
 /// Top-level arrays whose entries must be objects.
-const OBJECT_ARRAYS: &[&str] = &[
+pub(crate) const OBJECT_ARRAYS: &[&str] = &[
     "accessors",
     "animations",
     "buffers",

@@ -10,7 +10,7 @@
 //! and every sampler's key times) are written from the values of a float accessor.
 
 use super::{attribute_sets, said_of, Column};
-use crate::gltf::build::{f32_json, min_max, BinBuilder};
+use crate::gltf::build::{f32_json, min_max, set_bounds, BinBuilder};
 use crate::gltf::read::{arr, Document};
 use serde_json::Value;
 
@@ -149,4 +149,15 @@ fn bounded_by_rule(json: &Value) -> std::collections::BTreeSet<usize> {
         }
     }
     required
+}
+
+/// The declared bounds (where an accessor declares them) of each accessor of `rebound` made
+/// those of the values written to it (`width` a element).
+pub(super) fn declared_follow(json: &mut Value, rebound: Vec<(usize, Vec<f32>)>, width: usize) {
+    for (acc, written) in rebound {
+        let a = &mut json["accessors"][acc];
+        if a.get("min").is_some() || a.get("max").is_some() {
+            set_bounds(a, &written, width);
+        }
+    }
 }

@@ -10,27 +10,16 @@
 //! then the other stages address the meshes by their index in the input.
 
 use crate::gltf::compact::PASSED_THROUGH;
-use crate::gltf::read::{arr, listed, quoted_name};
+use crate::gltf::read::{arr, listed, quoted_name, OBJECT_ARRAYS};
 use serde_json::Value;
 
-/// The core schema's optional lists of the top level.
-const TOP: [&str; 15] = [
-    "extensionsUsed",
-    "extensionsRequired",
-    "accessors",
-    "animations",
-    "buffers",
-    "bufferViews",
-    "cameras",
-    "images",
-    "materials",
-    "meshes",
-    "nodes",
-    "samplers",
-    "scenes",
-    "skins",
-    "textures",
-];
+/// The core schema's optional lists of the top level: the extension names, and its lists of
+/// parts.
+fn top_lists() -> impl Iterator<Item = &'static str> {
+    ["extensionsUsed", "extensionsRequired"]
+        .into_iter()
+        .chain(OBJECT_ARRAYS.iter().copied())
+}
 
 /// The core schema's optional lists inside the top level's parts: `(part, list)`.
 const INNER: [(&str, &str); 4] = [
@@ -63,7 +52,7 @@ fn empty_in(json: &Value) -> Vec<(String, &'static str)> {
             }
         }
     }
-    for key in TOP {
+    for key in top_lists() {
         if empty(json, key) {
             found.push((String::new(), key));
         }

@@ -10,7 +10,7 @@
 
 use super::Column;
 use crate::gltf::accessor::{read_triangles, read_vec3};
-use crate::gltf::build::{set_bounds, BinBuilder};
+use crate::gltf::build::BinBuilder;
 use crate::gltf::read::{arr, quoted_name, Document};
 use serde_json::Value;
 
@@ -85,12 +85,7 @@ pub fn normals(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<St
             ));
         }
     }
-    for (acc, written) in rebound {
-        let a = &mut json["accessors"][acc];
-        if a.get("min").is_some() || a.get("max").is_some() {
-            set_bounds(a, &written, 3);
-        }
-    }
+    super::bounds::declared_follow(json, rebound, 3);
     lines
 }
 

@@ -12,7 +12,7 @@
 use super::normals::off_unit;
 use super::Column;
 use crate::gltf::accessor::{read_triangles, read_vec3};
-use crate::gltf::build::{set_bounds, BinBuilder};
+use crate::gltf::build::BinBuilder;
 use crate::gltf::read::{arr, quoted_name, Document};
 use glam::DVec3;
 use serde_json::Value;
@@ -81,12 +81,7 @@ pub fn tangents(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> Vec<S
             ));
         }
     }
-    for (acc, written) in rebound {
-        let a = &mut json["accessors"][acc];
-        if a.get("min").is_some() || a.get("max").is_some() {
-            set_bounds(a, &written, 4);
-        }
-    }
+    super::bounds::declared_follow(json, rebound, 4);
     lines
 }
 
