@@ -1816,6 +1816,64 @@ fn declarations_a_writer_got_wrong_are_written_as_the_file_is() {
     }
 }
 
+/// A texture missing beside a downloaded `.gltf` (its file not shipped, or misspelt) stopped
+/// every command ("image 0 uri ... cannot be read"); the work is on the geometry and the clips,
+/// so the image stays the reference it was (nothing the input held is lost), said in a line,
+/// and a USD output's material leaves the texture out, said. Fox as a `.gltf` with its image
+/// file missing blends to .glb, .gltf and .usda; the validator finds only the missing file
+/// (IO_ERROR, as in the input). A reference leading outside the input's folder is still refused
+/// (`hostile::external_references_stay_inside_the_input_folder`).
+#[test]
+fn a_texture_missing_beside_a_gltf_is_left_the_reference_it_was() {
+    use serde_json::json;
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (mut j, bin) = glb_parts(&fx.join("skinned/Fox.glb"));
+    std::fs::write(dir.path().join("fox.bin"), &bin).unwrap();
+    j["images"][0] = json!({ "uri": "fox_texture.png", "mimeType": "image/png" });
+    j["buffers"][0]["uri"] = json!("fox.bin");
+    let gltf = dir.path().join("fox.gltf");
+    std::fs::write(&gltf, serde_json::to_vec(&j).unwrap()).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    for (name, said) in [
+        ("f.glb", "left as a reference to it, not embedded"),
+        ("f.gltf", "left as a reference to it, not copied"),
+        ("f.usda", "image 0 \"fox_texture.png\" cannot be read"),
+    ] {
+        let written = out.path().join(name);
+        let told = run_ok(&[
+            "blend",
+            s(&gltf),
+            "--clips",
+            "Walk",
+            "Run",
+            "-o",
+            s(&written),
+        ]);
+        let err = String::from_utf8_lossy(&told.stderr);
+        assert!(
+            err.contains(said) && err.contains("cannot be read"),
+            "{name}: {err}"
+        );
+        if name == "f.usda" {
+            continue;
+        }
+        let j = match name {
+            "f.glb" => glb_parts(&written).0,
+            _ => read_json(&written),
+        };
+        assert_eq!(j["images"][0]["uri"], "fox_texture.png", "{name}");
+        if let Some((_, _, line)) = validate(&written) {
+            let report: serde_json::Value = serde_json::from_str(&line).unwrap();
+            let errors: Vec<&str> = (report["messages"].as_array().unwrap().iter())
+                .filter(|m| m["severity"] == "error")
+                .map(|m| m["code"].as_str().unwrap())
+                .collect();
+            assert_eq!(errors, ["IO_ERROR"], "{name}: {line}");
+        }
+    }
+}
+
 /// Keys that stand for no pose (a NaN or infinite time or value, as exporters that divide a
 /// zero by its length write; the whole file was refused, even for a clip the command does not
 /// use): left out, the keys beside them played across, said in a line. Fox with a NaN

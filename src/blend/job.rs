@@ -407,7 +407,9 @@ fn run_gltf(job: &BlendJob, inputs: &[&PathBuf]) -> Result<BlendSummary> {
         .collect::<Result<Vec<_>>>()?;
     let mut out = gltf::begin(&docs[0], container, &job.output)?;
     let input = inputs[0].display();
-    let mut warnings: Vec<String> = (out.mended.iter())
+    // A USD output says its own unread images (left out of its materials).
+    let unread = out.unread_images.iter().filter(|_| usd.is_none());
+    let mut warnings: Vec<String> = (unread.chain(&out.mended))
         .map(|what| format!("{input}: {what}"))
         .collect();
     let mut blends = Vec::new();

@@ -166,6 +166,9 @@ pub struct Output {
     pub meshopt: bool,
     /// What the output mends in the input's data, one line each, for the summary's warnings.
     pub mended: Vec<String>,
+    /// The image files that could not be read, left as the references they were: one line
+    /// each, for a glTF output's warnings (a USD output says its own).
+    pub unread_images: Vec<String>,
 }
 
 impl Output {
@@ -177,6 +180,7 @@ impl Output {
             copies: Vec::new(),
             meshopt: false,
             mended: Vec::new(),
+            unread_images: Vec::new(),
         }
     }
 

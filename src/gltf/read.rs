@@ -242,12 +242,27 @@ impl Document {
     /// The bytes and MIME type of image `i`'s external file `uri` (checked as every reference
     /// is, read up to the size limit, and only when it is an image type glTF allows).
     pub fn read_image(&self, i: usize, uri: &str) -> Result<(Vec<u8>, &'static str)> {
-        let what = format!("image {i}");
-        let file = self
-            .access
-            .resolve(&self.folder(), uri)
-            .map_err(|why| uri_error(&self.path, &what, uri, why))?;
-        read_image(&file).map_err(|why| uri_error(&self.path, &what, uri, why))
+        self.read_image_or_why(i, uri)?
+            .map_err(|why| uri_error(&self.path, &format!("image {i}"), uri, why))
+    }
+
+    /// [`Document::read_image`], telling a file that cannot be read (missing, not a regular
+    /// file, not an image type glTF allows, too large: the inner `Err`, why) from a reference
+    /// that leads outside the folders it may read (the outer error, a refusal): a texture
+    /// missing beside a downloaded `.gltf` need not stop the work on its geometry.
+    pub fn read_image_or_why(
+        &self,
+        i: usize,
+        uri: &str,
+    ) -> Result<std::result::Result<(Vec<u8>, &'static str), String>> {
+        let file = match self.access.resolve(&self.folder(), uri) {
+            Ok(file) => file,
+            Err(why) if why.starts_with("cannot be read") || why == "is not a regular file" => {
+                return Ok(Err(why))
+            }
+            Err(why) => return Err(uri_error(&self.path, &format!("image {i}"), uri, why)),
+        };
+        Ok(read_image(&file))
     }
 
     /// The bytes of buffer view `v` (an error naming it when it reaches past its buffer).

@@ -9,7 +9,7 @@
 use super::build::{BinBuilder, Output};
 use super::encode;
 use super::mend;
-use super::read::{arr, Document};
+use super::read::{arr, quoted_name, Document};
 use super::uri::{percent_decode, reference, Reference};
 use crate::output::{folder_of, Format, Outputs};
 use anyhow::{anyhow, Result};
@@ -52,13 +52,14 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         view["byteOffset"] = placed["byteOffset"].clone();
         bin.views[idx] = view;
     }
-    embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
+    let unread = embed_or_copy_images(doc, container, out_path, &mut json, &mut bin, &mut copies)?;
     let mut out = Output {
         json,
         bin,
         copies,
         meshopt: false,
         mended: Vec::new(),
+        unread_images: unread,
     };
     let mut mended = mend::undefined_keys(&mut out);
     let (json, bin) = (&mut out.json, &mut out.bin);
@@ -85,7 +86,8 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
 }
 
 /// Images referenced by file: embedded in a `.glb`, or (read, checked and) copied to the same
-/// relative place beside a `.gltf` written in another folder.
+/// relative place beside a `.gltf` written in another folder; returns a line for each that
+/// cannot be read (left the reference it was).
 fn embed_or_copy_images(
     doc: &Document,
     container: Container,
@@ -93,10 +95,10 @@ fn embed_or_copy_images(
     json: &mut Value,
     bin: &mut BinBuilder,
     copies: &mut Vec<(Vec<u8>, PathBuf)>,
-) -> Result<()> {
+) -> Result<Vec<String>> {
     let out_dir = folder_of(out_path);
     let Some(images) = json.get_mut("images").and_then(Value::as_array_mut) else {
-        return Ok(());
+        return Ok(Vec::new());
     };
     // Names of the images copied to their own relative places, which the others must not take.
     let mut taken: std::collections::HashSet<String> = images
@@ -106,6 +108,7 @@ fn embed_or_copy_images(
             _ => None,
         })
         .collect();
+    let mut lines = Vec::new();
     for (i, img) in images.iter_mut().enumerate() {
         let Some(uri) = img.get("uri").and_then(Value::as_str).map(str::to_owned) else {
             continue;
@@ -113,9 +116,25 @@ fn embed_or_copy_images(
         if uri.starts_with("data:") {
             continue;
         }
+        // An image file that cannot be read (a texture missing beside a downloaded .gltf)
+        // stays the reference it was, said in a line; one leading outside is still refused.
+        let mut read = |done: &str| -> Result<Option<(Vec<u8>, &'static str)>> {
+            Ok(match doc.read_image_or_why(i, &uri)? {
+                Ok(image) => Some(image),
+                Err(why) => {
+                    let name = quoted_name(img, || format!("{i}"));
+                    lines.push(format!(
+                        "image {name}: {uri:?} {why}; left as a reference to it, not {done}"
+                    ));
+                    None
+                }
+            })
+        };
         match container {
             Container::Glb => {
-                let (data, detected) = doc.read_image(i, &uri)?;
+                let Some((data, detected)) = read("embedded")? else {
+                    continue;
+                };
                 let mime = img
                     .get("mimeType")
                     .and_then(Value::as_str)
@@ -133,7 +152,9 @@ fn embed_or_copy_images(
                 Ok(Reference::Inside(rel)) => {
                     let dst = out_dir.join(&rel);
                     if !same_file(&doc.folder().join(&rel), &dst) {
-                        copies.push((doc.read_image(i, &uri)?.0, dst));
+                        if let Some((data, _)) = read("copied")? {
+                            copies.push((data, dst));
+                        }
                     }
                     // A Windows path's separators written as a URI's.
                     if uri.contains('\\') {
@@ -143,7 +164,9 @@ fn embed_or_copy_images(
                 // Outside the input's folder (allowed by --allow-external): copied beside the
                 // output under its own name, and referred to by that name.
                 _ => {
-                    let data = doc.read_image(i, &uri)?.0;
+                    let Some((data, _)) = read("copied")? else {
+                        continue;
+                    };
                     let name = unique_name(&uri, &mut taken);
                     img["uri"] = json!(encode_uri(&name));
                     copies.push((data, out_dir.join(&name)));
@@ -151,7 +174,7 @@ fn embed_or_copy_images(
             },
         }
     }
-    Ok(())
+    Ok(lines)
 }
 
 /// A file name for a copied image from outside the input's folder: the name it had, made

@@ -321,7 +321,9 @@ impl Run<'_> {
         self.progress.finish();
         let mut out = gltf::begin(&self.doc, container, &self.job.output)?;
         let input = self.doc.path.display();
-        (self.warnings).extend(out.mended.iter().map(|what| format!("{input}: {what}")));
+        (self.warnings).extend(
+            (out.unread_images.iter().chain(&out.mended)).map(|what| format!("{input}: {what}")),
+        );
         self.applied = apply_frames(
             &mut out,
             &self.doc,

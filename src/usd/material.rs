@@ -465,7 +465,20 @@ impl<'a> LookBuilder<'a> {
         if let Some(file) = self.files.get(&i) {
             return Ok(file.clone());
         }
-        let (data, mime) = self.doc.image(i)?;
+        // An image file that cannot be read (a texture missing beside a downloaded .gltf) is
+        // left out, said; one leading outside the allowed folders is still refused.
+        let uri = self.doc.json["images"][i]["uri"].as_str();
+        let (data, mime) = match uri.filter(|u| !u.starts_with("data:")) {
+            Some(uri) => match self.doc.read_image_or_why(i, uri)? {
+                Ok((data, mime)) => (data, Some(mime)),
+                Err(why) => {
+                    (self.look.left_out).push(format!("{what}: image {i} {uri:?} {why}, left out"));
+                    self.files.insert(i, None);
+                    return Ok(None);
+                }
+            },
+            None => self.doc.image(i)?,
+        };
         let img = &self.doc.json["images"][i];
         let label = img["name"]
             .as_str()
