@@ -1657,8 +1657,9 @@ fn empty_lists_and_meshes_with_no_primitive_are_left_out() {
 /// JSON that glTF's readers accept though no writer here spells it so: every integer written
 /// as a decimal (`24.0`: JSON does not tell them apart, the validator takes it; it made
 /// Parrot "have no POSITION", and Fox no clip keys), and a `.gltf` behind a UTF-8
-/// byte-order mark (which RFC 8259 lets a parser ignore; it did not parse). Parrot tweens and
-/// Fox blends to the originals' binaries and JSON values; the mark is said in a line.
+/// byte-order mark (which RFC 8259 lets a parser ignore; it did not parse), or a GLB whose JSON
+/// chunk is padded with NUL bytes (which JSON parsers refuse). Parrot tweens and Fox blends to
+/// the originals' binaries and JSON values; the mark and the padding are said in a line.
 #[test]
 fn integers_written_as_decimals_and_a_byte_order_mark_are_read() {
     fn decimals(v: &mut serde_json::Value) {
@@ -1717,6 +1718,36 @@ fn integers_written_as_decimals_and_a_byte_order_mark_are_read() {
         "-q",
     ]);
     assert_eq!(glb_parts(&a), glb_parts(&b));
+    // A GLB's JSON chunk padded with NUL bytes (the Rust gltf crate's writer before its pull
+    // request 174): read past, the output the original's to the byte.
+    let parrot = fx.join("morph-keyframes/Parrot.glb");
+    let (json, bin) = glb_parts(&parrot);
+    let mut bytes = glb_bytes(&json, &bin);
+    let js = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let spaces = bytes[20..20 + js]
+        .iter()
+        .rev()
+        .take_while(|&&c| c == b' ')
+        .count();
+    let nul_padded = dir.path().join("nul.glb");
+    if spaces == 0 {
+        // Make room: four NULs, the chunk and the file four bytes longer.
+        bytes.splice(20 + js..20 + js, [0u8; 4]);
+        bytes[12..16].copy_from_slice(&((js + 4) as u32).to_le_bytes());
+        let total = bytes.len() as u32;
+        bytes[8..12].copy_from_slice(&total.to_le_bytes());
+    } else {
+        bytes[20 + js - spaces..20 + js].fill(0);
+    }
+    std::fs::write(&nul_padded, &bytes).unwrap();
+    let told = run_ok(&["tween", s(&nul_padded), "-o", s(&a)]);
+    let err = String::from_utf8_lossy(&told.stderr);
+    assert!(
+        err.contains("the JSON chunk padded with NUL bytes"),
+        "{err}"
+    );
+    run_ok(&["tween", s(&parrot), "-o", s(&b), "-q"]);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
 }
 
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,

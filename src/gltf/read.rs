@@ -27,9 +27,9 @@ pub struct Document {
     pub input_bytes: u64,
     /// The compression extensions decoded on read (no longer in the JSON).
     pub decoded: Vec<String>,
-    /// Whether the JSON began with a UTF-8 byte-order mark, which glTF asks writers to leave
-    /// out (read past: [`super::spelling`]).
-    pub byte_order_mark: bool,
+    /// What the reading of the JSON text passed over that glTF asks writers to leave out (a
+    /// byte-order mark, a GLB's NUL padding: [`super::spelling`]), a line each.
+    pub read_past: Vec<String>,
     /// The largest element count of an accessor its buffer view holds (found once, when an
     /// accessor without a buffer view is read).
     pub(crate) largest_backed: std::sync::OnceLock<usize>,
@@ -160,12 +160,12 @@ impl Document {
     /// A document from the bytes of a `.gltf` or `.glb` file at `path` (which names it in
     /// errors and anchors its external references).
     pub fn from_bytes(path: &Path, bytes: &[u8], access: &Access) -> Result<Document> {
-        let (json_bytes, bin) = if bytes.starts_with(b"glTF") {
-            split_glb(path, bytes)?
-        } else {
-            (bytes, None)
+        let glb = bytes.starts_with(b"glTF");
+        let (json_bytes, bin) = match glb {
+            true => split_glb(path, bytes)?,
+            false => (bytes, None),
         };
-        let (json_bytes, byte_order_mark) = spelling::past_byte_order_mark(json_bytes);
+        let (json_bytes, read_past) = spelling::json_text(json_bytes, glb);
         let mut json: Value =
             serde_json::from_slice(json_bytes).map_err(|e| not_gltf(path, bytes, e))?;
         spelling::integers(&mut json);
@@ -225,7 +225,7 @@ impl Document {
             access: access.clone(),
             input_bytes,
             decoded,
-            byte_order_mark,
+            read_past,
             largest_backed: std::sync::OnceLock::new(),
         })
     }

@@ -3,15 +3,16 @@
 //!
 //! - A UTF-8 byte-order mark ahead of the JSON (Windows tools write one: KhronosGroup/glTF
 //!   issue 1345) is read past, as glTF 2.0 asks of readers (RFC 8259 section 8.1: a parser
-//!   may ignore it), and said in a line ([`Document::byte_order_mark`]): glTF asks writers
-//!   for none, the validator counts it an error, and the output is written without it.
+//!   may ignore it), and said in a line ([`Document::read_past`]): glTF asks writers for
+//!   none, the validator counts it an error, and the output is written without it. So is a
+//!   GLB's JSON chunk padded with NUL bytes where glTF asks spaces ([`json_text`]).
 //! - A whole number written as a decimal (`5.0`, `5e0`, `1.2e1`) where glTF asks an integer
 //!   (an index, a count, an offset, an enum: [`INTEGER`]) is read as that integer. JSON does
 //!   not tell them apart and the validator takes either; the stages read such numbers as
 //!   integers, and a writer whose numbers are all floats made its file "have no POSITION".
 //!   Numbers elsewhere (factors, bounds, keys' values, `extras`) are left as written.
 //!
-//! [`Document::byte_order_mark`]: super::read::Document::byte_order_mark
+//! [`Document::read_past`]: super::read::Document::read_past
 
 use serde_json::Value;
 
@@ -60,12 +61,23 @@ const INTEGER: [&str; 34] = [
 /// (a primitive's `targets`).
 const INTEGER_MAPS: [&str; 2] = ["attributes", "targets"];
 
-/// The bytes of a JSON text past a UTF-8 byte-order mark, and whether there was one.
-pub fn past_byte_order_mark(json: &[u8]) -> (&[u8], bool) {
-    match json.strip_prefix(b"\xEF\xBB\xBF") {
-        Some(rest) => (rest, true),
-        None => (json, false),
+/// The bytes of a JSON text past a UTF-8 byte-order mark and, in a GLB's JSON chunk
+/// (`glb`), without the NUL bytes a writer padded it with where glTF asks spaces (the Rust
+/// `gltf` crate's writer before its pull request 174, VReducer's before its 20th: JSON parsers,
+/// three.js's and the validator's among them, refuse them); with a line for each read past.
+pub fn json_text(json: &[u8], glb: bool) -> (&[u8], Vec<String>) {
+    let mut said = Vec::new();
+    let mut text = json;
+    if let Some(rest) = text.strip_prefix(b"\xEF\xBB\xBF") {
+        text = rest;
+        said.push("a byte-order mark ahead of the JSON (glTF asks writers for none): read past, the output written without it".to_string());
     }
+    let padded = text.iter().rev().take_while(|&&b| b == 0).count();
+    if glb && padded > 0 {
+        text = &text[..text.len() - padded];
+        said.push("the JSON chunk padded with NUL bytes where glTF asks spaces (JSON parsers refuse them): read past, the output padded with spaces".to_string());
+    }
+    (text, said)
 }
 
 /// Every whole number written as a decimal where glTF asks an integer, made that integer, in
@@ -181,8 +193,16 @@ mod tests {
     }
 
     #[test]
-    fn a_byte_order_mark_is_read_past() {
-        assert_eq!(past_byte_order_mark(b"\xEF\xBB\xBF{}"), (&b"{}"[..], true));
-        assert_eq!(past_byte_order_mark(b"{}"), (&b"{}"[..], false));
+    fn a_byte_order_mark_and_nul_padding_are_read_past() {
+        let past = |json: &[u8], glb| {
+            let (text, said) = json_text(json, glb);
+            (text.to_vec(), said.len())
+        };
+        assert_eq!(past(b"\xEF\xBB\xBF{}", false), (b"{}".to_vec(), 1));
+        assert_eq!(past(b"{}", false), (b"{}".to_vec(), 0));
+        assert_eq!(past(b"{}\0\0", true), (b"{}".to_vec(), 1));
+        assert_eq!(past(b"\xEF\xBB\xBF{}\0", true), (b"{}".to_vec(), 2));
+        // A .gltf's NUL is its JSON's (refused as it is).
+        assert_eq!(past(b"{}\0", false), (b"{}\0".to_vec(), 0));
     }
 }

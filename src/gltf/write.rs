@@ -64,11 +64,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     let mut mended = mend::undefined_keys(&mut out);
     let (json, bin) = (&mut out.json, &mut out.bin);
     mended.extend(mend::all(json, bin));
-    if doc.byte_order_mark {
-        mended.push(
-            "a byte-order mark ahead of the JSON (glTF asks writers for none): read past, the output written without it".into(),
-        );
-    }
+    mended.extend(doc.read_past.iter().cloned());
     mended.extend(mend::bounds(doc, json));
     mended.extend(mend::normals(doc, json, bin));
     mended.extend(mend::tangents(doc, json, bin));
