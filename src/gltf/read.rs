@@ -81,20 +81,23 @@ pub fn target_names(mesh: &Value) -> Vec<String> {
     if !own.is_empty() {
         return own;
     }
-    let each = |p: &Value| -> Vec<String> {
-        let own: Vec<String> = (arr(p, "targets").iter())
-            .map(|t| t["extras"]["targetName"].as_str().unwrap_or("").to_string())
-            .collect();
-        match own.iter().any(|n| !n.is_empty()) {
-            true => own,
-            false => Vec::new(),
-        }
-    };
     let primitives = arr(mesh, "primitives");
     (primitives.iter().map(names))
-        .chain(primitives.iter().map(each))
+        .chain(primitives.iter().map(names_of_each_target))
         .find(|n| !n.is_empty())
         .unwrap_or_default()
+}
+
+/// The names primitive `p`'s targets give themselves (`targets[i].extras.targetName`, early
+/// UniVRM's), or none where no target names itself.
+pub(crate) fn names_of_each_target(p: &Value) -> Vec<String> {
+    let own: Vec<String> = (arr(p, "targets").iter())
+        .map(|t| t["extras"]["targetName"].as_str().unwrap_or("").to_string())
+        .collect();
+    match own.iter().any(|n| !n.is_empty()) {
+        true => own,
+        false => Vec::new(),
+    }
 }
 
 /// How many names [`listed`] shows.

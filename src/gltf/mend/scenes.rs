@@ -6,6 +6,7 @@
 //! very same nodes through their ancestors. A child whose ancestors the scene does not list is
 //! kept (leaving it out would take it out of the scene).
 
+use crate::gltf::channel::node_parents;
 use crate::gltf::read::{arr, listed, quoted_name};
 use serde_json::Value;
 
@@ -18,14 +19,7 @@ use serde_json::Value;
 /// ```
 pub fn scene_roots(json: &mut Value) -> Vec<String> {
     let nodes = arr(json, "nodes");
-    let mut parent = vec![None; nodes.len()];
-    for (p, n) in nodes.iter().enumerate() {
-        for c in arr(n, "children").iter().filter_map(Value::as_u64) {
-            if let Some(slot) = parent.get_mut(c as usize) {
-                *slot = Some(p);
-            }
-        }
-    }
+    let parent = node_parents(json);
     let mut left = Vec::new();
     let mut kept_lists = Vec::new();
     for scene in arr(json, "scenes") {

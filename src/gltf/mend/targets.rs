@@ -5,7 +5,7 @@
 //! out of the output, and the names it held become the mesh's `extras.targetNames` (where the
 //! mesh names none), where every tool looks for them.
 
-use crate::gltf::read::{arr, listed, quoted_name};
+use crate::gltf::read::{arr, listed, names_of_each_target, quoted_name};
 use serde_json::{json, Value};
 
 /// Leave out of every morph target of `json` the entries that are not accessor indices, the
@@ -18,18 +18,16 @@ pub fn target_extras(json: &mut Value) -> Vec<String> {
         let mut names: Option<Vec<String>> = None;
         let mut found = false;
         for p in mesh["primitives"].as_array_mut().into_iter().flatten() {
+            let own = names_of_each_target(p);
             let Some(targets) = p.get_mut("targets").and_then(Value::as_array_mut) else {
                 continue;
             };
-            let own: Vec<String> = (targets.iter())
-                .map(|t| t["extras"]["targetName"].as_str().unwrap_or("").to_string())
-                .collect();
             for t in targets.iter_mut().filter_map(Value::as_object_mut) {
                 let before = t.len();
                 t.retain(|_, v| v.is_u64());
                 found |= t.len() < before;
             }
-            if names.is_none() && own.iter().any(|n| !n.is_empty()) {
+            if names.is_none() && !own.is_empty() {
                 names = Some(own);
             }
         }
