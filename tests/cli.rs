@@ -1750,6 +1750,66 @@ fn integers_written_as_decimals_and_a_byte_order_mark_are_read() {
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
 }
 
+/// A GLB whose header's length is not the file's, as real writers left them: 4 bytes after the
+/// chunks (a GLB cut out of a 3D Tiles b3dm: three.js pull request 21122), a header counting
+/// the JSON chunk only (qmuntal/gltf issue 38), a binary chunk whose padding the file lacks
+/// (assimp issue 3176). Each is read by its chunks, said in a line, and tweens (Parrot) or
+/// blends (Fox) to the original's bytes; a file cut short is still refused, saying so.
+#[test]
+fn a_glb_whose_header_length_is_wrong_is_read_by_its_chunks() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.glb"), dir.path().join("b.glb"));
+    let set_total = |bytes: &mut Vec<u8>, total: usize| {
+        bytes[8..12].copy_from_slice(&(total as u32).to_le_bytes());
+    };
+    for (file, args) in [
+        ("morph-keyframes/Parrot.glb", &["tween"][..]),
+        ("skinned/Fox.glb", &["blend", "--clips", "Walk", "Run"][..]),
+    ] {
+        let original = std::fs::read(fx.join(file)).unwrap();
+        let js = u32::from_le_bytes(original[12..16].try_into().unwrap()) as usize;
+        let mut b3dm = original.clone();
+        b3dm.extend_from_slice(b"    ");
+        let mut json_only = original.clone();
+        set_total(&mut json_only, 20 + js);
+        // One byte more in the buffer, its chunk (and the header) counting the padding to 4
+        // that the file does not have.
+        let (mut json, mut bin) = glb_parts(&fx.join(file));
+        bin.truncate(json["buffers"][0]["byteLength"].as_u64().unwrap() as usize);
+        bin.push(7);
+        json["buffers"][0]["byteLength"] = bin.len().into();
+        bin.extend([0; 3]);
+        let mut unpadded = glb_bytes(&json, &bin);
+        unpadded.truncate(unpadded.len() - 3);
+        let mut cut = original.clone();
+        cut.truncate(cut.len() - 100);
+        let run = |input: &Path, out: &Path| {
+            let told = run_ok(&[args, &[s(input), "-o", s(out)]].concat());
+            String::from_utf8_lossy(&told.stderr).into_owned()
+        };
+        run(&fx.join(file), &b);
+        for (name, bytes, line) in [
+            ("b3dm.glb", &b3dm, "4 bytes after the GLB's chunks"),
+            ("json_only.glb", &json_only, "read by its chunks"),
+            ("unpadded.glb", &unpadded, "the file ends 3 bytes before"),
+        ] {
+            let input = dir.path().join(name);
+            std::fs::write(&input, bytes).unwrap();
+            let err = run(&input, &a);
+            assert!(err.contains(line), "{file} {name}: {err}");
+            assert_valid(&a);
+            assert_eq!(glb_parts(&a), glb_parts(&b), "{file} {name}");
+        }
+        let input = dir.path().join("cut.glb");
+        std::fs::write(&input, &cut).unwrap();
+        let r = inbetween(&[args, &[s(&input), "-o", s(&a)]].concat());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{file}: {err}");
+        assert!(err.contains("cut short"), "{file}: {err}");
+    }
+}
+
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
 /// and as an external file of a `.gltf`; another named by a Windows path, `tex\\fox.png`, as
 /// AWS iot-app-kit's pull request 417 met them), extensions used but not named in `extensionsUsed`

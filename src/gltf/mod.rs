@@ -1,7 +1,7 @@
 //! glTF in and out.
 //!
 //! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
-//! container, buffers; [`uri`] says what external files it may read; [`spelling`]: a byte-order
+//! [`container`]: a `.glb`'s chunks, read as they say where its header's length is wrong; buffers; [`uri`] says what external files it may read; [`spelling`]: a byte-order
 //! mark read past, whole decimals read as the integers glTF asks) -> [`decode`] (meshopt and Draco
 //! compression undone) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles; [`channel`]:
 //! animation channels read and evaluated, nodes' rest transforms; [`skin`]: skinned points at any
@@ -18,6 +18,7 @@ mod accessor;
 mod build;
 mod channel;
 mod compact;
+mod container;
 mod decode;
 mod encode;
 mod instancing;

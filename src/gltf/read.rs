@@ -4,12 +4,13 @@
 //! not touch — unknown extensions, `extras`, names, vendor fields — is written back unchanged.
 //! Accessors are decoded in [`super::accessor`].
 
+use super::container;
 use super::decode::decode;
 use super::spelling;
 use super::uri::{
     image_mime, read_image, read_prefix, reference, regular_file, uri_error, Access, Reference,
 };
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use base64::Engine;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -164,11 +165,17 @@ impl Document {
     /// errors and anchors its external references).
     pub fn from_bytes(path: &Path, bytes: &[u8], access: &Access) -> Result<Document> {
         let glb = bytes.starts_with(b"glTF");
-        let (json_bytes, bin) = match glb {
-            true => split_glb(path, bytes)?,
-            false => (bytes, None),
+        let container = match glb {
+            true => container::split(path, bytes)?,
+            false => container::Glb {
+                json: bytes,
+                bin: None,
+                said: Vec::new(),
+                cut_short: None,
+            },
         };
-        let (json_bytes, read_past) = spelling::json_text(json_bytes, glb);
+        let (json_bytes, mut read_past) = spelling::json_text(container.json, glb);
+        read_past.extend(container.said);
         let mut json: Value =
             serde_json::from_slice(json_bytes).map_err(|e| not_gltf(path, bytes, e))?;
         spelling::integers(&mut json);
@@ -185,10 +192,18 @@ impl Document {
         check_structure(&json).map_err(|e| at(path, e))?;
         let folder = input_folder(path);
         let mut buffers = Vec::new();
-        let mut bin = bin;
+        let mut bin = container.bin;
         let mut input_bytes = bytes.len() as u64;
         for (i, b) in arr(&json, "buffers").iter().enumerate() {
-            buffers.push(read_buffer(path, &folder, access, i, b, &mut bin)?);
+            let cut_short = container.cut_short.as_deref();
+            buffers.push(read_buffer(
+                path,
+                &folder,
+                access,
+                (i, b),
+                &mut bin,
+                cut_short,
+            )?);
             if b.get("uri")
                 .and_then(Value::as_str)
                 .is_some_and(|u| !u.starts_with("data:"))
@@ -313,9 +328,9 @@ fn read_buffer(
     path: &Path,
     folder: &Path,
     access: &Access,
-    i: usize,
-    b: &Value,
+    (i, b): (usize, &Value),
     bin: &mut Option<&[u8]>,
+    cut_short: Option<&str>,
 ) -> Result<Vec<u8>> {
     let declared = b["byteLength"].as_u64().unwrap_or(0);
     let what = format!("buffer {i}");
@@ -324,9 +339,11 @@ fn read_buffer(
     let fallback = ["EXT_meshopt_compression", "KHR_meshopt_compression"]
         .iter()
         .any(|e| ext[*e]["fallback"].as_bool() == Some(true));
+    let mut from_chunk = false;
     let data = match b.get("uri").and_then(Value::as_str) {
         None if fallback => Vec::new(),
         None => {
+            from_chunk = true;
             let chunk = if i == 0 { bin.take() } else { None };
             chunk.map(<[u8]>::to_vec).ok_or_else(|| {
                 at(
@@ -349,12 +366,13 @@ fn read_buffer(
         }
     };
     if (data.len() as u64) < declared && !fallback {
+        let held = data.len();
         bail!(at(
             path,
-            format!(
-                "buffer {i} declares {declared} bytes but holds {}",
-                data.len()
-            )
+            match cut_short.filter(|_| from_chunk) {
+                Some(header_says) => format!("{header_says}: cut short, buffer {i} declares {declared} bytes and {held} are there"),
+                None => format!("buffer {i} declares {declared} bytes but holds {held}"),
+            }
         ));
     }
     Ok(data)
@@ -479,53 +497,6 @@ pub fn mesh_nodes(json: &Value) -> Vec<Vec<usize>> {
         }
     }
     out
-}
-
-fn split_glb<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a [u8], Option<&'a [u8]>)> {
-    let word = |at: usize| -> Option<u32> {
-        bytes
-            .get(at..at + 4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    };
-    let version = word(4).ok_or_else(|| at(path, "truncated GLB header"))?;
-    let length = word(8).ok_or_else(|| at(path, "truncated GLB header"))? as usize;
-    if version != 2 {
-        bail!(at(
-            path,
-            format!("GLB container version {version} is not supported (only 2)")
-        ));
-    }
-    if length != bytes.len() {
-        bail!(at(
-            path,
-            format!(
-                "GLB header says the file is {length} bytes but it is {} bytes",
-                bytes.len()
-            )
-        ));
-    }
-    let mut off = 12;
-    let mut json = None;
-    let mut bin = None;
-    while off + 8 <= bytes.len() {
-        let clen = word(off).context("chunk")? as usize;
-        let ctype = word(off + 4).context("chunk")?;
-        let end = off + 8 + clen;
-        if end > bytes.len() {
-            bail!(at(
-                path,
-                format!("GLB chunk at byte {off} runs past the end of the file")
-            ));
-        }
-        match ctype {
-            0x4E4F_534A if json.is_none() => json = Some(&bytes[off + 8..end]),
-            0x004E_4942 if bin.is_none() => bin = Some(&bytes[off + 8..end]),
-            _ => {}
-        }
-        off = end;
-    }
-    let json = json.ok_or_else(|| at(path, "GLB has no JSON chunk"))?;
-    Ok((json, bin))
 }
 
 fn decode_data_uri(uri: &str) -> Option<Vec<u8>> {
