@@ -1810,6 +1810,116 @@ fn a_glb_whose_header_length_is_wrong_is_read_by_its_chunks() {
     }
 }
 
+/// A face whose morph targets a writer listed on some primitives only: UniGLTF (UniVRM's core)
+/// wrote them on a mesh's first primitive (its issue 18), SharpGLTF's builder leaves out the
+/// trailing targets a primitive's vertices do not move (its issue 281). RobotExpressive's head
+/// (three primitives, three targets, only the mouth's moving) so written was refused ("primitive
+/// 1 has 0 morph targets but primitive 0 has 3"); it is read as viewers play it, a missing
+/// target moving nothing, said in a line, and tweens as the file its writer meant: every
+/// primitive's targets and positions as the whole file's tween gives them, validator-clean
+/// plain, `--compact` and `--meshopt`, and blends.
+#[test]
+fn morph_targets_on_some_primitives_only_are_read_as_targets_of_zeros() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let robot = fx.join("skinned/RobotExpressive.glb");
+    let head = |j: &mut serde_json::Value| j["meshes"][2]["primitives"].take();
+    let mouth_first = |j: &mut serde_json::Value| {
+        let mut p = head(j);
+        let p = p.as_array_mut().unwrap();
+        p.rotate_right(1);
+        j["meshes"][2]["primitives"] = serde_json::json!(p);
+    };
+    let whole = dir.path().join("whole.glb");
+    edited_glb(&robot, &whole, mouth_first);
+    let unigltf = dir.path().join("unigltf.glb");
+    edited_glb(&robot, &unigltf, |j| {
+        mouth_first(j);
+        for p in j["meshes"][2]["primitives"].as_array_mut().unwrap()[1..].iter_mut() {
+            p.as_object_mut().unwrap().remove("targets");
+        }
+    });
+    let sharp = dir.path().join("sharp.glb");
+    edited_glb(&robot, &sharp, |j| {
+        mouth_first(j);
+        let targets = j["meshes"][2]["primitives"][2]["targets"]
+            .as_array_mut()
+            .unwrap();
+        targets.pop();
+    });
+    let tween = |input: &Path, out: &Path, extra: &[&str]| {
+        let args = [
+            &["tween", s(input), "--keys", "targets", "-o", s(out)][..],
+            extra,
+        ]
+        .concat();
+        String::from_utf8_lossy(&run_ok(&args).stderr).into_owned()
+    };
+    // The head's own input has the validator's warnings on its skinned nodes: none added, and
+    // no error.
+    let clean = |out: &Path| {
+        assert_no_new_issues(&robot, out);
+        if let Some((errors, _, report)) = validate(out) {
+            assert_eq!(errors, 0, "{report}");
+        }
+    };
+    let reference = dir.path().join("reference.glb");
+    tween(&whole, &reference, &["-q"]);
+    let want = Document::open(&reference).unwrap();
+    let values =
+        |d: &Document, a: &serde_json::Value| d.read_f64(a.as_u64().unwrap() as usize).unwrap().0;
+    for (input, fewer) in [
+        (&unigltf, "but 0 on primitive 1, 0 on primitive 2"),
+        (&sharp, "but 2 on primitive 2"),
+    ] {
+        let out = dir.path().join("out.glb");
+        let err = tween(input, &out, &[]);
+        assert!(
+            err.contains(&format!(
+                "\"Head\" lists 3 morph targets on primitive 0 {fewer}"
+            )),
+            "{err}"
+        );
+        clean(&out);
+        let got = Document::open(&out).unwrap();
+        let (pw, pg) = (
+            &want.json["meshes"][2]["primitives"],
+            &got.json["meshes"][2]["primitives"],
+        );
+        for pi in 0..3 {
+            let (tw, tg) = (
+                pw[pi]["targets"].as_array().unwrap(),
+                pg[pi]["targets"].as_array().unwrap(),
+            );
+            assert_eq!(tw.len(), tg.len(), "primitive {pi}");
+            for (a, b) in tw.iter().zip(tg) {
+                assert_eq!(
+                    values(&want, &a["POSITION"]),
+                    values(&got, &b["POSITION"]),
+                    "primitive {pi}"
+                );
+            }
+            let pos = |p: &serde_json::Value| p["attributes"]["POSITION"].clone();
+            assert_eq!(values(&want, &pos(&pw[pi])), values(&got, &pos(&pg[pi])));
+        }
+        for extra in ["--compact", "--meshopt"] {
+            tween(input, &out, &[extra, "-q"]);
+            clean(&out);
+        }
+        run_ok(&[
+            "blend",
+            s(input),
+            "--clips",
+            "Walking",
+            "Running",
+            "-o",
+            s(&out),
+            "-q",
+        ]);
+        clean(&out);
+    }
+}
+
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
 /// and as an external file of a `.gltf`; another named by a Windows path, `tex\\fox.png`, as
 /// AWS iot-app-kit's pull request 417 met them), extensions used but not named in `extensionsUsed`
