@@ -1817,7 +1817,8 @@ fn a_glb_whose_header_length_is_wrong_is_read_by_its_chunks() {
 /// 1 has 0 morph targets but primitive 0 has 3"); it is read as viewers play it, a missing
 /// target moving nothing, said in a line, and tweens as the file its writer meant: every
 /// primitive's targets and positions as the whole file's tween gives them, validator-clean
-/// plain, `--compact` and `--meshopt`, and blends.
+/// plain, `--compact` and `--meshopt`, and blends. So are default weights of another count
+/// than the targets.
 #[test]
 fn morph_targets_on_some_primitives_only_are_read_as_targets_of_zeros() {
     let Some(fx) = fixtures() else { return };
@@ -1918,6 +1919,43 @@ fn morph_targets_on_some_primitives_only_are_read_as_targets_of_zeros() {
         ]);
         clean(&out);
     }
+    // Default weights of another count than the targets: the head's two for its three targets,
+    // its node's four. Blended as glTF's readers play them: the missing weight 0, the one past
+    // the targets left out.
+    let weights = dir.path().join("weights.glb");
+    edited_glb(&robot, &weights, |j| {
+        j["meshes"][2]["weights"] = serde_json::json!([0.0, 0.5]);
+        let node = (j["nodes"].as_array_mut().unwrap().iter_mut())
+            .find(|n| n["mesh"] == 2)
+            .unwrap();
+        node["weights"] = serde_json::json!([0.0, 0.5, 0.0, 1.0]);
+    });
+    let out = dir.path().join("out.glb");
+    let told = run_ok(&[
+        "blend",
+        s(&weights),
+        "--clips",
+        "Walking",
+        "Running",
+        "-o",
+        s(&out),
+    ]);
+    let err = String::from_utf8_lossy(&told.stderr);
+    assert!(err.contains("mesh \"Head\" lists 2 default weights for 3 morph targets (glTF asks one each): written with the missing ones 0"), "{err}");
+    assert!(err.contains("node \"Head\" lists 4 default weights for 3 morph targets (glTF asks one each): written with the ones past the targets left out"), "{err}");
+    clean(&out);
+    let (json, _) = glb_parts(&out);
+    assert_eq!(
+        json["meshes"][2]["weights"],
+        serde_json::json!([0.0, 0.5, 0.0])
+    );
+    let node = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["mesh"] == 2)
+        .unwrap();
+    assert_eq!(node["weights"], serde_json::json!([0.0, 0.5, 0.0]));
 }
 
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,

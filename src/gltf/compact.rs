@@ -289,7 +289,7 @@ fn visit_index(v: &mut Value, f: &mut dyn FnMut(&mut usize)) {
 }
 
 /// The items of the array `v[key]` (none where it is not an array).
-fn items_mut<'a>(v: &'a mut Value, key: &str) -> impl Iterator<Item = &'a mut Value> {
+pub(crate) fn items_mut<'a>(v: &'a mut Value, key: &str) -> impl Iterator<Item = &'a mut Value> {
     v.get_mut(key)
         .and_then(Value::as_array_mut)
         .into_iter()

@@ -214,6 +214,7 @@ impl Document {
         }
         let decoded = decode(&mut json, &mut buffers).map_err(|e| at(path, e))?;
         read_past.extend(targets::equal_counts(&mut json));
+        read_past.extend(targets::weights_counts(&mut json));
         // Images are read only when an output needs them, but every reference is checked now.
         for (i, img) in arr(&json, "images").iter().enumerate() {
             if let Some(uri) = img.get("uri").and_then(Value::as_str) {

@@ -8,10 +8,16 @@
 //! one moving nothing (three.js), so that is how it is read: a primitive with fewer targets than
 //! the mesh's most gets the missing ones as zero deltas, accessors with no buffer view (zeros by
 //! glTF's rule; no bytes), of the attributes its own targets move (or, with none, those the
-//! other primitives' target moves that it has). The mesh's `weights`, where shorter, get zeros.
-//! Every stage then reads the mesh as glTF asks, and the output is written so; a line says it
+//! other primitives' target moves that it has). Every stage then reads the mesh as glTF asks, and the output is written so; a line says it
 //! ([`super::read::Document::read_past`]).
 
+//!
+//! So are default weights listing another number than the targets (a mesh's or a node's
+//! `weights`: the validator's MESH_INVALID_WEIGHTS_COUNT, NODE_WEIGHTS_INVALID), as glTF's
+//! readers use them: a missing weight is 0, one past the targets drives nothing
+//! ([`weights_counts`]).
+
+use super::compact::items_mut;
 use super::read::arr;
 use serde_json::{json, Map, Value};
 
@@ -87,9 +93,6 @@ pub fn equal_counts(json: &mut Value) -> Vec<String> {
                 targets.push(Value::Object(target));
             }
         }
-        if let Some(w) = mesh.get_mut("weights").and_then(Value::as_array_mut) {
-            w.resize(w.len().max(most), json!(0.0));
-        }
         let name = mesh["name"]
             .as_str()
             .map_or_else(|| format!("mesh {mi}"), |n| format!("mesh {n:?}"));
@@ -142,4 +145,59 @@ fn zero_accessor(like: Option<&Value>, name: &str, count: u64) -> Value {
         zeros["max"] = json!(vec![0; width]);
     }
     zeros
+}
+
+/// Default weights (a mesh's `weights`, and a node's for its mesh) that list another number
+/// than the mesh's targets: missing ones written 0, ones past the targets left out (a list left
+/// with none removed); a line for each.
+pub fn weights_counts(json: &mut Value) -> Vec<String> {
+    let counts: Vec<usize> = (arr(json, "meshes").iter())
+        .map(|m| {
+            arr(m, "primitives")
+                .first()
+                .map_or(0, |p| arr(p, "targets").len())
+        })
+        .collect();
+    let mut said = Vec::new();
+    let mut fit = |owner: &mut Value, what: String, targets: usize| {
+        let Some(w) = owner.get("weights").and_then(Value::as_array) else {
+            return;
+        };
+        if w.len() == targets {
+            return;
+        }
+        said.push(format!(
+            "{what} lists {} default weights for {targets} morph targets (glTF asks one each): written with {}",
+            w.len(),
+            match targets {
+                0 => "none".to_string(),
+                _ if w.len() < targets => "the missing ones 0".to_string(),
+                _ => "the ones past the targets left out".to_string(),
+            }
+        ));
+        match targets {
+            0 => _ = owner.as_object_mut().map(|o| o.remove("weights")),
+            _ => {
+                if let Some(w) = owner["weights"].as_array_mut() {
+                    w.resize(targets, json!(0.0));
+                }
+            }
+        }
+    };
+    let name = |v: &Value, kind: &str, i: usize| match v["name"].as_str() {
+        Some(n) => format!("{kind} {n:?}"),
+        None => format!("{kind} {i}"),
+    };
+    for (mi, mesh) in items_mut(json, "meshes").enumerate() {
+        let what = name(mesh, "mesh", mi);
+        fit(mesh, what, counts[mi]);
+    }
+    for (ni, node) in items_mut(json, "nodes").enumerate() {
+        let Some(&targets) = node["mesh"].as_u64().and_then(|m| counts.get(m as usize)) else {
+            continue;
+        };
+        let what = name(node, "node", ni);
+        fit(node, what, targets);
+    }
+    said
 }
