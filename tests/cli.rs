@@ -2193,6 +2193,84 @@ fn undefined_keys_are_left_out() {
     assert_valid(&tweened);
 }
 
+/// Undefined keys in accessors samplers share: a NaN time in the key times every sampler of
+/// Fox's Walk reads, and a second sampler reading the first one's times and rotations (as
+/// exporters write one track for two joints). Each sampler keeps the same keys, so the times
+/// and the shared values are packed once; each was read again after it was packed (the second
+/// sampler's keys shifted, or a panic: `cargo fuzz`'s gltf_read found it). Every Walk sampler
+/// is written with the original's keys less key 7, its values the original's.
+#[test]
+fn undefined_keys_in_shared_accessors_are_left_out_once() {
+    let Some(fx) = fixtures() else { return };
+    let fox = fx.join("skinned/Fox.glb");
+    let doc = Document::open(&fox).unwrap();
+    let walk = (doc.json["animations"].as_array().unwrap().iter())
+        .position(|a| a["name"] == "Walk")
+        .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (shared, nan) = (dir.path().join("shared.glb"), dir.path().join("nan.glb"));
+    edited_glb(&fox, &shared, |j| {
+        let anim = &mut j["animations"][walk];
+        let sampler = anim["samplers"][0].clone();
+        let first = anim["channels"][0].clone();
+        let animated: Vec<u64> = (anim["channels"].as_array().unwrap().iter())
+            .map(|c| c["target"]["node"].as_u64().unwrap())
+            .collect();
+        let joints = j["skins"][0]["joints"].as_array().unwrap();
+        let other = (joints.iter().map(|n| n.as_u64().unwrap()))
+            .find(|n| !animated.contains(n))
+            .unwrap();
+        let anim = &mut j["animations"][walk];
+        let samplers = anim["samplers"].as_array_mut().unwrap();
+        samplers.push(sampler);
+        let s = samplers.len() - 1;
+        let mut channel = first;
+        channel["sampler"] = s.into();
+        channel["target"]["node"] = other.into();
+        anim["channels"].as_array_mut().unwrap().push(channel);
+    });
+    let input = |d: &Document, s: &serde_json::Value| {
+        d.read_f64(s["input"].as_u64().unwrap() as usize).unwrap().0
+    };
+    let output = |d: &Document, s: &serde_json::Value| {
+        d.read_f64(s["output"].as_u64().unwrap() as usize)
+            .unwrap()
+            .0
+    };
+    let before = Document::open(&shared).unwrap();
+    let samplers = before.json["animations"][walk]["samplers"]
+        .as_array()
+        .unwrap();
+    poke_f32(
+        &shared,
+        &nan,
+        samplers[0]["input"].as_u64().unwrap() as usize,
+        7,
+        0,
+        f32::NAN,
+    );
+    let out = dir.path().join("out.glb");
+    let told = run_ok(&["blend", s(&nan), "--clips", "Walk", "Run", "-o", s(&out)]);
+    let err = String::from_utf8_lossy(&told.stderr);
+    assert!(err.contains("animation \"Walk\": 22 keys NaN"), "{err}");
+    assert_valid(&out);
+    let after = Document::open(&out).unwrap();
+    let written = after.json["animations"][walk]["samplers"]
+        .as_array()
+        .unwrap();
+    assert_eq!(written.len(), samplers.len());
+    for (i, (a, b)) in samplers.iter().zip(written).enumerate() {
+        let (times, values) = (input(&before, a), output(&before, a));
+        let per_key = values.len() / times.len();
+        let mut want_times = times.clone();
+        want_times.remove(7);
+        let mut want_values = values.clone();
+        want_values.drain(7 * per_key..8 * per_key);
+        assert_eq!(input(&after, b), want_times, "sampler {i}");
+        assert_eq!(output(&after, b), want_values, "sampler {i}");
+    }
+}
+
 /// An index accessor holding its type's largest value (255 in 8 bits, 65535 in 16: the
 /// primitive restart index, which WebGL 2 always applies and the validator refuses), as a
 /// writer numbering a 16 x 16 grid's 256 vertices in 8 bits (or a 256 x 256 grid's in 16)

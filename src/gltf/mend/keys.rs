@@ -54,13 +54,16 @@ fn pack(out: &mut Output, acc: usize, column: &Column, values: &[f64], width: us
 /// undefined keys, which keys they keep.
 type Readers = BTreeMap<usize, Vec<(usize, Option<Vec<bool>>)>>;
 
-/// One sampler with undefined keys: where it is, its accessors and what it keeps.
+/// One sampler with undefined keys: where it is, its accessors, their data as the input has
+/// them (read before any is packed: samplers share accessors) and what it keeps.
 struct Undefined {
     animation: usize,
     sampler: usize,
     input: usize,
     output: usize,
     defined: Vec<bool>,
+    times: (Column, Vec<f64>),
+    values: (Column, Vec<f64>, usize),
 }
 
 /// Leave the undefined keys (see the module comment) out of every sampler of `out`'s
@@ -82,29 +85,30 @@ pub fn undefined_keys(out: &mut Output) -> Vec<String> {
                 c["sampler"].as_u64() == Some(s as u64)
                     && c["target"]["path"].as_str() == Some("rotation")
             });
-            let defined = (floats(out, input).zip(floats(out, output))).and_then(
-                |((_, times, _), (_, values, width))| {
+            let data = floats(out, input).zip(floats(out, output));
+            let defined = data
+                .as_ref()
+                .and_then(|((_, times, _), (_, values, width))| {
                     let per_key = values.len().checked_div(times.len())?;
                     let fits = per_key * times.len() == values.len()
-                        && (!rotation || (width == 4 && per_key == if cubic { 12 } else { 4 }));
+                        && (!rotation || (*width == 4 && per_key == if cubic { 12 } else { 4 }));
                     let mid = if cubic { per_key / 3 } else { 0 };
-                    fits.then(|| defined_keys(&times, &values, per_key, rotation.then_some(mid)))
-                },
-            );
-            let undefined = defined
-                .as_ref()
-                .filter(|d| d.contains(&true) && d.contains(&false));
+                    fits.then(|| defined_keys(times, values, per_key, rotation.then_some(mid)))
+                });
+            let undefined = defined.filter(|d| d.contains(&true) && d.contains(&false));
             users
                 .entry(input)
                 .or_default()
-                .push((output, undefined.cloned()));
-            if let Some(defined) = undefined {
+                .push((output, undefined.clone()));
+            if let (Some(defined), Some(((in_col, times, _), values))) = (undefined, data) {
                 found.push(Undefined {
                     animation: a,
                     sampler: s,
                     input,
                     output,
-                    defined: defined.clone(),
+                    defined,
+                    times: (in_col, times),
+                    values,
                 });
             }
         }
@@ -119,15 +123,11 @@ pub fn undefined_keys(out: &mut Output) -> Vec<String> {
     let mut packed_outputs = std::collections::BTreeSet::new();
     let mut copied_inputs: BTreeMap<(usize, Vec<bool>), usize> = BTreeMap::new();
     for u in found.iter().filter(|u| !shared_output(u)) {
-        let (Some((in_col, times, _)), Some((out_col, values, width))) =
-            (floats(out, u.input), floats(out, u.output))
-        else {
-            continue;
-        };
+        let ((in_col, times), (out_col, values, width)) = (&u.times, &u.values);
         let per_key = values.len() / times.len();
-        let (times, values) = defined_only(&times, &values, per_key, &u.defined);
+        let (times, values) = defined_only(times, values, per_key, &u.defined);
         if packed_outputs.insert(u.output) {
-            pack(out, u.output, &out_col, &values, width, false);
+            pack(out, u.output, out_col, &values, *width, false);
         }
         // The key times: packed where every sampler reading them keeps the same keys, else a
         // copy of this sampler's own.
@@ -138,7 +138,7 @@ pub fn undefined_keys(out: &mut Output) -> Vec<String> {
             .entry((u.input, u.defined.clone()))
             .or_insert_with(|| {
                 if same {
-                    pack(out, u.input, &in_col, &times, 1, true);
+                    pack(out, u.input, in_col, &times, 1, true);
                     u.input
                 } else {
                     let stored: Vec<f32> = times.iter().map(|&t| t as f32).collect();
