@@ -1958,6 +1958,128 @@ fn morph_targets_on_some_primitives_only_are_read_as_targets_of_zeros() {
     assert_eq!(node["weights"], serde_json::json!([0.0, 0.5, 0.0]));
 }
 
+/// Data URIs as writers spell them and browsers read them: base64 wrapped in lines (Python's
+/// `base64.encodebytes`: 76 characters and a newline, which the validator calls an invalid
+/// URI), without its padding, or the bytes themselves `%XX`-escaped (RFC 2397; the validator
+/// takes it). Each was refused ("a data URI that is not base64"); AnimatedMorphCube's buffer so
+/// written tweens to the original's bytes, and Fox with its buffer and its texture wrapped
+/// blends validator-clean: to a `.gltf` the texture written as plain base64 (said), to a `.glb`
+/// embedded in the binary chunk (a data URI there is the validator's DATA_URI_GLB warning),
+/// the same bytes either way.
+#[test]
+fn data_uris_are_read_as_browsers_read_them() {
+    use base64::Engine;
+    let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+    let wrapped = |b: &[u8]| {
+        let text = b64(b);
+        let lines: Vec<&str> = (0..text.len())
+            .step_by(76)
+            .map(|i| &text[i..(i + 76).min(text.len())])
+            .collect();
+        lines.join("\n") + "\n"
+    };
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let cube = fx.join("morph-khronos/AnimatedMorphCube/glTF");
+    let bin = std::fs::read(cube.join("AnimatedMorphCube.bin")).unwrap();
+    let text = std::fs::read(cube.join("AnimatedMorphCube.gltf")).unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&text).unwrap();
+    let (a, b) = (dir.path().join("a.glb"), dir.path().join("b.glb"));
+    run_ok(&[
+        "tween",
+        s(&cube.join("AnimatedMorphCube.gltf")),
+        "-o",
+        s(&b),
+        "-q",
+    ]);
+    // A length base64 pads (not a multiple of 3).
+    let mut bin = bin;
+    if bin.len() % 3 == 0 {
+        bin.push(0);
+    }
+    let percent: String = bin.iter().map(|v| format!("%{v:02X}")).collect();
+    for data in [
+        format!("data:application/octet-stream;base64,{}", wrapped(&bin)),
+        format!(
+            "data:application/octet-stream;base64,{}",
+            b64(&bin).trim_end_matches('=')
+        ),
+        format!("data:application/octet-stream,{percent}"),
+    ] {
+        let mut json = json.clone();
+        json["buffers"][0] = serde_json::json!({ "uri": data, "byteLength": bin.len() });
+        let input = dir.path().join("cube.gltf");
+        std::fs::write(&input, serde_json::to_vec(&json).unwrap()).unwrap();
+        run_ok(&["tween", s(&input), "-o", s(&a), "-q"]);
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "{}",
+            &data[..60]
+        );
+    }
+    // Fox as a .gltf, its buffer and its texture as wrapped base64.
+    let fox = fx.join("skinned/Fox.glb");
+    let (mut json, bin) = glb_parts(&fox);
+    let view = json["images"][0]["bufferView"].as_u64().unwrap() as usize;
+    let start = json["bufferViews"][view]["byteOffset"]
+        .as_u64()
+        .unwrap_or(0) as usize;
+    let len = json["bufferViews"][view]["byteLength"].as_u64().unwrap() as usize;
+    let png = bin[start..start + len].to_vec();
+    let image = json["images"][0].as_object_mut().unwrap();
+    image.remove("bufferView");
+    image.remove("mimeType");
+    image.insert(
+        "uri".into(),
+        format!("data:image/png;base64,{}", wrapped(&png)).into(),
+    );
+    json["buffers"][0]["uri"] =
+        format!("data:application/octet-stream;base64,{}", wrapped(&bin)).into();
+    let input = dir.path().join("fox.gltf");
+    std::fs::write(&input, serde_json::to_vec(&json).unwrap()).unwrap();
+    // A .gltf keeps the texture a data URI, written as plain base64 (said); a .glb embeds it
+    // in its binary chunk (the validator warns of a data URI there).
+    let gltf_out = dir.path().join("fox_out.gltf");
+    let told = run_ok(&[
+        "blend",
+        s(&input),
+        "--clips",
+        "Walk",
+        "Run",
+        "-o",
+        s(&gltf_out),
+    ]);
+    let err = String::from_utf8_lossy(&told.stderr);
+    assert!(
+        err.contains(
+            "embedded as data URIs whose base64 browsers read but glTF's validator does not"
+        ),
+        "{err}"
+    );
+    assert_valid(&gltf_out);
+    let out: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&gltf_out).unwrap()).unwrap();
+    assert_eq!(
+        out["images"][0]["uri"],
+        format!("data:image/png;base64,{}", b64(&png))
+    );
+    run_ok(&[
+        "blend",
+        s(&input),
+        "--clips",
+        "Walk",
+        "Run",
+        "-o",
+        s(&a),
+        "-q",
+    ]);
+    assert_valid(&a);
+    let doc = Document::open(&a).unwrap();
+    assert_eq!(doc.image(0).unwrap(), (png, Some("image/png")));
+    assert_eq!(doc.json["images"][0]["mimeType"], "image/png");
+}
+
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
 /// and as an external file of a `.gltf`; another named by a Windows path, `tex\\fox.png`, as
 /// AWS iot-app-kit's pull request 417 met them), extensions used but not named in `extensionsUsed`

@@ -9,10 +9,10 @@ use super::decode::decode;
 use super::spelling;
 use super::targets;
 use super::uri::{
-    image_mime, read_image, read_prefix, reference, regular_file, uri_error, Access, Reference,
+    data_uri, image_mime, read_image, read_prefix, reference, regular_file, uri_error, Access,
+    Reference,
 };
 use anyhow::{anyhow, bail, Result};
-use base64::Engine;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -306,8 +306,10 @@ impl Document {
             self.view(v as usize)?.to_vec()
         } else {
             match img["uri"].as_str() {
-                Some(uri) if uri.starts_with("data:") => decode_data_uri(uri).ok_or_else(|| {
-                    self.err(format!("image {i} has a data URI that is not base64"))
+                Some(uri) if uri.starts_with("data:") => data_uri(uri).ok_or_else(|| {
+                    self.err(format!(
+                        "image {i} has a data URI whose base64 does not decode"
+                    ))
                 })?,
                 Some(uri) => self.read_image(i, uri)?.0,
                 None => bail!(self.err(format!("image {i} has neither a uri nor a bufferView"))),
@@ -355,10 +357,10 @@ fn read_buffer(
                 )
             })?
         }
-        Some(uri) if uri.starts_with("data:") => decode_data_uri(uri).ok_or_else(|| {
+        Some(uri) if uri.starts_with("data:") => data_uri(uri).ok_or_else(|| {
             at(
                 path,
-                format!("buffer {i} has a data URI that is not base64"),
+                format!("buffer {i} has a data URI whose base64 does not decode"),
             )
         })?,
         Some(uri) => {
@@ -500,16 +502,6 @@ pub fn mesh_nodes(json: &Value) -> Vec<Vec<usize>> {
         }
     }
     out
-}
-
-fn decode_data_uri(uri: &str) -> Option<Vec<u8>> {
-    let (head, data) = uri.split_once(',')?;
-    if !head.ends_with(";base64") {
-        return None;
-    }
-    base64::engine::general_purpose::STANDARD
-        .decode(data.trim())
-        .ok()
 }
 
 #[cfg(test)]

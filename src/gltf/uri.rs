@@ -33,6 +33,11 @@ pub enum Reference {
 
 /// Decode `%XX` escapes of a relative URI into a file path.
 pub fn percent_decode(uri: &str) -> String {
+    String::from_utf8_lossy(&percent_bytes(uri)).into_owned()
+}
+
+/// The bytes `%XX` escapes stand for, the other characters as they are.
+fn percent_bytes(uri: &str) -> Vec<u8> {
     let b = uri.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
@@ -50,7 +55,35 @@ pub fn percent_decode(uri: &str) -> String {
         out.push(b[i]);
         i += 1;
     }
-    String::from_utf8_lossy(&out).into_owned()
+    out
+}
+
+/// The bytes of a `data:` URI (RFC 2397), read as browsers read it (WHATWG's data: URL
+/// processor): its data `%XX`-decoded, then, where its header ends `;base64` (in any case),
+/// base64 with ASCII whitespace skipped and the padding optional. Writers wrap base64 in lines
+/// (Python's `base64.encodebytes`, 76 characters a line, its newlines escaped in the JSON),
+/// leave out its padding, or write the bytes themselves `%XX`-escaped, as RFC 2397 allows
+/// (the validator takes those; Blender's importer, its issue 635, did not).
+pub fn data_uri(uri: &str) -> Option<Vec<u8>> {
+    use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
+    use base64::Engine;
+    const FORGIVING: GeneralPurpose = GeneralPurpose::new(
+        &base64::alphabet::STANDARD,
+        GeneralPurposeConfig::new()
+            .with_decode_padding_mode(DecodePaddingMode::Indifferent)
+            .with_decode_allow_trailing_bits(true),
+    );
+    let (head, data) = uri.strip_prefix("data:")?.split_once(',')?;
+    let bytes = percent_bytes(data);
+    let base64 = (head.rsplit(';').next()).is_some_and(|p| p.trim().eq_ignore_ascii_case("base64"));
+    if !base64 {
+        return Some(bytes);
+    }
+    let text: Vec<u8> = bytes
+        .into_iter()
+        .filter(|b| !b.is_ascii_whitespace())
+        .collect();
+    FORGIVING.decode(text).ok()
 }
 
 const ABSOLUTE: &str = "is an absolute path (only references inside the input file's folder are read; --allow-external names other folders that may be)";
@@ -212,6 +245,26 @@ pub fn regular_file(path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Data URIs as writers spell them: base64 padded or not, wrapped in lines, `;BASE64`, or
+    /// the bytes themselves `%XX`-escaped; base64 that does not decode is none.
+    #[test]
+    fn data_uris_are_read_as_browsers_read_them() {
+        let bytes = [0u8, 1, 2, 250, 255, 64, 65];
+        for uri in [
+            "data:application/octet-stream;base64,AAEC+v9AQQ==",
+            "data:application/octet-stream;base64,AAEC+v9AQQ",
+            "data:application/gltf-buffer;BASE64,AAEC\r\n+v9A\nQQ==",
+            "data:;base64, AAEC +v9AQQ%3D%3D",
+            "data:application/octet-stream,%00%01%02%FA%FF@A",
+            "data:,%00%01%02%fa%ff%40A",
+        ] {
+            assert_eq!(data_uri(uri).as_deref(), Some(&bytes[..]), "{uri:?}");
+        }
+        assert_eq!(data_uri("data:;base64,AAE*"), None);
+        assert_eq!(data_uri("data:;base64,A"), None);
+        assert_eq!(data_uri("data:application/octet-stream"), None);
+    }
 
     #[test]
     fn references_are_normalised_and_escapes_told_apart() {

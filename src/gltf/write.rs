@@ -10,7 +10,7 @@ use super::build::{BinBuilder, Output};
 use super::encode;
 use super::mend;
 use super::read::{arr, quoted_name, Document};
-use super::uri::{percent_decode, reference, Reference};
+use super::uri::{data_uri, image_mime, percent_decode, reference, Reference};
 use crate::output::{folder_of, Format, Outputs};
 use anyhow::{anyhow, Result};
 use serde_json::{json, Value};
@@ -70,6 +70,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
     mended.extend(mend::tangents(doc, json, bin));
     mended.extend(mend::sparse_parts(doc, json, bin));
     mended.extend(mend::image_types(doc, json, bin));
+    mended.extend(mend::image_data_uris(json));
     mended.extend(mend::undeclared_extensions(json));
     mended.extend(mend::scene_roots(json));
     mended.extend(mend::target_extras(json));
@@ -110,6 +111,11 @@ fn embed_or_copy_images(
             continue;
         };
         if uri.starts_with("data:") {
+            // In a `.glb`, embedded in the binary chunk as a view (the validator warns of a
+            // data URI there: DATA_URI_GLB); a `.gltf` keeps it ([`mend::image_data_uris`]).
+            if container == Container::Glb {
+                embed_data_uri(img, &uri, bin);
+            }
             continue;
         }
         // An image file that cannot be read (a texture missing beside a downloaded .gltf)
@@ -171,6 +177,30 @@ fn embed_or_copy_images(
         }
     }
     Ok(lines)
+}
+
+/// Image `img`'s data URI `uri` as a view of `bin`, typed as declared, else as its header or
+/// its bytes say; left as it is where its bytes are no image type glTF allows.
+fn embed_data_uri(img: &mut Value, uri: &str, bin: &mut BinBuilder) {
+    let Some(data) = data_uri(uri) else {
+        return;
+    };
+    let Some(detected) = image_mime(&data) else {
+        return;
+    };
+    let header = (uri
+        .strip_prefix("data:")
+        .and_then(|u| u.split(&[';', ','][..]).next()))
+    .filter(|m| m.starts_with("image/"));
+    let mime = (img.get("mimeType").and_then(Value::as_str))
+        .or(header)
+        .unwrap_or(detected)
+        .to_owned();
+    let view = bin.push_view(&data, None);
+    let o = img.as_object_mut().expect("checked when read");
+    o.remove("uri");
+    o.insert("bufferView".into(), json!(view));
+    o.insert("mimeType".into(), json!(mime));
 }
 
 /// A file name for a copied image from outside the input's folder: the name it had, made

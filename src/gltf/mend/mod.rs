@@ -6,7 +6,7 @@
 //! The mends, one a file, in the order `begin` runs them: [`undefined_keys`], [`weights`] (and
 //! joints named twice), [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the
 //! bounds of the VEC4 data these change) in [`all`]; then [`bounds`], [`normals`], [`tangents`],
-//! [`sparse_parts`], [`image_types`], [`undeclared_extensions`], [`scene_roots`],
+//! [`sparse_parts`], [`image_types`], [`image_data_uris`], [`undeclared_extensions`], [`scene_roots`],
 //! [`target_extras`], and the animations ([`empty_animations`], [`repeated_channels`],
 //! [`negative_times`]: the channels and clips left out, and the clips moved to start at 0 s, when
 //! the output is written), and the [`empty_lists`] and meshes with no primitive (left out when the
@@ -14,6 +14,7 @@
 
 mod animations;
 mod bounds;
+mod data_uris;
 mod empty;
 mod extensions;
 mod images;
@@ -33,6 +34,7 @@ pub use animations::{
     drop_empty_animations, drop_repeated_channels, empty_animations, repeated_channels,
 };
 pub use bounds::bounds;
+pub use data_uris::image_data_uris;
 pub use empty::{drop_empty_lists, empty_lists};
 pub use extensions::undeclared_extensions;
 pub use images::image_types;
