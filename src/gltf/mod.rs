@@ -7,7 +7,7 @@
 //! animation channels read and evaluated, nodes' rest transforms; [`skin`]: skinned points at any
 //! pose; [`instancing`]: a node's mesh instances) ... the command's own work ... -> [`build`] (new
 //! accessors and buffer views on an [`Output`]; [`mend`]: what the input breaks of glTF's rules,
-//! one mend a file, made right as it is copied: undefined keys, skin weights, rotation keys, key
+//! one mend a file, made right as it is copied: undefined keys, inverse bind matrices, skin weights, rotation keys, key
 //! times, indices, strides, bounds, normals, tangents, sparse parts, image types, image data URIs, undeclared
 //! extensions, scene roots, repeated channels, empty clips and empty lists) -> [`mod@reorder`]
 //! (with meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors

@@ -62,6 +62,7 @@ pub fn begin(doc: &Document, container: Container, out_path: &Path) -> Result<Ou
         unread_images: unread,
     };
     let mut mended = mend::undefined_keys(&mut out);
+    mended.extend(mend::inverse_binds(doc, &mut out));
     let (json, bin) = (&mut out.json, &mut out.bin);
     mended.extend(mend::all(json, bin));
     mended.extend(doc.read_past.iter().cloned());

@@ -3,14 +3,14 @@
 //! write. Each fix is what every viewer that copes with the broken data does anyway; a line
 //! names it where it is more than a codec's rounding.
 //!
-//! The mends, one a file, in the order `begin` runs them: [`undefined_keys`], [`weights`] (and
-//! joints named twice), [`rotations`], [`key_times`], [`restart_indices`], [`strides`] (with the
-//! bounds of the VEC4 data these change) in [`all`]; then [`bounds`], [`normals`], [`tangents`],
-//! [`sparse_parts`], [`image_types`], [`image_data_uris`], [`undeclared_extensions`], [`scene_roots`],
-//! [`target_extras`], and the animations ([`empty_animations`], [`repeated_channels`],
-//! [`negative_times`]: the channels and clips left out, and the clips moved to start at 0 s, when
-//! the output is written), and the [`empty_lists`] and meshes with no primitive (left out when the
-//! output is written).
+//! The mends, one a file, in the order `begin` runs them: [`undefined_keys`], [`inverse_binds`],
+//! [`weights`] (and joints named twice), [`rotations`], [`key_times`], [`restart_indices`],
+//! [`strides`] (with the bounds of the VEC4 data these change) in [`all`]; then [`bounds`],
+//! [`normals`], [`tangents`], [`sparse_parts`], [`image_types`], [`image_data_uris`],
+//! [`undeclared_extensions`], [`scene_roots`], [`target_extras`], and the animations
+//! ([`empty_animations`], [`repeated_channels`], [`negative_times`]: the channels and clips left
+//! out, and the clips moved to start at 0 s, when the output is written), and the
+//! [`empty_lists`] and meshes with no primitive (left out when the output is written).
 
 mod animations;
 mod bounds;
@@ -19,6 +19,7 @@ mod empty;
 mod extensions;
 mod images;
 mod indices;
+mod inverse_binds;
 mod key_times;
 mod keys;
 mod normals;
@@ -39,6 +40,7 @@ pub use empty::{drop_empty_lists, empty_lists};
 pub use extensions::undeclared_extensions;
 pub use images::image_types;
 pub use indices::restart_indices;
+pub use inverse_binds::inverse_binds;
 pub use key_times::{key_times, negative_times, start_at_zero};
 pub use keys::undefined_keys;
 pub use normals::normals;
