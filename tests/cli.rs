@@ -1524,13 +1524,19 @@ fn tweened(input: &Path, out: &Path, said: &[&str]) -> (serde_json::Value, Vec<u
     if said.is_empty() {
         args.push("-q");
     }
-    let told = run_ok(&args);
-    let err = String::from_utf8_lossy(&told.stderr);
+    said_by(&args, said);
+    assert_valid(out);
+    glb_parts(out)
+}
+
+/// `inbetween ARGS`, each of `said` in what it says on stderr; all it said there.
+fn said_by(args: &[&str], said: &[&str]) -> String {
+    let told = run_ok(args);
+    let err = String::from_utf8_lossy(&told.stderr).into_owned();
     for line in said {
         assert!(err.contains(line), "{line} in {err}");
     }
-    assert_valid(out);
-    glb_parts(out)
+    err
 }
 
 /// `blend INPUT --clips Walk Run -o OUT -q` (Fox, edited), and the output's JSON and binary
@@ -1931,18 +1937,13 @@ fn morph_targets_on_some_primitives_only_are_read_as_targets_of_zeros() {
         node["weights"] = serde_json::json!([0.0, 0.5, 0.0, 1.0]);
     });
     let out = dir.path().join("out.glb");
-    let told = run_ok(&[
-        "blend",
-        s(&weights),
-        "--clips",
-        "Walking",
-        "Running",
-        "-o",
-        s(&out),
-    ]);
-    let err = String::from_utf8_lossy(&told.stderr);
-    assert!(err.contains("mesh \"Head\" lists 2 default weights for 3 morph targets (glTF asks one each): written with the missing ones 0"), "{err}");
-    assert!(err.contains("node \"Head\" lists 4 default weights for 3 morph targets (glTF asks one each): written with the ones past the targets left out"), "{err}");
+    said_by(
+        &["blend", s(&weights), "--clips", "Walking", "Running", "-o", s(&out)],
+        &[
+            "mesh \"Head\" lists 2 default weights for 3 morph targets (glTF asks one each): written with the missing ones 0",
+            "node \"Head\" lists 4 default weights for 3 morph targets (glTF asks one each): written with the ones past the targets left out",
+        ],
+    );
     clean(&out);
     let (json, _) = glb_parts(&out);
     assert_eq!(
@@ -1982,16 +1983,9 @@ fn data_uris_are_read_as_browsers_read_them() {
     let dir = tempfile::tempdir().unwrap();
     let cube = fx.join("morph-khronos/AnimatedMorphCube/glTF");
     let bin = std::fs::read(cube.join("AnimatedMorphCube.bin")).unwrap();
-    let text = std::fs::read(cube.join("AnimatedMorphCube.gltf")).unwrap();
-    let json: serde_json::Value = serde_json::from_slice(&text).unwrap();
+    let json = read_json(cube.join("AnimatedMorphCube.gltf"));
     let (a, b) = (dir.path().join("a.glb"), dir.path().join("b.glb"));
-    run_ok(&[
-        "tween",
-        s(&cube.join("AnimatedMorphCube.gltf")),
-        "-o",
-        s(&b),
-        "-q",
-    ]);
+    tweened(&cube.join("AnimatedMorphCube.gltf"), &b, &[]);
     // A length base64 pads (not a multiple of 3).
     let mut bin = bin;
     if bin.len() % 3 == 0 {
@@ -2041,39 +2035,24 @@ fn data_uris_are_read_as_browsers_read_them() {
     // A .gltf keeps the texture a data URI, written as plain base64 (said); a .glb embeds it
     // in its binary chunk (the validator warns of a data URI there).
     let gltf_out = dir.path().join("fox_out.gltf");
-    let told = run_ok(&[
-        "blend",
-        s(&input),
-        "--clips",
-        "Walk",
-        "Run",
-        "-o",
-        s(&gltf_out),
-    ]);
-    let err = String::from_utf8_lossy(&told.stderr);
-    assert!(
-        err.contains(
-            "embedded as data URIs whose base64 browsers read but glTF's validator does not"
-        ),
-        "{err}"
+    said_by(
+        &[
+            "blend",
+            s(&input),
+            "--clips",
+            "Walk",
+            "Run",
+            "-o",
+            s(&gltf_out),
+        ],
+        &["embedded as data URIs whose base64 browsers read but glTF's validator does not"],
     );
     assert_valid(&gltf_out);
-    let out: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&gltf_out).unwrap()).unwrap();
     assert_eq!(
-        out["images"][0]["uri"],
+        read_json(&gltf_out)["images"][0]["uri"],
         format!("data:image/png;base64,{}", b64(&png))
     );
-    run_ok(&[
-        "blend",
-        s(&input),
-        "--clips",
-        "Walk",
-        "Run",
-        "-o",
-        s(&a),
-        "-q",
-    ]);
+    walked_and_run(&input, &a);
     assert_valid(&a);
     let doc = Document::open(&a).unwrap();
     assert_eq!(doc.image(0).unwrap(), (png, Some("image/png")));
@@ -2103,10 +2082,11 @@ fn inverse_bind_matrices_left_short_are_rebuilt_from_the_rest_pose() {
             j["accessors"][acc]["count"] = (24 - left_out).into()
         });
         let out = dir.path().join("out.glb");
-        let told = run_ok(&["blend", s(&short), "--clips", "Walk", "Run", "-o", s(&out)]);
-        let err = String::from_utf8_lossy(&told.stderr);
         let line = format!("skin 0's inverseBindMatrices hold {} matrices for 24 joints (glTF asks one each): the other {left_out} written", 24 - left_out);
-        assert!(err.contains(&line), "{err}");
+        said_by(
+            &["blend", s(&short), "--clips", "Walk", "Run", "-o", s(&out)],
+            &[&line],
+        );
         assert_valid(&out);
         let written = Document::open(&out).unwrap();
         let acc = written.json["skins"][0]["inverseBindMatrices"]
@@ -2438,9 +2418,10 @@ fn undefined_keys_in_shared_accessors_are_left_out_once() {
         f32::NAN,
     );
     let out = dir.path().join("out.glb");
-    let told = run_ok(&["blend", s(&nan), "--clips", "Walk", "Run", "-o", s(&out)]);
-    let err = String::from_utf8_lossy(&told.stderr);
-    assert!(err.contains("animation \"Walk\": 22 keys NaN"), "{err}");
+    said_by(
+        &["blend", s(&nan), "--clips", "Walk", "Run", "-o", s(&out)],
+        &["animation \"Walk\": 22 keys NaN"],
+    );
     assert_valid(&out);
     let after = Document::open(&out).unwrap();
     let written = after.json["animations"][walk]["samplers"]
