@@ -2126,6 +2126,67 @@ fn inverse_bind_matrices_left_short_are_rebuilt_from_the_rest_pose() {
     }
 }
 
+/// Clips that share a name (glTF does not ask names to be unique: Mixamo names every clip
+/// "mixamo.com", files merged from several repeat theirs; google/model-viewer issue 3224): a
+/// name several carry picked the first silently (`blend --clips mixamo.com mixamo.com` blended
+/// Survey with itself and said it had no stride cycle). Now refused, one line naming the
+/// indices, by which each is picked: Fox's clips all named so blend by index to the bytes of the
+/// named original's blend; the preview and tween (Parrot's clip twice) alike.
+#[test]
+fn clips_sharing_a_name_are_picked_by_index() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.glb");
+    let fox = dir.path().join("mixamo.glb");
+    edited_glb(&fx.join("skinned/Fox.glb"), &fox, |j| {
+        for a in j["animations"].as_array_mut().unwrap() {
+            a["name"] = "mixamo.com".into();
+        }
+    });
+    let named = "3 animations are named \"mixamo.com\" (animations 0, 1, 2): name one by its index";
+    let blend = [
+        "blend",
+        s(&fox),
+        "--clips",
+        "mixamo.com",
+        "mixamo.com",
+        "-o",
+        s(&out),
+    ];
+    assert_refused(&blend, "mixamo.glb", named, &out);
+    let png = dir.path().join("walk.png");
+    let preview = [
+        "preview",
+        s(&fox),
+        "--animation",
+        "mixamo.com",
+        "-o",
+        s(&png),
+    ];
+    assert_refused(&preview, "mixamo.glb", named, &png);
+    run_ok(&["preview", s(&fox), "--animation", "1", "-o", s(&png), "-q"]);
+    run_ok(&["blend", s(&fox), "--clips", "1", "2", "-o", s(&out), "-q"]);
+    let original = dir.path().join("original.glb");
+    walked_and_run(&fx.join("skinned/Fox.glb"), &original);
+    assert_eq!(glb_parts(&out).1, glb_parts(&original).1);
+    let parrot = dir.path().join("twice.glb");
+    edited_glb(&fx.join("morph-keyframes/Parrot.glb"), &parrot, |j| {
+        let mut clip = j["animations"][0].clone();
+        clip["name"] = "fly".into();
+        j["animations"][0]["name"] = "fly".into();
+        j["animations"].as_array_mut().unwrap().push(clip);
+    });
+    let tween = ["tween", s(&parrot), "--animation", "fly", "-o", s(&out)];
+    std::fs::remove_file(&out).unwrap();
+    assert_refused(
+        &tween,
+        "twice.glb",
+        "2 animations are named \"fly\" (animations 0, 1)",
+        &out,
+    );
+    run_ok(&["tween", s(&parrot), "--animation", "1", "-o", s(&out), "-q"]);
+}
+
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
 /// and as an external file of a `.gltf`; another named by a Windows path, `tex\\fox.png`, as
 /// AWS iot-app-kit's pull request 417 met them), extensions used but not named in `extensionsUsed`

@@ -6,7 +6,7 @@ use super::by_name;
 use super::cycles::CycleMethod;
 use super::plan::{blend, gait, BlendOptions, Blended, Gait, Report};
 use super::rig::{self, Clip, Path, Rig};
-use crate::gltf::{self, listed, listed_or_none, Access, Container, Document};
+use crate::gltf::{self, clip_by, listed, listed_or_none, Access, Container, Document};
 use crate::output::{Format, Outputs};
 use anyhow::{bail, Result};
 use std::collections::BTreeSet;
@@ -100,11 +100,11 @@ impl BlendDone {
 }
 
 fn find_clip<'a>(doc: &Document, clips: &'a [Clip], key: &str) -> Result<&'a Clip> {
-    if let Some(c) = clips.iter().find(|c| c.name == key) {
-        return Ok(c);
-    }
-    if let Some(c) = key.parse::<usize>().ok().and_then(|i| clips.get(i)) {
-        return Ok(c);
+    let named = clips.iter().map(|c| (c.index, c.name.as_str()));
+    if let Some(i) = clip_by(key, named).map_err(|e| doc.err(e))? {
+        if let Some(c) = clips.iter().find(|c| c.index == i) {
+            return Ok(c);
+        }
     }
     let names: Vec<String> = clips.iter().map(|c| format!("{:?}", c.name)).collect();
     bail!(doc.err(format!(

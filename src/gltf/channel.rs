@@ -19,6 +19,33 @@ pub fn clip_name(anim: &Value, index: usize) -> String {
         .map_or_else(|| format!("animation {index}"), str::to_owned)
 }
 
+/// The clip `sel` picks among `clips` (each an animation's index in the file and its name, as
+/// [`clip_name`] gives it): the one named `sel`, else the one at index `sel` in the file;
+/// `Ok(None)` where none is. glTF does not ask names to be unique (files merged from several
+/// carry one name many times; Mixamo names every clip "mixamo.com"): a name several clips
+/// carry picks none, and the error names their indices, by which each can be picked.
+pub fn clip_by<'a>(
+    sel: &str,
+    clips: impl Iterator<Item = (usize, &'a str)>,
+) -> std::result::Result<Option<usize>, String> {
+    let clips: Vec<(usize, &str)> = clips.collect();
+    let named: Vec<String> = (clips.iter())
+        .filter(|(_, name)| *name == sel)
+        .map(|(i, _)| i.to_string())
+        .collect();
+    match named.len() {
+        0 => Ok(sel
+            .parse::<usize>()
+            .ok()
+            .filter(|i| clips.iter().any(|(c, _)| c == i))),
+        1 => Ok(named[0].parse().ok()),
+        n => Err(format!(
+            "{n} animations are named {sel:?} (animations {}): name one by its index",
+            super::read::listed(&named)
+        )),
+    }
+}
+
 /// A sampler's keys (`times`, and `values` with the same count per key) closed into a loop at
 /// `end` (`--loop`): the first key again there, its tangents flat for a CUBICSPLINE sampler;
 /// nothing when the keys already reach `end`.

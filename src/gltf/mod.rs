@@ -34,7 +34,7 @@ mod write;
 pub use accessor::{read_attribute, read_attribute3, read_triangles, read_vec3};
 pub use build::{set_bounds, BinBuilder, Output, Storage};
 pub use channel::{
-    clip_name, close_keys, defined_keys, defined_only, local_at, node_parents, push_key,
+    clip_by, clip_name, close_keys, defined_keys, defined_only, local_at, node_parents, push_key,
     read_channels, rest_matrix, rest_trs, slerp, Channel, Interp, Path, MIN_QUATERNION,
 };
 pub(crate) use compact::{compact, drop_channels, AccessorRefs, PASSED_THROUGH};

@@ -11,7 +11,9 @@
 //! ```
 
 use super::{Column, Scene, MAX_ANIMATION_FRAMES};
-use crate::gltf::{self, arr, clip_name, listed_or_none, local_at, mesh_nodes, node_parents};
+use crate::gltf::{
+    self, arr, clip_by, clip_name, listed_or_none, local_at, mesh_nodes, node_parents,
+};
 use crate::gltf::{read_channels, rest_matrix, rest_trs};
 use crate::gltf::{Channel, Document, Path, Skeleton, Skinning};
 use crate::progress::Progress;
@@ -252,8 +254,9 @@ pub fn posed(doc: &Document, clip: &str, times: &[f64]) -> Result<Points> {
 /// The clip `name` (or index) among those that move nodes, or an error listing them.
 fn find(doc: &Document, name: &str) -> Result<ClipSpan> {
     let mut clips = moving_clips(doc)?;
-    let index = name.parse::<usize>().ok();
-    match (clips.iter()).position(|c| c.name == name || Some(c.animation) == index) {
+    let named = clips.iter().map(|c| (c.animation, c.name.as_str()));
+    let picked = clip_by(name, named).map_err(|e| doc.err(e))?;
+    match (clips.iter()).position(|c| Some(c.animation) == picked) {
         Some(k) => Ok(clips.swap_remove(k)),
         None => {
             let names: Vec<String> = clips.iter().map(|c| format!("{:?}", c.name)).collect();

@@ -6,8 +6,9 @@
 
 use super::timegrid::snap;
 use crate::gltf::{
-    arr, defined_keys, defined_only, listed, mesh_nodes, quoted_name, read_attribute,
-    read_attribute3, read_triangles, read_vec3, weights_target, Document, WeightsTarget,
+    arr, clip_by, clip_name, defined_keys, defined_only, listed, mesh_nodes, quoted_name,
+    read_attribute, read_attribute3, read_triangles, read_vec3, weights_target, Document,
+    WeightsTarget,
 };
 use anyhow::{bail, Result};
 use glam::DVec3;
@@ -446,12 +447,12 @@ fn has_distinct_keys(mesh: &MorphMesh, track: &Track) -> bool {
 
 fn find_animation(doc: &Document, sel: &str) -> Result<usize> {
     let anims = arr(&doc.json, "animations");
-    if let Some(i) = anims.iter().position(|a| a["name"].as_str() == Some(sel)) {
-        return Ok(i);
-    }
-    match sel.parse::<usize>() {
-        Ok(i) if i < anims.len() => Ok(i),
-        _ => {
+    let names: Vec<String> = (anims.iter().enumerate())
+        .map(|(i, a)| clip_name(a, i))
+        .collect();
+    match clip_by(sel, names.iter().map(String::as_str).enumerate()).map_err(|e| doc.err(e))? {
+        Some(i) => Ok(i),
+        None => {
             let names: Vec<String> = anims
                 .iter()
                 .enumerate()
