@@ -494,6 +494,16 @@ fn every_material_feature(fx: &Path, out: &Path) {
         .as_array_mut()
         .unwrap()
         .push(serde_json::json!({"name": "unused", "emissiveFactor": [1, 1, 0]}));
+    // Material variants choosing it or the first (USD: left out, said; the materials written).
+    json["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push("KHR_materials_variants".into());
+    json["extensions"] = serde_json::json!({"KHR_materials_variants":
+        {"variants": [{"name": "day"}, {"name": "night"}]}});
+    let unused = json["materials"].as_array().unwrap().len() - 1;
+    json["meshes"][0]["primitives"][0]["extensions"] = serde_json::json!({"KHR_materials_variants":
+        {"mappings": [{"material": 0, "variants": [0]}, {"material": unused, "variants": [1]}]}});
     write_glb(out, &json, &bin);
 }
 
@@ -622,6 +632,10 @@ fn materials_and_textures_travel_to_usd() {
             assert!(close(&surface["ior"], &[1.4]), "{what}");
             assert!(
                 stderr.contains("material 0 KHR_materials_sheen left out"),
+                "{what}: {stderr}"
+            );
+            assert!(
+                stderr.contains("material variants \"day\", \"night\" (KHR_materials_variants) left out: each mesh bound to its default material"),
                 "{what}: {stderr}"
             );
             let tex = |n: &str| &shader(&looks, &red(n))["inputs"];

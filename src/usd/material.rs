@@ -99,6 +99,26 @@ pub struct Texture {
 /// The surface shader's name in every material.
 pub const SURFACE: &str = "PreviewSurface";
 
+/// The material variants of `KHR_materials_variants` that a primitive maps, named in a line:
+/// the stage binds each mesh its default material (its variants' materials are written among
+/// the unbound ones), and has no variant sets choosing between them.
+fn variants_left_out(json: &Json) -> Option<String> {
+    let variants = arr(&json["extensions"]["KHR_materials_variants"], "variants");
+    let mapped = (arr(json, "meshes").iter())
+        .flat_map(|m| arr(m, "primitives"))
+        .any(|p| !arr(&p["extensions"]["KHR_materials_variants"], "mappings").is_empty());
+    if variants.is_empty() || !mapped {
+        return None;
+    }
+    let names: Vec<String> = (variants.iter().enumerate())
+        .map(|(i, v)| crate::gltf::quoted_name(v, || i.to_string()))
+        .collect();
+    Some(format!(
+        "material variants {} (KHR_materials_variants) left out: each mesh bound to its default material, the variants' materials written unbound",
+        crate::gltf::listed(&names)
+    ))
+}
+
 /// Builds the look as primitives ask for materials.
 pub struct LookBuilder<'a> {
     doc: &'a Document,
@@ -164,6 +184,7 @@ impl<'a> LookBuilder<'a> {
                 self.material(m, false)?;
             }
         }
+        self.look.left_out.extend(variants_left_out(&self.doc.json));
         Ok(Look { scope, ..self.look })
     }
 
