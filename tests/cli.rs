@@ -2501,15 +2501,11 @@ fn undefined_keys_in_shared_accessors_are_left_out_once() {
     }
 }
 
-/// An index accessor holding its type's largest value (255 in 8 bits, 65535 in 16: the
-/// primitive restart index, which WebGL 2 always applies and the validator refuses), as a
-/// writer numbering a 16 x 16 grid's 256 vertices in 8 bits (or a 256 x 256 grid's in 16)
-/// leaves it: the triangles of the last vertex were dropped by browsers, and the error carried
-/// into the output. Written as 32-bit indices, the same values, said in a line.
-#[test]
-fn indices_holding_the_restart_value_are_written_in_32_bits() {
+/// A grid of `n` x `n` vertices (n <= 16) with two morph targets and a weights clip, its
+/// triangles indexed in 8 bits of `component` type (5121, or 5120 as writers with no unsigned
+/// type store them): the glTF, its binary chunk and the index bytes.
+fn byte_indexed_grid(n: u32, component: u32) -> (serde_json::Value, Vec<u8>, Vec<u8>) {
     use serde_json::json;
-    let n = 16u32;
     let mut bin = Vec::new();
     let mut push = |bytes: Vec<u8>| -> (usize, usize) {
         while bin.len() % 4 != 0 {
@@ -2519,20 +2515,21 @@ fn indices_holding_the_restart_value_are_written_in_32_bits() {
         bin.extend(bytes);
         (at, bin.len() - at)
     };
+    let last = (n - 1) as f32;
     let grid = |z: &dyn Fn(f32, f32) -> f32| -> Vec<u8> {
         (0..n * n)
             .flat_map(|v| {
-                let (x, y) = ((v % n) as f32 / 15.0, (v / n) as f32 / 15.0);
+                let (x, y) = ((v % n) as f32 / last, (v / n) as f32 / last);
                 [x, y, z(x, y)]
             })
             .flat_map(f32::to_le_bytes)
             .collect()
     };
+    let row = n as u8;
     let indices: Vec<u8> = (0..n - 1)
         .flat_map(|y| (0..n - 1).map(move |x| (y * n + x) as u8))
-        .flat_map(|a| [a, a + 16, a + 1, a + 1, a + 16, a.wrapping_add(17)])
+        .flat_map(|a| [a, a + row, a + 1, a + 1, a + row, a.wrapping_add(row + 1)])
         .collect();
-    assert!(indices.contains(&255));
     let views: Vec<(usize, usize)> = vec![
         push(grid(&|_, _| 0.0)),
         push(grid(&|_, y| 0.2 * y)),
@@ -2552,7 +2549,9 @@ fn indices_holding_the_restart_value_are_written_in_32_bits() {
         json!({ "bufferView": v, "componentType": 5126, "count": n * n,
         "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, hi] })
     };
-    let (t1, t2) = (0.2, (8.0f32 / 15.0 * 3.0).sin() * 0.3);
+    let wave = (0..n)
+        .map(|v| (v as f32 / last * 3.0).sin() * 0.3)
+        .fold(0f32, f32::max);
     let j = json!({
         "asset": { "version": "2.0" }, "scene": 0, "scenes": [{ "nodes": [0] }],
         "nodes": [{ "mesh": 0 }],
@@ -2561,14 +2560,50 @@ fn indices_holding_the_restart_value_are_written_in_32_bits() {
         "animations": [{ "channels": [{ "sampler": 0, "target": { "node": 0, "path": "weights" } }],
             "samplers": [{ "input": 4, "output": 5 }] }],
         "accessors": [
-            vec3(0, 0.0), vec3(1, t1), vec3(2, t2),
-            { "bufferView": 3, "componentType": 5121, "count": indices.len(), "type": "SCALAR" },
+            vec3(0, 0.0), vec3(1, 0.2), vec3(2, wave),
+            { "bufferView": 3, "componentType": component, "count": indices.len(), "type": "SCALAR" },
             { "bufferView": 4, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1] },
             { "bufferView": 5, "componentType": 5126, "count": 4, "type": "SCALAR" }
         ],
         "bufferViews": views.iter().map(|&v| view(v)).collect::<Vec<_>>(),
         "buffers": [{ "byteLength": bin.len() }]
     });
+    (j, bin, indices)
+}
+
+/// Indices written as signed integers (libGDX's gdx-gltf exporter writes SHORT indices, its
+/// issue 103: Java has no unsigned short, so an index past 32767 is the negative number of the
+/// same bits): a vertex past the signed range was read as vertex 0 (its negative value cast),
+/// the frames solved on the wrong triangles and the error carried into the output. A 12 x 12
+/// grid indexed in BYTE (indices 128-143 negative) tweens to the bytes of the same grid indexed
+/// in UNSIGNED_BYTE, said in a line.
+#[test]
+fn indices_written_signed_are_read_as_the_unsigned_they_stand_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.glb"), dir.path().join("b.glb"));
+    let (signed, unsigned) = (
+        dir.path().join("signed.glb"),
+        dir.path().join("unsigned.glb"),
+    );
+    let (j, bin, indices) = byte_indexed_grid(12, 5120);
+    assert!(indices.iter().any(|&i| i > 127));
+    write_glb(&signed, &j, &bin);
+    let (j, bin, _) = byte_indexed_grid(12, 5121);
+    write_glb(&unsigned, &j, &bin);
+    tweened(&signed, &a, &["index accessor 3 written as signed integers, which glTF does not allow for indices: read and written as the unsigned integers of the same bits"]);
+    tweened(&unsigned, &b, &[]);
+    assert_eq!(glb_parts(&a), glb_parts(&b));
+}
+
+/// An index accessor holding its type's largest value (255 in 8 bits, 65535 in 16: the
+/// primitive restart index, which WebGL 2 always applies and the validator refuses), as a
+/// writer numbering a 16 x 16 grid's 256 vertices in 8 bits (or a 256 x 256 grid's in 16)
+/// leaves it: the triangles of the last vertex were dropped by browsers, and the error carried
+/// into the output. Written as 32-bit indices, the same values, said in a line.
+#[test]
+fn indices_holding_the_restart_value_are_written_in_32_bits() {
+    let (j, bin, indices) = byte_indexed_grid(16, 5121);
+    assert!(indices.contains(&255));
     let dir = tempfile::tempdir().unwrap();
     let (input, out) = (dir.path().join("grid.glb"), dir.path().join("out.glb"));
     write_glb(&input, &j, &bin);

@@ -2,7 +2,7 @@
 //!
 //! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
 //! [`container`]: a `.glb`'s chunks, read as they say where its header's length is wrong; buffers; [`uri`] says what external files it may read; [`spelling`]: a byte-order
-//! mark read past, whole decimals read as the integers glTF asks) -> [`decode`] (meshopt and Draco
+//! mark read past, whole decimals read as the integers glTF asks, signed indices as unsigned) -> [`decode`] (meshopt and Draco
 //! compression undone; [`targets`]: a mesh's primitives given the same number of morph targets) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles; [`channel`]:
 //! animation channels read and evaluated, nodes' rest transforms; [`skin`]: skinned points at any
 //! pose; [`instancing`]: a node's mesh instances) ... the command's own work ... -> [`build`] (new

@@ -191,6 +191,7 @@ impl Document {
             ));
         }
         check_structure(&json).map_err(|e| at(path, e))?;
+        read_past.extend(spelling::signed_indices(&mut json));
         let folder = input_folder(path);
         let mut buffers = Vec::new();
         let mut bin = container.bin;

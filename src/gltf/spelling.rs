@@ -80,6 +80,52 @@ pub fn json_text(json: &[u8], glb: bool) -> (&[u8], Vec<String>) {
     (text, said)
 }
 
+/// Indices and joint indices written as signed integers (BYTE, SHORT), which glTF does not
+/// allow for them (MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT): libGDX's gdx-gltf exporter
+/// writes its indices as SHORT (its issue 103; Java has no unsigned short, so an index past
+/// 32767 is stored as the negative number of the same bits). Read as the unsigned integers of
+/// the same bits, as the writer meant (a SHORT -1 is vertex 65535): the accessors'
+/// `componentType` made UNSIGNED_BYTE or UNSIGNED_SHORT; a line naming them.
+pub fn signed_indices(json: &mut Value) -> Vec<String> {
+    let mut used: Vec<usize> = Vec::new();
+    for mesh in json["meshes"].as_array().into_iter().flatten() {
+        for p in mesh["primitives"].as_array().into_iter().flatten() {
+            let joints = (p["attributes"].as_object().into_iter().flatten())
+                .filter(|(k, _)| k.starts_with("JOINTS_"))
+                .map(|(_, a)| a);
+            used.extend(
+                std::iter::once(&p["indices"])
+                    .chain(joints)
+                    .filter_map(Value::as_u64)
+                    .map(|a| a as usize),
+            );
+        }
+    }
+    used.sort_unstable();
+    used.dedup();
+    let mut fixed = Vec::new();
+    for a in used {
+        let Some(acc) = json["accessors"].get_mut(a) else {
+            continue;
+        };
+        let unsigned = match acc["componentType"].as_u64() {
+            Some(5120) => 5121,
+            Some(5122) => 5123,
+            _ => continue,
+        };
+        acc["componentType"] = unsigned.into();
+        fixed.push(a.to_string());
+    }
+    match fixed.is_empty() {
+        true => Vec::new(),
+        false => vec![format!(
+            "index accessor{} {} written as signed integers, which glTF does not allow for indices: read and written as the unsigned integers of the same bits",
+            if fixed.len() == 1 { "" } else { "s" },
+            super::read::listed(&fixed)
+        )],
+    }
+}
+
 /// Every whole number written as a decimal where glTF asks an integer, made that integer, in
 /// place; see the module comment.
 ///
