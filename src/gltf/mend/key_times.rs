@@ -38,15 +38,6 @@ fn increasing_times(t: &[f32]) -> Option<Vec<f32>> {
     m.windows(2).all(|w| w[1] > w[0]).then_some(m)
 }
 
-/// Key-time accessor `input` of `json` in `bin` (a plain float SCALAR accessor): where it lies,
-/// and its times.
-fn times_of(json: &Value, bin: &BinBuilder, input: usize) -> Option<(Column, Vec<f32>)> {
-    let count = json["accessors"][input]["count"].as_u64()? as usize;
-    let column = Column::of_width(json, bin, input, count, 1).filter(|c| c.component == 5126)?;
-    let times = (0..count).map(|i| column.float(&bin.bytes, i, 0)).collect();
-    Some((column, times))
-}
-
 /// Make every float key-time accessor of the output's animations increasing (see
 /// [`increasing_times`]), in place in `bin`; returns a line for each animation with such
 /// times. A repeated time is a step between its keys, which the moved time keeps within a
@@ -60,7 +51,8 @@ pub fn key_times(json: &Value, bin: &mut BinBuilder) -> Vec<String> {
             let Some(input) = sampler["input"].as_u64().map(|i| i as usize) else {
                 continue;
             };
-            let Some((column, t)) = times_of(json, bin, input).filter(|_| done.insert(input))
+            let Some((column, t)) =
+                Column::floats(json, bin, input, 1).filter(|_| done.insert(input))
             else {
                 continue;
             };
@@ -95,7 +87,7 @@ fn sampler_times(
     let mut times = BTreeMap::new();
     for sampler in arr(anim, "samplers") {
         let input = sampler["input"].as_u64()? as usize;
-        times.insert(input, times_of(json, bin, input)?.1);
+        times.insert(input, Column::floats(json, bin, input, 1)?.1);
     }
     Some(times)
 }

@@ -19,21 +19,14 @@ use std::collections::BTreeMap;
 /// A float accessor of `out` (SCALAR, VEC3 or VEC4): where it lies, its values as stored and
 /// its width.
 fn floats(out: &Output, acc: usize) -> Option<(Column, Vec<f64>, usize)> {
-    let a = &out.json["accessors"][acc];
-    let width = match a["type"].as_str()? {
+    let width = match out.json["accessors"][acc]["type"].as_str()? {
         "SCALAR" => 1,
         "VEC3" => 3,
         "VEC4" => 4,
         _ => return None,
     };
-    let count = a["count"].as_u64()? as usize;
-    let column = Column::of_width(&out.json, &out.bin, acc, count, width as u64)
-        .filter(|c| c.component == 5126)?;
-    let values = (0..count)
-        .flat_map(|i| (0..width).map(move |c| (i, c)))
-        .map(|(i, c)| column.float(&out.bin.bytes, i, c) as f64)
-        .collect();
-    Some((column, values, width))
+    let (column, values) = Column::floats(&out.json, &out.bin, acc, width as u64)?;
+    Some((column, values.into_iter().map(f64::from).collect(), width))
 }
 
 /// Write `values` (`width` a element) over the first elements of accessor `acc` (at `column`)

@@ -125,6 +125,24 @@ impl Column {
             })
     }
 
+    /// A plain float accessor `acc` of `width` components (see [`Column::of_width`]) and its
+    /// values as stored, element by element.
+    fn floats(
+        json: &Value,
+        bin: &BinBuilder,
+        acc: usize,
+        width: u64,
+    ) -> Option<(Column, Vec<f32>)> {
+        let count = json["accessors"][acc]["count"].as_u64()? as usize;
+        let column =
+            Column::of_width(json, bin, acc, count, width).filter(|c| c.component == 5126)?;
+        let values = (0..count)
+            .flat_map(|i| (0..width as usize).map(move |c| (i, c)))
+            .map(|(i, c)| column.float(&bin.bytes, i, c))
+            .collect();
+        Some((column, values))
+    }
+
     fn at(&self, i: usize, c: usize) -> usize {
         self.start + i * self.stride + c * self.size
     }
