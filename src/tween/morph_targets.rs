@@ -42,6 +42,9 @@ struct Edits {
     /// Key times written so far, with their accessor: a track whose times are the first keys
     /// of another's (clips at one rate from 0) reads them from the same view.
     times: Vec<(Vec<f32>, usize)>,
+    /// How many channels read each sampler of an animation, as the edits leave them (counted
+    /// once per animation: a clip of 10,000 channels was looked through for each track).
+    readers: std::collections::HashMap<usize, Vec<usize>>,
 }
 
 /// One processed mesh as it is written: its frames, what was read of it, the layout, and its
@@ -796,9 +799,22 @@ fn animate_track(
             // A sampler that channels of other meshes also read (each mesh its own frames and,
             // compacted, its own basis weights) stays theirs: this mesh's channels get a new one.
             let anim = &mut out.json["animations"][*animation];
-            let others = arr(anim, "channels").iter().enumerate().any(|(c, ch)| {
-                ch["sampler"].as_u64() == Some(*sampler as u64) && !channels.contains(&c)
+            let readers = edits.readers.entry(*animation).or_insert_with(|| {
+                let mut n = vec![0; arr(anim, "samplers").len()];
+                for s in arr(anim, "channels")
+                    .iter()
+                    .filter_map(|c| c["sampler"].as_u64())
+                {
+                    if let Some(k) = n.get_mut(s as usize) {
+                        *k += 1;
+                    }
+                }
+                n
             });
+            let mine = (channels.iter())
+                .filter(|&&c| anim["channels"][c]["sampler"].as_u64() == Some(*sampler as u64))
+                .count();
+            let others = readers.get(*sampler).is_some_and(|&n| n > mine);
             if others {
                 let samplers = anim["samplers"]
                     .as_array_mut()
@@ -809,6 +825,9 @@ fn animate_track(
                 for &c in channels {
                     anim["channels"][c]["sampler"] = json!(new);
                 }
+                readers[*sampler] -= mine;
+                readers.resize(readers.len().max(new + 1), 0);
+                readers[new] = channels.len();
                 return;
             }
             let s = &mut out.json["animations"][*animation]["samplers"][*sampler];
