@@ -1759,8 +1759,9 @@ fn integers_written_as_decimals_and_a_byte_order_mark_are_read() {
 /// A GLB whose header's length is not the file's, as real writers left them: 4 bytes after the
 /// chunks (a GLB cut out of a 3D Tiles b3dm: three.js pull request 21122), a header counting
 /// the JSON chunk only (qmuntal/gltf issue 38), a binary chunk whose padding the file lacks
-/// (assimp issue 3176). Each is read by its chunks, said in a line, and tweens (Parrot) or
-/// blends (Fox) to the original's bytes; a file cut short is still refused, saying so.
+/// (assimp issue 3176). Each is read by its chunks, said in a line (and by `inspect`), and
+/// tweens (Parrot) or blends (Fox) to the original's bytes; a file cut short is still refused,
+/// saying so.
 #[test]
 fn a_glb_whose_header_length_is_wrong_is_read_by_its_chunks() {
     let Some(fx) = fixtures() else { return };
@@ -1806,6 +1807,25 @@ fn a_glb_whose_header_length_is_wrong_is_read_by_its_chunks() {
             assert!(err.contains(line), "{file} {name}: {err}");
             assert_valid(&a);
             assert_eq!(glb_parts(&a), glb_parts(&b), "{file} {name}");
+            // `inspect` says it too, in its text and its JSON.
+            let text = run_ok(&["inspect", s(&input)]).stdout;
+            let text = String::from_utf8_lossy(&text);
+            assert!(
+                text.contains("mended in a glTF output: ") && text.contains(line),
+                "{text}"
+            );
+            let json = run_ok(&["inspect", s(&input), "--json"]).stdout;
+            let json: serde_json::Value = serde_json::from_slice(&json).unwrap();
+            let mended = json["mended"].as_array().unwrap();
+            assert!(
+                mended.iter().any(|m| m.as_str().unwrap().contains(line)),
+                "{json}"
+            );
+            if let Some(py) = python() {
+                let report = dir.path().join("inspect.json");
+                std::fs::write(&report, json.to_string()).unwrap();
+                check_schema(&py, "inspect.schema.json", &report, name);
+            }
         }
         let input = dir.path().join("cut.glb");
         std::fs::write(&input, &cut).unwrap();

@@ -7,7 +7,8 @@
 //! capture, see [`bvh`]. Text, or JSON (`schemas/inspect.schema.json`).
 
 use crate::gltf::{
-    arr, listed, quoted_name, target_names, weights_target, Access, Document, PASSED_THROUGH,
+    arr, begin, clip_by, clip_name, listed, quoted_name, target_names, weights_target, Access,
+    Container, Document, PASSED_THROUGH,
 };
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, targets_given_normals, KeyOptions, KeySource,
@@ -55,6 +56,9 @@ pub struct Inspection {
     pub bytes: u64,
     pub generator: Option<String>,
     pub extensions: Vec<Extension>,
+    /// What a glTF output of the file is written with that the file breaks of glTF's rules or
+    /// spells otherwise, a line each (as `tween` and `blend` say them).
+    pub mended: Vec<String>,
     pub morph_meshes: Vec<MorphMeshInfo>,
     pub animations: Vec<AnimationInfo>,
     pub tween: TweenInfo,
@@ -217,6 +221,10 @@ fn inspect_gltf(path: &Path, access: &Access) -> Result<Inspection> {
         bytes: doc.input_bytes,
         generator: json["asset"]["generator"].as_str().map(str::to_owned),
         extensions: extensions(&doc),
+        // Nothing is written: the output is begun in memory only, for what it mends.
+        mended: begin(&doc, Container::Glb, Path::new("inspect.glb"))
+            .map(|out| out.mended)
+            .unwrap_or_default(),
         morph_meshes: morph_meshes(&doc),
         animations: animations(&doc),
         tween: TweenInfo { tracks, refused },
@@ -228,9 +236,9 @@ fn inspect_gltf(path: &Path, access: &Access) -> Result<Inspection> {
                 .unwrap_or_default()
                 .into_iter())
             .map(|(a, g)| ClipGait {
-                // As `blend --clips` names it: its name, or its index.
-                clip: (json["animations"][a]["name"].as_str())
-                    .map_or_else(|| a.to_string(), str::to_owned),
+                // As `blend --clips` names it: its name, or its index where it has none or
+                // shares it.
+                clip: clip_label(json, a),
                 gait: GaitInfo::of(g),
             })
             .collect(),
@@ -433,6 +441,20 @@ fn blend_clips(json: &Value) -> Vec<String> {
 }
 
 /// A glTF file's inspection as text for a person.
+/// Animation `a` as `blend --clips` picks it: its name, where that picks it, else its index.
+fn clip_label(json: &Value, a: usize) -> String {
+    let names: Vec<String> = (arr(json, "animations").iter().enumerate())
+        .map(|(i, anim)| clip_name(anim, i))
+        .collect();
+    let name = &names[a];
+    match json["animations"][a]["name"].is_string()
+        && clip_by(name, names.iter().map(String::as_str).enumerate()) == Ok(Some(a))
+    {
+        true => name.clone(),
+        false => a.to_string(),
+    }
+}
+
 fn gltf_text(i: &Inspection) -> String {
     let mut s = format!("{}: {} bytes", i.file, i.bytes);
     if let Some(g) = &i.generator {
@@ -446,6 +468,9 @@ fn gltf_text(i: &Inspection) -> String {
             if e.required { " (required)" } else { "" },
             e.status
         );
+    }
+    for line in &i.mended {
+        s += &format!("mended in a glTF output: {line}\n");
     }
     for m in &i.morph_meshes {
         s += &format!(
