@@ -7,6 +7,23 @@ use cli::{BenchArgs, Cli, Command, EvalArgs};
 use inbetween::{bench, blend, eval, inspect, preview, tween};
 use std::process::ExitCode;
 
+/// `print!` to stdout, a reader that stopped reading (`inspect file | head`) no error: the
+/// standard macro panicked on the closed pipe.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write;
+        let _ = write!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
+/// [`out!`] with a line end, as `println!`.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 fn main() -> ExitCode {
     inbetween::keep_freed_memory();
     match Cli::parse().command {
@@ -25,8 +42,8 @@ fn main() -> ExitCode {
         Command::Inspect(args) => {
             let found = inspect::inspect(&args.input, &args.access());
             finish(found, |i| match args.json {
-                true => println!("{}", serde_json::to_string_pretty(&i).unwrap_or_default()),
-                false => print!("{}", inspect::text(&i)),
+                true => outln!("{}", serde_json::to_string_pretty(&i).unwrap_or_default()),
+                false => out!("{}", inspect::text(&i)),
             })
         }
         Command::Preview(args) => {
@@ -85,12 +102,12 @@ fn run_eval(args: &EvalArgs) -> ExitCode {
     let scores = eval::run_eval(&args.input, args.step, &args.methods, args.keys());
     finish(scores, |scores| {
         if args.json {
-            println!(
+            outln!(
                 "{}",
                 serde_json::to_string_pretty(&scores).unwrap_or_default()
             );
         } else {
-            print!("{}", eval::table(&scores));
+            out!("{}", eval::table(&scores));
         }
     })
 }
@@ -100,18 +117,18 @@ fn run_bench(args: BenchArgs) -> ExitCode {
     if let Some(triangles) = args.preview {
         let r = bench::preview(triangles, &args.preview_methods);
         return finish(r, |r| {
-            println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
+            outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
         });
     }
     if let Some(meshes) = args.scene {
         return finish(bench::scene(meshes), |r| {
-            println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
+            outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
         });
     }
     if let Some(triangles) = args.end_to_end {
         let r = bench::end_to_end(triangles, args.e2e_tweens, &args.e2e_format, &args.e2e_args);
         return finish(r, |r| {
-            println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
+            outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
         });
     }
     let opts = bench::BenchOptions {
@@ -123,16 +140,16 @@ fn run_bench(args: BenchArgs) -> ExitCode {
     let json = args.json;
     let rows = bench::run(&opts, &mut |row| {
         if json {
-            println!("{}", serde_json::to_string(row).unwrap_or_default());
+            outln!("{}", serde_json::to_string(row).unwrap_or_default());
         } else {
             eprintln!("bench: {} triangles done", row.triangles);
         }
     });
     finish(rows, |rows| {
         if !json {
-            print!("{}", bench::table(&rows));
+            out!("{}", bench::table(&rows));
             if let Some(x) = bench::fitted_exponent(&rows) {
-                println!("\nper-frame seed time grows as triangles^{x:.2} (least-squares fit over these sizes)");
+                outln!("\nper-frame seed time grows as triangles^{x:.2} (least-squares fit over these sizes)");
             }
         }
     })

@@ -2207,6 +2207,33 @@ fn clips_sharing_a_name_are_picked_by_index() {
     run_ok(&["tween", s(&parrot), "--animation", "1", "-o", s(&out), "-q"]);
 }
 
+/// A reader that stops reading (`inbetween inspect face.glb | head -1`): the output was
+/// printed with `println!`, which panicked on the closed pipe ("failed printing to stdout:
+/// Broken pipe", a backtrace, exit 101). Now what cannot be written is dropped: exit 0, nothing
+/// on stderr. The pipe is closed before inspect writes (its read end dropped at once).
+#[test]
+fn a_reader_that_stops_reading_is_no_error() {
+    use std::process::{Command, Stdio};
+    let input = sample("flag_wave.glb");
+    for json in [false, true] {
+        let mut args = vec!["inspect", s(&input)];
+        if json {
+            args.push("--json");
+        }
+        let mut child = Command::new(env!("CARGO_BIN_EXE_inbetween"))
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+}
+
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
 /// and as an external file of a `.gltf`; another named by a Windows path, `tex\\fox.png`, as
 /// AWS iot-app-kit's pull request 417 met them), extensions used but not named in `extensionsUsed`
