@@ -27,11 +27,10 @@ pub fn inverse_binds(doc: &Document, out: &mut Output) -> Vec<String> {
         if held >= joints || a["type"] != "MAT4" {
             continue;
         }
-        let Some(mesh_node) =
-            (arr(&out.json, "nodes").iter()).position(|n| n["skin"].as_u64() == Some(s as u64))
-        else {
-            continue;
-        };
+        // A skin no node uses binds as the scene's origin does.
+        let mesh_node = (arr(&out.json, "nodes").iter())
+            .position(|n| n["skin"].as_u64() == Some(s as u64))
+            .unwrap_or(usize::MAX);
         let Ok((stored, _)) = doc.read_f64(acc) else {
             continue;
         };
