@@ -24,6 +24,14 @@ macro_rules! outln {
     }};
 }
 
+/// [`outln!`] to stderr (the summary, its warnings and errors), as `eprintln!`.
+macro_rules! errln {
+    ($($arg:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
 fn main() -> ExitCode {
     inbetween::keep_freed_memory();
     match Cli::parse().command {
@@ -66,7 +74,7 @@ fn finish<T>(result: anyhow::Result<T>, done: impl FnOnce(T)) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("inbetween: error: {}", format!("{e:#}").replace('\n', " "));
+            errln!("inbetween: error: {}", format!("{e:#}").replace('\n', " "));
             ExitCode::from(2)
         }
     }
@@ -86,7 +94,7 @@ fn run_job<J, T>(
 
 fn summary(quiet: bool, line: String) {
     if !quiet {
-        eprintln!("{line}");
+        errln!("{line}");
     }
 }
 
@@ -142,7 +150,7 @@ fn run_bench(args: BenchArgs) -> ExitCode {
         if json {
             outln!("{}", serde_json::to_string(row).unwrap_or_default());
         } else {
-            eprintln!("bench: {} triangles done", row.triangles);
+            errln!("bench: {} triangles done", row.triangles);
         }
     });
     finish(rows, |rows| {

@@ -2210,7 +2210,8 @@ fn clips_sharing_a_name_are_picked_by_index() {
 /// A reader that stops reading (`inbetween inspect face.glb | head -1`): the output was
 /// printed with `println!`, which panicked on the closed pipe ("failed printing to stdout:
 /// Broken pipe", a backtrace, exit 101). Now what cannot be written is dropped: exit 0, nothing
-/// on stderr. The pipe is closed before inspect writes (its read end dropped at once).
+/// on stderr. The pipe is closed before inspect writes (its read end dropped at once); so is
+/// tween's stderr before its summary.
 #[test]
 fn a_reader_that_stops_reading_is_no_error() {
     use std::process::{Command, Stdio};
@@ -2232,6 +2233,17 @@ fn a_reader_that_stops_reading_is_no_error() {
         assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
         assert!(err.is_empty(), "{args:?}: {err}");
     }
+    // The summary on stderr (`tween ... 2>&1 | head -1`), its reader gone: the file written.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.glb");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_inbetween"))
+        .args(["tween", s(&input), "-o", s(&out)])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stderr.take());
+    assert_eq!(child.wait().unwrap().code(), Some(0));
+    assert_valid(&out);
 }
 
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
