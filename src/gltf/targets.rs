@@ -8,9 +8,8 @@
 //! one moving nothing (three.js), so that is how it is read: a primitive with fewer targets than
 //! the mesh's most gets the missing ones as zero deltas, accessors with no buffer view (zeros by
 //! glTF's rule; no bytes), of the attributes its own targets move (or, with none, those the
-//! other primitives' target moves that it has). Every stage then reads the mesh as glTF asks, and the output is written so; a line says it
-//! ([`super::read::Document::read_past`]).
-
+//! other primitives' target moves that it has). Every stage then reads the mesh as glTF asks,
+//! and the output is written so; a line says it ([`super::read::Document::read_past`]).
 //!
 //! So are default weights listing another number than the targets (a mesh's or a node's
 //! `weights`: the validator's MESH_INVALID_WEIGHTS_COUNT, NODE_WEIGHTS_INVALID), as glTF's
