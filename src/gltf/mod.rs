@@ -1,18 +1,21 @@
 //! glTF in and out.
 //!
 //! The pipeline, one module per stage: [`read`] (a `.gltf`/`.glb` file into a [`Document`]:
-//! [`container`]: a `.glb`'s chunks, read as they say where its header's length is wrong; buffers; [`uri`] says what external files it may read; [`spelling`]: a byte-order
-//! mark read past, whole decimals read as the integers glTF asks, signed indices as unsigned) -> [`decode`] (meshopt and Draco
-//! compression undone; [`targets`]: a mesh's primitives given the same number of morph targets) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles; [`channel`]:
-//! animation channels read and evaluated, nodes' rest transforms; [`skin`]: skinned points at any
-//! pose; [`instancing`]: a node's mesh instances) ... the command's own work ... -> [`build`] (new
+//! [`container`]: a `.glb`'s chunks, read as they say where its header's length is wrong; buffers;
+//! [`uri`] says what external files it may read; [`spelling`]: a byte-order mark read past, whole
+//! decimals read as the integers glTF asks, signed indices as unsigned) -> [`decode`] (meshopt and
+//! Draco compression undone; [`targets`]: a mesh's primitives given the same number of morph
+//! targets) -> [`accessor`] (accessors decoded to `f64`/`u32`, triangles; [`channel`]: animation
+//! channels read and evaluated, nodes' rest transforms; [`skin`]: skinned points at any pose;
+//! [`instancing`]: a node's mesh instances) ... the command's own work ... -> [`build`] (new
 //! accessors and buffer views on an [`Output`]; [`mend`]: what the input breaks of glTF's rules,
-//! one mend a file, made right as it is copied: undefined keys, inverse bind matrices, skin weights, rotation keys, key
-//! times, indices, strides, bounds, normals, tangents, sparse parts, image types, image data URIs, undeclared
-//! extensions, scene roots, repeated channels, empty clips and empty lists) -> [`mod@reorder`]
-//! (with meshopt: triangles and vertices in mesh order) -> [`compact`] (channels and accessors
-//! nothing uses any more dropped) -> [`encode`] (meshopt compression, when asked for) -> [`write`]
-//! (`.glb` or `.gltf` with its `.bin` and images, staged as one all-or-nothing set of files).
+//! one mend a file, made right as it is copied: undefined keys, inverse bind matrices, skin
+//! weights, rotation keys, key times, indices, strides, bounds, normals, tangents, sparse parts,
+//! image types, image data URIs, undeclared extensions, scene roots, repeated channels, empty clips
+//! and empty lists) -> [`mod@reorder`] (with meshopt: triangles and vertices in mesh order) ->
+//! [`compact`] (channels and accessors nothing uses any more dropped) -> [`encode`] (meshopt
+//! compression, when asked for) -> [`write`] (`.glb` or `.gltf` with its `.bin` and images, staged
+//! as one all-or-nothing set of files).
 
 mod accessor;
 mod build;
