@@ -331,11 +331,11 @@ impl Skinning {
 /// joints past them, each as its rest pose binds it: from its parent joint's matrix and its own
 /// rest transform (the bind pose's offset from its parent as at rest), or where its parent is
 /// no joint with a matrix, from its rest world transform and that of `mesh_node` (a node the
-/// skin deforms; none, past the nodes: the scene's origin); a matrix with no inverse (a joint scaled to nothing) gives the identity.
-/// Writers have left out the last joints' matrices (glTF-Blender-IO issue 2532: a Fox with 51
-/// for 64 joints, which Blender imports). On files that have them all, the parent rule gives
-/// the stored matrix to within 4e-7 (relative) for every joint below another of CesiumMan and
-/// Fox.
+/// skin deforms; none, past the nodes: the scene's origin); a matrix with no inverse (a joint
+/// scaled to nothing) gives the identity. Writers have left out the last joints' matrices
+/// (glTF-Blender-IO issue 2532: a Fox with 51 for 64 joints, which Blender imports). On files
+/// that have them all, the parent rule gives the stored matrix to within 4e-7 (relative) for
+/// every joint below another of CesiumMan and Fox.
 pub fn inverse_binds(json: &Value, skin: usize, mesh_node: usize, stored: &[DMat4]) -> Vec<DMat4> {
     let parents = node_parents(json);
     let nodes = arr(json, "nodes");
