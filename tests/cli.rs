@@ -2246,6 +2246,93 @@ fn a_reader_that_stops_reading_is_no_error() {
     assert_valid(&out);
 }
 
+/// A sparse accessor whose indices are out of order or repeated (glTF asks them strictly
+/// increasing; ACCESSOR_SPARSE_INDICES_NON_INCREASING): the reader here applies them in turn,
+/// the validator stops at the first out of order and reads other values, so its bounds
+/// disagreed and the error was carried. Parrot's first target as such a sparse accessor (indices
+/// 5, 2, 9, 2) tweens validator-clean, the target written dense as it decodes (vertex 2 the
+/// later value), said.
+#[test]
+fn sparse_indices_out_of_order_are_written_dense() {
+    let Some(fx) = fixtures() else { return };
+    let parrot = fx.join("morph-keyframes/Parrot.glb");
+    let doc = Document::open(&parrot).unwrap();
+    let (mut json, mut bin) = (doc.json.clone(), doc.buffers[0].clone());
+    let target = json["meshes"][0]["primitives"][0]["targets"][0]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    let count = json["accessors"][target]["count"].clone();
+    let mut view = |json: &mut serde_json::Value, bytes: Vec<u8>| {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let at = bin.len();
+        bin.extend(&bytes);
+        let views = json["bufferViews"].as_array_mut().unwrap();
+        views.push(serde_json::json!({"buffer": 0, "byteOffset": at, "byteLength": bytes.len()}));
+        views.len() - 1
+    };
+    let indices: Vec<u8> = [5u16, 2, 9, 2]
+        .iter()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
+    let values: Vec<u8> = [
+        0.1f32, 0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 0.3, 0.0, 0.4, 0.0,
+    ]
+    .iter()
+    .flat_map(|v| v.to_le_bytes())
+    .collect();
+    let (iv, vv) = (view(&mut json, indices), view(&mut json, values));
+    let accessors = json["accessors"].as_array_mut().unwrap();
+    accessors.push(
+        serde_json::json!({"componentType": 5126, "count": count, "type": "VEC3",
+        "min": [0, 0, 0], "max": [0.1, 0.4, 0.3],
+        "sparse": {"count": 4, "indices": {"bufferView": iv, "componentType": 5123},
+            "values": {"bufferView": vv}}}),
+    );
+    let sparse = accessors.len() - 1;
+    json["meshes"][0]["primitives"][0]["targets"][0]["POSITION"] = sparse.into();
+    json["buffers"][0]["byteLength"] = bin.len().into();
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("sparse.glb"), dir.path().join("out.glb"));
+    write_glb(&input, &json, &bin);
+    if let Some((_, _, report)) = validate(&input) {
+        assert!(
+            report.contains("ACCESSOR_SPARSE_INDICES_NON_INCREASING"),
+            "{report}"
+        );
+    }
+    tweened(
+        &input,
+        &out,
+        &[&format!(
+            "1 sparse accessor ({sparse}) listed its indices out of order or twice"
+        )],
+    );
+    // The output's accessors renumbered (those nothing uses left out): its first target's.
+    let written = Document::open(&out).unwrap();
+    let first = written.json["meshes"][0]["primitives"][0]["targets"][0]["POSITION"]
+        .as_u64()
+        .unwrap() as usize;
+    let acc = &written.json["accessors"][first];
+    assert!(
+        acc.get("sparse").is_none() && acc["bufferView"].is_u64(),
+        "{acc}"
+    );
+    let (got, _) = written.read_f64(first).unwrap();
+    let mut want = vec![0.0; got.len()];
+    for (v, xyz) in [
+        (5, [0.1, 0.0, 0.0]),
+        (9, [0.0, 0.0, 0.3]),
+        (2, [0.0, 0.4, 0.0]),
+    ] {
+        for c in 0..3 {
+            want[3 * v + c] = xyz[c] as f32 as f64;
+        }
+    }
+    assert_eq!(got, want);
+}
+
 /// Declarations a writer got wrong: an image labelled JPEG whose bytes are PNG (in the file,
 /// and as an external file of a `.gltf`; another named by a Windows path, `tex\\fox.png`, as
 /// AWS iot-app-kit's pull request 417 met them), extensions used but not named in `extensionsUsed`

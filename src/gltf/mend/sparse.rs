@@ -1,7 +1,9 @@
 //! Sparse parts ([`sparse_parts`]): a buffer view that only sparse parts use loses
 //! `byteStride` and `target` (only vertex data may have them); a float sparse accessor whose
-//! parts lie in a view that other accessors read as vertex data (the same writer's) is written
-//! dense, as it decodes.
+//! parts lie in a view that other accessors read as vertex data (the same writer's), or whose
+//! indices are not strictly increasing (ACCESSOR_SPARSE_INDICES_NON_INCREASING: a reader that
+//! stops at the first out of order, the validator among them, reads other values than one that
+//! applies them all), is written dense, as it decodes.
 
 use super::said_of;
 use crate::gltf::build::BinBuilder;
@@ -35,7 +37,7 @@ pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> V
             view.remove("target");
         }
     }
-    let mut densified = Vec::new();
+    let (mut densified, mut unordered) = (Vec::new(), Vec::new());
     for i in 0..arr(json, "accessors").len() {
         let a = &json["accessors"][i];
         let shared = ["indices", "values"].iter().any(|part| {
@@ -43,7 +45,9 @@ pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> V
                 .as_u64()
                 .is_some_and(|v| plain.contains(&v))
         });
-        if !shared || a["componentType"].as_u64() != Some(5126) {
+        let out_of_order =
+            sparse_indices(doc, a).is_some_and(|ix| ix.windows(2).any(|w| w[0] >= w[1]));
+        if !(shared || out_of_order) || a["componentType"].as_u64() != Some(5126) {
             continue;
         }
         let Ok((values, _)) = doc.read_f64(i) else {
@@ -58,9 +62,41 @@ pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> V
             o.remove("byteOffset");
             o.insert("bufferView".into(), serde_json::json!(view));
         }
-        densified.push(i.to_string());
+        match out_of_order {
+            true => unordered.push(i.to_string()),
+            false => densified.push(i.to_string()),
+        }
     }
-    said_of(&densified, |n, s, its, which| {
+    let mut said = said_of(&densified, |n, s, its, which| {
         format!("{n} sparse accessor{s} ({which}) kept {its} indices or values in a view that vertex data also uses; written dense")
-    })
+    });
+    said.extend(said_of(&unordered, |n, s, its, which| {
+        format!("{n} sparse accessor{s} ({which}) listed {its} indices out of order or twice, which glTF does not allow (readers that stop at it, the validator among them, read other values); written dense as they decode, a repeated index's later value kept")
+    }));
+    said
+}
+
+/// The indices of sparse accessor `a` as stored (`None` where it is not sparse or they lie
+/// outside their view).
+fn sparse_indices(doc: &Document, a: &Value) -> Option<Vec<u32>> {
+    let sparse = &a["sparse"];
+    let count = sparse["count"].as_u64()? as usize;
+    let ix = &sparse["indices"];
+    let view = doc.view(ix["bufferView"].as_u64()? as usize).ok()?;
+    let bytes = view.get(ix["byteOffset"].as_u64().unwrap_or(0) as usize..)?;
+    let size = match ix["componentType"].as_u64()? {
+        5121 => 1,
+        5123 => 2,
+        5125 => 4,
+        _ => return None,
+    };
+    let read = |k: usize| -> Option<u32> {
+        let b = bytes.get(k * size..(k + 1) * size)?;
+        Some(match size {
+            1 => b[0] as u32,
+            2 => u16::from_le_bytes([b[0], b[1]]) as u32,
+            _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        })
+    };
+    (0..count).map(read).collect()
 }
