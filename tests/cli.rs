@@ -1759,7 +1759,7 @@ fn integers_written_as_decimals_and_a_byte_order_mark_are_read() {
 /// A GLB whose header's length is not the file's, as real writers left them: 4 bytes after the
 /// chunks (a GLB cut out of a 3D Tiles b3dm: three.js pull request 21122), a header counting
 /// the JSON chunk only (qmuntal/gltf issue 38), a binary chunk whose padding the file lacks
-/// (assimp issue 3176). Each is read by its chunks, said in a line (and by `inspect`), and
+/// (assimp's exporter miscounted that padding: its issue 3176). Each is read by its chunks, said in a line (and by `inspect`), and
 /// tweens (Parrot) or blends (Fox) to the original's bytes; a file cut short is still refused,
 /// saying so.
 #[test]

@@ -11,8 +11,8 @@
 //!   transfer) are left out;
 //! - chunks whole in the file past the declared length are read (a header counting the JSON
 //!   chunk only: qmuntal/gltf issue 38, fixed in its pull request 39);
-//! - a binary chunk the file ends inside (assimp's exporter counted padding it did not write,
-//!   its issue 3176) is read as far as it goes: enough where its buffer's `byteLength` lies
+//! - a binary chunk the file ends inside (its padding counted and not written; assimp's
+//!   exporter miscounted its chunk's padding, its issue 3176) is read as far as it goes: enough where its buffer's `byteLength` lies
 //!   within it; a file cut short (a download stopped) is refused when its buffer is read
 //!   ([`Glb::cut_short`] says so there).
 
