@@ -7,8 +7,8 @@
 //! capture, see [`bvh`]. Text, or JSON (`schemas/inspect.schema.json`).
 
 use crate::gltf::{
-    arr, begin, clip_by, clip_name, listed, quoted_name, target_names, weights_target, Access,
-    Container, Document, PASSED_THROUGH,
+    arr, begin, clip_name, listed, quoted_name, target_names, weights_target, Access, Container,
+    Document, PASSED_THROUGH,
 };
 use crate::tween::{
     find_morph_meshes, grid_of, plan, skeletal_clips, targets_given_normals, KeyOptions, KeySource,
@@ -216,6 +216,7 @@ fn inspect_gltf(path: &Path, access: &Access) -> Result<Inspection> {
         Ok(m) => (tween_tracks(m), None),
         Err(e) => (Vec::new(), Some(format!("{e:#}"))),
     };
+    let labels = clip_labels(json);
     Ok(Inspection {
         file: path.display().to_string(),
         bytes: doc.input_bytes,
@@ -238,7 +239,7 @@ fn inspect_gltf(path: &Path, access: &Access) -> Result<Inspection> {
             .map(|(a, g)| ClipGait {
                 // As `blend --clips` names it: its name, or its index where it has none or
                 // shares it.
-                clip: clip_label(json, a),
+                clip: labels[a].clone(),
                 gait: GaitInfo::of(g),
             })
             .collect(),
@@ -441,18 +442,25 @@ fn blend_clips(json: &Value) -> Vec<String> {
 }
 
 /// A glTF file's inspection as text for a person.
-/// Animation `a` as `blend --clips` picks it: its name, where that picks it, else its index.
-fn clip_label(json: &Value, a: usize) -> String {
-    let names: Vec<String> = (arr(json, "animations").iter().enumerate())
+/// Each animation as `blend --clips` picks it: its name, where no other carries it, else its
+/// index (an unnamed one, or one whose name others share: `gltf::clip_by` refuses that name).
+fn clip_labels(json: &Value) -> Vec<String> {
+    let anims = arr(json, "animations");
+    let names: Vec<String> = (anims.iter().enumerate())
         .map(|(i, anim)| clip_name(anim, i))
         .collect();
-    let name = &names[a];
-    match json["animations"][a]["name"].is_string()
-        && clip_by(name, names.iter().map(String::as_str).enumerate()) == Ok(Some(a))
-    {
-        true => name.clone(),
-        false => a.to_string(),
+    let mut carried: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    for name in &names {
+        *carried.entry(name.as_str()).or_default() += 1;
     }
+    (names.iter().enumerate())
+        .map(
+            |(a, name)| match anims[a]["name"].is_string() && carried[name.as_str()] == 1 {
+                true => name.clone(),
+                false => a.to_string(),
+            },
+        )
+        .collect()
 }
 
 fn gltf_text(i: &Inspection) -> String {

@@ -5,7 +5,8 @@
 //! ([`crate::gltf::uri::data_uri`]); a data URI of the bytes themselves, `%XX`-escaped as
 //! RFC 2397 allows and the validator takes, is left as written.
 
-use crate::gltf::read::{listed, quoted_name};
+use super::said_of;
+use crate::gltf::read::quoted_name;
 use crate::gltf::uri::{data_uri, image_mime};
 use base64::Engine;
 use serde_json::Value;
@@ -44,13 +45,7 @@ pub fn image_data_uris(json: &mut Value) -> Vec<String> {
         img["uri"] = format!("data:{media};base64,{plain}").into();
         fixed.push(quoted_name(img, || i.to_string()));
     }
-    let what = match fixed.len() {
-        0 => return Vec::new(),
-        1 => "image",
-        _ => "images",
-    };
-    vec![format!(
-        "{what} {} embedded as data URIs whose base64 browsers read but glTF's validator does not (wrapped in lines, without padding or a header in another case): written as plain base64",
-        listed(&fixed)
-    )]
+    said_of(&fixed, |_, s, _, which| {
+        format!("image{s} {which} embedded as data URIs whose base64 browsers read but glTF's validator does not (wrapped in lines, without padding or a header in another case): written as plain base64")
+    })
 }

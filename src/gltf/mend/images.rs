@@ -5,8 +5,9 @@
 //! decoders that players pick by the bytes show it the same; those that go by the label fail
 //! on the wrong one).
 
+use super::said_of;
 use crate::gltf::build::BinBuilder;
-use crate::gltf::read::{arr, listed, quoted_name, Document};
+use crate::gltf::read::{arr, quoted_name, Document};
 use crate::gltf::uri::image_mime;
 use serde_json::Value;
 
@@ -41,13 +42,7 @@ pub fn image_types(doc: &Document, json: &mut Value, bin: &BinBuilder) -> Vec<St
         fixed.push(format!("{name} ({declared}, its bytes {told})"));
         json["images"][i]["mimeType"] = told.into();
     }
-    let (what, its) = match fixed.len() {
-        0 => return Vec::new(),
-        1 => ("image", "its"),
-        _ => ("images", "their"),
-    };
-    vec![format!(
-        "{what} {} declared another type than {its} bytes are: declared as the bytes are",
-        listed(&fixed)
-    )]
+    said_of(&fixed, |_, s, its, which| {
+        format!("image{s} {which} declared another type than {its} bytes are: declared as the bytes are")
+    })
 }
