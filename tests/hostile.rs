@@ -562,6 +562,15 @@ fn a_long_baked_face_rig_is_written_in_little_memory() {
     assert_eq!(times.len(), 7201);
     let (_, key_times, key_weights) = weights(&input);
     assert_eq!((times, played), (key_times, key_weights));
+    // So the output is the input's size, as `inspect` says beforehand: the weights animation is
+    // written anew in place of the one read, not beside it (it said 1.5 MB added to the 2.7 MB file).
+    let size = |path: &Path| std::fs::metadata(path).unwrap().len() as f64;
+    let grown = size(&glb) - size(&input);
+    assert!(grown.abs() < 1e-3 * size(&input), "{grown} bytes");
+    let said = inbetween(&["inspect", "--json", s(&input)]);
+    let said: serde_json::Value = serde_json::from_slice(&said.stdout).unwrap();
+    let added = &said["tween"]["tracks"][0]["added_bytes"];
+    assert!(added.as_f64().unwrap() < 1e-3 * size(&input), "{said}");
     let usd = dir.path().join("out.usdc");
     let r = run_in_shell(limit, &["tween", s(&input), "-o", s(&usd)]);
     let err = String::from_utf8_lossy(&r.stderr);

@@ -400,6 +400,15 @@ fn tween_tracks(meshes: &[MorphMesh]) -> Vec<TrackInfo> {
                     })
                     .sum(),
             };
+            // The track's weights animation is written anew, frames by all targets; one
+            // read from a clip replaces that clip's sampler (keys by its targets).
+            let animation = frames.len() as u64 * (4 + 4 * targets);
+            let replaced = match t.origin {
+                TrackOrigin::Animation { .. } => {
+                    t.times.len() as u64 * (4 + 4 * m.target_count as u64)
+                }
+                TrackOrigin::Targets { .. } => 0,
+            };
             out.push(TrackInfo {
                 mesh: m.name.clone(),
                 keys_from: match &t.origin {
@@ -411,7 +420,7 @@ fn tween_tracks(meshes: &[MorphMesh]) -> Vec<TrackInfo> {
                 new_targets,
                 added_bytes: new_targets as u64 * m.vertex_count() as u64 * per_vertex
                     + given
-                    + frames.len() as u64 * (4 + 4 * targets),
+                    + animation.saturating_sub(replaced),
             });
         }
     }
