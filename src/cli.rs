@@ -662,6 +662,11 @@ pub struct BenchArgs {
     /// (.glb, --meshopt, .usdc) and `preview` on it, each in a child process (e.g. 30000).
     #[arg(long, value_name = "MESHES")]
     pub scene: Option<usize>,
+    /// Instead: write a face rig of this many blend shapes (about 20,000 vertices, 101 keys of
+    /// a weights animation) and time `tween` (.glb, --compact, .usdc) on it, each in a child
+    /// process (e.g. 300).
+    #[arg(long, value_name = "SHAPES")]
+    pub rig: Option<usize>,
     /// With --end-to-end: more `tween` options for the timed run (e.g. --e2e-arg=--compact).
     #[arg(long = "e2e-arg", value_name = "ARG", allow_hyphen_values = true)]
     pub e2e_args: Vec<String>,

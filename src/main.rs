@@ -133,6 +133,11 @@ fn run_bench(args: BenchArgs) -> ExitCode {
             outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
         });
     }
+    if let Some(shapes) = args.rig {
+        return finish(bench::rig(shapes), |r| {
+            outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
+        });
+    }
     if let Some(triangles) = args.end_to_end {
         let r = bench::end_to_end(triangles, args.e2e_tweens, &args.e2e_format, &args.e2e_args);
         return finish(r, |r| {

@@ -3298,9 +3298,9 @@ fn bent_arm(
     input
 }
 
-/// `bench --end-to-end` and `bench --scene` run their commands in child processes and print
-/// what they timed as JSON: every run there, each with its wall time, the summary of the timed
-/// tween (and its linear twin) beside it.
+/// `bench --end-to-end`, `bench --scene` and `bench --rig` run their commands in child
+/// processes and print what they timed as JSON: every run there, each with its wall time, the
+/// summary of the timed tween (and its linear twin) beside it.
 #[test]
 fn bench_times_whole_commands_in_child_processes() {
     let json = |args: &[&str]| -> serde_json::Value {
@@ -3327,6 +3327,25 @@ fn bench_times_whole_commands_in_child_processes() {
             "tween -o meshopt.glb --meshopt",
             "tween -o out.usdc",
             "preview -o sheet.png"
+        ]
+    );
+    let rig = json(&["bench", "--rig", "2"]);
+    assert_eq!(
+        (rig["shapes"].as_u64(), rig["keys"].as_u64()),
+        (Some(2), Some(101))
+    );
+    let runs: Vec<&str> = (rig["runs"].as_array().unwrap().iter())
+        .map(|r| {
+            assert!(r[1].as_f64().unwrap() > 0.0, "{r}");
+            r[0].as_str().unwrap()
+        })
+        .collect();
+    assert_eq!(
+        runs,
+        [
+            "tween -o out.glb",
+            "tween -o compact.glb --compact",
+            "tween -o out.usdc"
         ]
     );
 }

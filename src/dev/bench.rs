@@ -491,31 +491,90 @@ pub fn scene(meshes: usize) -> Result<SceneBench> {
         key_weights: None,
     }
     .write(&input)?;
-    let path = |name: &str| dir.join(name).to_string_lossy().into_owned();
-    let input_s = path("scene.glb");
-    let cases = [
-        ("tween", path("out.glb"), ""),
-        ("tween", path("meshopt.glb"), "--meshopt"),
-        ("tween", path("out.usdc"), ""),
-        ("preview", path("sheet.png"), ""),
-    ];
-    let mut runs = Vec::new();
-    for (command, output, more) in &cases {
-        let mut args = vec![*command, &input_s, "-o", output, "-q"];
-        args.extend(more.split_whitespace());
-        let (wall_s, _) = child(&args)?;
-        let name = std::path::Path::new(output).file_name().unwrap_or_default();
-        runs.push((
-            format!("{command} -o {} {more}", name.to_string_lossy())
-                .trim()
-                .to_string(),
-            wall_s,
-        ));
-    }
+    let runs = timed_runs(
+        &dir,
+        &input,
+        &[
+            ("tween", "out.glb", ""),
+            ("tween", "meshopt.glb", "--meshopt"),
+            ("tween", "out.usdc", ""),
+            ("preview", "sheet.png", ""),
+        ],
+    )?;
     let input_mib = std::fs::metadata(&input)?.len() as f64 / 1048576.0;
     let _ = std::fs::remove_dir_all(&dir);
     Ok(SceneBench {
         meshes,
+        input_mib,
+        runs,
+    })
+}
+
+/// Each of `cases` (command, output file name in `dir`, more options) run on `input` in a
+/// child process, quietly: (command line after the input, wall seconds), in order.
+fn timed_runs(
+    dir: &std::path::Path,
+    input: &std::path::Path,
+    cases: &[(&str, &str, &str)],
+) -> Result<Vec<(String, f64)>> {
+    let input = input.to_string_lossy().into_owned();
+    let mut runs = Vec::new();
+    for (command, output, more) in cases {
+        let path = dir.join(output).to_string_lossy().into_owned();
+        let mut args = vec![*command, &input, "-o", &path, "-q"];
+        args.extend(more.split_whitespace());
+        let (wall_s, _) = child(&args)?;
+        let line = format!("{command} -o {output} {more}");
+        runs.push((line.trim().to_string(), wall_s));
+    }
+    Ok(runs)
+}
+
+/// A face rig of many shapes, each command timed on it in a child process (`inbetween bench
+/// --rig N`): what grows with the number of authored targets rather than with triangles.
+#[derive(Debug, Serialize)]
+pub struct RigBench {
+    pub shapes: usize,
+    pub vertices: usize,
+    pub keys: usize,
+    pub input_mib: f64,
+    /// (command line after the input, wall seconds), in order.
+    pub runs: Vec<(String, f64)>,
+}
+
+/// Write a face of about 20,000 vertices with `shapes` blend shapes keyed by a weights
+/// animation at 10 keys a second for 10 seconds (101 keys), and time on it `tween` to .glb,
+/// .glb with --compact (the authored targets fitted to every frame between keys, the basis
+/// beside them) and .usdc. The compaction's passes over frames x shapes x vertices made it
+/// grow with the square of the shapes: at 300 shapes `--compact` took 110 s beside 6 s for
+/// the dense output (now about 14 s, 2 cores).
+///
+/// ```text
+/// inbetween bench --rig 300
+/// ```
+pub fn rig(shapes: usize) -> Result<RigBench> {
+    let dir = std::env::temp_dir().join(format!("inbetween-rig-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let input = dir.join("rig.glb");
+    let file = synth::face_rig_of(141, shapes, 10.0, 10.0);
+    let vertices = file.meshes[0].surface.positions.len();
+    let keys = file.key_times.as_ref().map_or(0, Vec::len);
+    file.write(&input)?;
+    let runs = timed_runs(
+        &dir,
+        &input,
+        &[
+            ("tween", "out.glb", ""),
+            ("tween", "compact.glb", "--compact"),
+            ("tween", "out.usdc", ""),
+        ],
+    )?;
+    let input_mib = std::fs::metadata(&input)?.len() as f64 / 1048576.0;
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(RigBench {
+        shapes,
+        vertices,
+        keys,
         input_mib,
         runs,
     })

@@ -333,7 +333,12 @@ impl KeyframeFile {
 /// `seconds` baked at `rate` samples a second, every weight a smooth curve in [0, 1]. Like a
 /// capture-driven face: many targets, blended weights, dense keys.
 pub fn face_rig(shapes: usize, rate: f64, seconds: f64) -> KeyframeFile {
-    let face = grid(40, 40, 2.0, 2.0);
+    face_rig_of(40, shapes, rate, seconds)
+}
+
+/// [`face_rig`] on a face of `side` x `side` quads ((side + 1)^2 vertices).
+pub fn face_rig_of(side: usize, shapes: usize, rate: f64, seconds: f64) -> KeyframeFile {
+    let face = grid(side, side, 2.0, 2.0);
     let mut targets = Vec::new();
     for k in 0..shapes {
         let t: Vec<DVec3> = if k == 0 {

@@ -28,7 +28,7 @@ use super::keys::MorphMesh;
 use crate::gltf::{exp_roundtrip, oct_roundtrip, Storage};
 use anyhow::{bail, Result};
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par, Side};
+use faer::{Accum, Mat, MatRef, Par, Side};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -223,6 +223,13 @@ enum Attr {
     Tangent,
 }
 
+/// Vertices a thread measures at a time (3 columns each of the matrix products in
+/// [`Plan::measure`]).
+const MEASURE_CHUNK: usize = 512;
+
+/// Basis rows made beyond those asked for, at least: the next tries of [`Plan::run`].
+const BASIS_AHEAD: usize = 8;
+
 /// One column block of the frames matrix: an attribute of a primitive.
 struct Block {
     prim: usize,
@@ -297,23 +304,62 @@ impl Rows<'_> {
     }
 
     /// Visit the matrix in column chunks: `visit(block index, first vertex, chunk)` with the
-    /// chunk as a frames x columns matrix.
-    fn chunks(&self, visit: &mut dyn FnMut(usize, usize, &Mat<f64>)) {
+    /// chunk as a frames x columns matrix. Each chunk is filled on every thread, a few vertices
+    /// each, as [`Rows::fill`] fills a row (the same operations in the same order: the same
+    /// bits), the vertices' authored deltas read once for all frames: a 300-target face rig's
+    /// 298 frames read the targets once per frame (43 GB a pass over 20k vertices), 1.8 s a pass.
+    fn chunks(&self, visit: &mut dyn FnMut(usize, usize, MatRef<f64>)) {
         const VERTICES: usize = 1024;
+        /// Vertices a thread fills at a time (their 3 values in every frame).
+        const GROUP: usize = 8;
         let frames = self.count();
+        let mut buf = Vec::new();
         for (bi, b) in self.blocks.iter().enumerate() {
+            let p = &self.frames.primitives[b.prim];
+            let targets = self.authored.iter().map(Vec::len).max().unwrap_or(0);
+            let authored: Vec<Option<&Vec<DVec3>>> = (0..targets)
+                .map(|i| self.authored_values(b.prim, b.attr, i))
+                .collect();
             for v0 in (0..b.vertices).step_by(VERTICES) {
                 let v1 = (v0 + VERTICES).min(b.vertices);
                 let cols = 3 * (v1 - v0);
-                let mut m = Mat::<f64>::zeros(frames, cols);
-                let mut row = vec![0.0; cols];
-                for f in 0..frames {
-                    self.fill(b, f, v0, v1, &mut row);
-                    for (c, x) in row.iter().enumerate() {
-                        m[(f, c)] = *x;
-                    }
-                }
-                visit(bi, v0, &m);
+                buf.clear();
+                buf.resize(frames * cols, 0.0);
+                // Column-major: GROUP vertices' columns are one run of the buffer.
+                buf.par_chunks_mut(frames * 3 * GROUP)
+                    .enumerate()
+                    .for_each(|(g, out)| {
+                        let first = v0 + g * GROUP;
+                        let last = (first + GROUP).min(v1);
+                        let mut acc = [DVec3::ZERO; GROUP];
+                        for f in 0..frames {
+                            let acc = &mut acc[..last - first];
+                            if self.exact[f] {
+                                acc.fill(DVec3::ZERO);
+                            } else {
+                                let values = Self::frame_values(p, b.attr, f)
+                                    .expect("block of a present attribute");
+                                for (o, d) in acc.iter_mut().zip(&values[first..last]) {
+                                    *o = DVec3::from(d.map(f64::from));
+                                }
+                                for (&w, d) in self.authored[f].iter().zip(&authored) {
+                                    let Some(d) = d.filter(|_| w != 0.0) else {
+                                        continue;
+                                    };
+                                    for (o, x) in acc.iter_mut().zip(&d[first..last]) {
+                                        *o -= w * *x;
+                                    }
+                                }
+                                if b.weight != 1.0 {
+                                    acc.iter_mut().for_each(|x| *x *= b.weight);
+                                }
+                            }
+                            for (c, x) in acc.iter().flat_map(|x| x.to_array()).enumerate() {
+                                out[c * frames + f] = x;
+                            }
+                        }
+                    });
+                visit(bi, v0, MatRef::from_column_major_slice(&buf, frames, cols));
             }
         }
     }
@@ -349,18 +395,20 @@ impl Factors {
 /// their two products: the Gram matrix (frames x frames) or, where the frames have fewer
 /// values than there are frames, their covariance (values x values; a 337-vertex mesh at 4,201
 /// frames took 9.2 s and 614 MiB by the Gram matrix).
-fn factor(rows: &Rows) -> Result<Factors> {
+fn factor(rows: &Rows) -> Result<(Factors, Vec<f64>)> {
     let n = rows.count();
     let values = values(&rows.blocks);
     if values < n {
         return factor_by_values(rows, values);
     }
+    let mut norms2 = vec![0.0; n];
     // Frames played by their authored weights alone have zero rows: left out of the Gram matrix
     // (faer's eigensolver did not converge on MorphStressTest resampled by gltf-transform, its
     // keys' zero block beside the frames between) and given zero weights.
     let live: Vec<usize> = (0..n).filter(|&f| !rows.exact[f]).collect();
     let mut gram = Mat::<f64>::zeros(live.len(), live.len());
     rows.chunks(&mut |_, _, m| {
+        add_row_norms(&mut norms2, m);
         let m = Mat::from_fn(live.len(), m.ncols(), |r, c| m[(live[r], c)]);
         matmul(
             gram.as_mut(),
@@ -376,7 +424,14 @@ fn factor(rows: &Rows) -> Result<Factors> {
     for (r, &f) in live.iter().enumerate() {
         u.row_mut(f).copy_from(live_u.row(r));
     }
-    Ok(Factors::Svd { u, sigma })
+    Ok((Factors::Svd { u, sigma }, norms2))
+}
+
+/// Each row's squared norm added to `norms2`, summed along the row.
+fn add_row_norms(norms2: &mut [f64], m: MatRef<f64>) {
+    for (f, r) in norms2.iter_mut().enumerate() {
+        *r += m.row(f).iter().map(|x| x * x).sum::<f64>();
+    }
 }
 
 /// The eigenvectors of `product` (the frames' Gram matrix or covariance) in the order of the
@@ -405,11 +460,13 @@ fn values(blocks: &[Block]) -> usize {
 
 /// [`factor`] through the covariance of the frames' `values` columns: its eigenvectors are the
 /// right singular vectors V, and U = M V / sigma.
-fn factor_by_values(rows: &Rows, values: usize) -> Result<Factors> {
+fn factor_by_values(rows: &Rows, values: usize) -> Result<(Factors, Vec<f64>)> {
     let n = rows.count();
     let mut m = Mat::<f64>::zeros(n, values);
     let mut at = 0;
+    let mut norms2 = vec![0.0; n];
     rows.chunks(&mut |_, _, chunk| {
+        add_row_norms(&mut norms2, chunk);
         m.as_mut()
             .submatrix_mut(0, at, n, chunk.ncols())
             .copy_from(chunk);
@@ -439,7 +496,7 @@ fn factor_by_values(rows: &Rows, values: usize) -> Result<Factors> {
             u[(r, c)] /= sv;
         }
     }
-    Ok(Factors::Svd { u, sigma })
+    Ok((Factors::Svd { u, sigma }, norms2))
 }
 
 /// The smallest K whose truncation leaves every frame's (weighted) residual within `budget`
@@ -557,6 +614,7 @@ pub fn compact(
         rig,
         base,
         base_error,
+        basis_rows: Default::default(),
     };
     plan.run(own)
 }
@@ -575,24 +633,36 @@ fn fit_authored(rows: &mut Rows, own: &[usize]) -> Result<()> {
         let targets: Vec<Option<&Vec<DVec3>>> = (0..t)
             .map(|i| rows.authored_values(b.prim, b.attr, i))
             .collect();
-        for i in 0..t {
-            let Some(ai) = targets[i] else { continue };
-            for j in i..t {
-                if let Some(aj) = targets[j] {
-                    let dot: f64 = ai.iter().zip(aj.iter()).map(|(x, y)| x.dot(*y)).sum();
+        let p = &rows.frames.primitives[b.prim];
+        let frames: Vec<&[[f32; 3]]> = (own.iter())
+            .map(|&f| Rows::frame_values(p, b.attr, f).expect("block of a present attribute"))
+            .collect();
+        // Each target's products with the targets after it (None: one without this attribute)
+        // and with the frames, the targets on every thread.
+        type Products = (Vec<Option<f64>>, Vec<f64>);
+        let products: Vec<Option<Products>> = (0..t)
+            .into_par_iter()
+            .map(|i| {
+                let ai = targets[i]?;
+                let later: Vec<&[DVec3]> = targets[i..].iter().flatten().map(|a| &a[..]).collect();
+                let mut with = dots(ai, &later, |d| *d).into_iter();
+                let later = (targets[i..].iter())
+                    .map(|a| a.map(|_| with.next().expect("a product for each target")))
+                    .collect();
+                Some((later, dots(ai, &frames, |d| DVec3::from(d.map(f64::from)))))
+            })
+            .collect();
+        for (i, products) in products.into_iter().enumerate() {
+            let Some((later, frames)) = products else {
+                continue;
+            };
+            for (j, dot) in (i..t).zip(later) {
+                if let Some(dot) = dot {
                     ata[(i, j)] += w2 * dot;
                     ata[(j, i)] = ata[(i, j)];
                 }
             }
-            let p = &rows.frames.primitives[b.prim];
-            for (col, &f) in own.iter().enumerate() {
-                let values =
-                    Rows::frame_values(p, b.attr, f).expect("block of a present attribute");
-                let dot: f64 = ai
-                    .iter()
-                    .zip(values)
-                    .map(|(x, d)| x.dot(DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64)))
-                    .sum();
+            for (col, dot) in frames.into_iter().enumerate() {
                 atd[(i, col)] += w2 * dot;
             }
         }
@@ -620,6 +690,25 @@ fn fit_authored(rows: &mut Rows, own: &[usize]) -> Result<()> {
     Ok(())
 }
 
+/// The dot products of `a` with each of `others` (values `to` makes vectors of), each summed
+/// in vertex order from -0.0 as `Iterator::sum` sums them (the same bits), [`LANES`] at a time so
+/// that their sums run side by side: one sum's chain of additions waits on each addition (a
+/// 300-target rig's 45,000 products of 20k vertices: 3 s one at a time).
+fn dots<T: Sync>(a: &[DVec3], others: &[&[T]], to: impl Fn(&T) -> DVec3) -> Vec<f64> {
+    const LANES: usize = 8;
+    let mut out = Vec::with_capacity(others.len());
+    for group in others.chunks(LANES) {
+        let mut sums = [-0.0f64; LANES];
+        for (v, x) in a.iter().enumerate() {
+            for (s, o) in sums.iter_mut().zip(group) {
+                *s += x.dot(to(&o[v]));
+            }
+        }
+        out.extend_from_slice(&sums[..group.len()]);
+    }
+    out
+}
+
 /// A compaction under way: the rows and the tolerances in scene units.
 struct Plan<'a> {
     rows: &'a Rows<'a>,
@@ -631,25 +720,24 @@ struct Plan<'a> {
     /// How each primitive's own attributes are filtered, and what that moves each block by.
     base: Vec<BaseBits>,
     base_error: Vec<Option<Vec<f32>>>,
+    /// The basis rows made so far (see [`Plan::encode`]).
+    basis_rows: std::sync::Mutex<Vec<Vec<Vec<f32>>>>,
 }
 
 impl Plan<'_> {
     fn run(&self, own: Vec<usize>) -> Result<Compacted> {
         let rows = self.rows;
-        let n = rows.count();
-        let factors = match self.opts.basis {
-            Basis::Off => Some(Factors::Own(own)),
-            _ => Some(factor(rows)?),
+        // The frames' squared norms come with the factors, from the same pass over the frames.
+        let (factors, norms2) = match self.opts.basis {
+            Basis::Off => (Some(Factors::Own(own)), Vec::new()),
+            _ => {
+                let (f, norms2) = factor(rows)?;
+                (Some(f), norms2)
+            }
         };
         let mut k = match (&factors, self.opts.basis) {
             (Some(f), Basis::Off) => f.rank(),
             (Some(f), Basis::Auto) => {
-                let mut norms2 = vec![0.0; n];
-                rows.chunks(&mut |_, _, m| {
-                    for (f, r) in norms2.iter_mut().enumerate() {
-                        *r += m.row(f).iter().map(|x| x * x).sum::<f64>();
-                    }
-                });
                 let blocks = rows.blocks.len() as f64 / rows.frames.primitives.len().max(1) as f64;
                 let budget = TRUNCATION_SHARE * self.tol;
                 smallest_k(f, &norms2, budget * budget * self.vertices as f64 * blocks)
@@ -809,29 +897,47 @@ impl Plan<'_> {
             }
         }
         if let (Some(Factors::Svd { u, sigma }), true) = (factors, k > 0) {
-            let mut uk = Mat::<f64>::zeros(k, n);
-            for c in 0..k {
-                for r in 0..n {
-                    uk[(c, r)] = u[(r, c)] / sigma[c];
-                }
-            }
-            rows.chunks(&mut |bi, v0, m| {
-                let mut part = Mat::<f64>::zeros(k, m.ncols());
-                matmul(
-                    part.as_mut(),
-                    Accum::Replace,
-                    uk.as_ref(),
-                    m.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                let w = rows.blocks[bi].weight;
-                for (c, target) in basis.iter_mut().enumerate() {
-                    for j in 0..m.ncols() {
-                        target[bi][3 * v0 + j] = (part[(c, j)] / w) as f32;
+            let mut cache = self.basis_rows.lock().expect("one encode at a time");
+            if cache.len() < k {
+                // Row c is the same for every k: rows past k made in the same pass (its cost
+                // is in filling the residuals, not in the rows), for the next k tried.
+                let from = cache.len();
+                let to = (k + (k / 8).max(BASIS_AHEAD)).min(sigma.len());
+                let mut uk = Mat::<f64>::zeros(to - from, n);
+                for c in from..to {
+                    for r in 0..n {
+                        uk[(c - from, r)] = u[(r, c)] / sigma[c];
                     }
                 }
-            });
+                let mut fresh: Vec<Vec<Vec<f32>>> = vec![
+                    rows.blocks
+                        .iter()
+                        .map(|b| vec![0.0f32; 3 * b.vertices])
+                        .collect();
+                    to - from
+                ];
+                rows.chunks(&mut |bi, v0, m| {
+                    let mut part = Mat::<f64>::zeros(to - from, m.ncols());
+                    matmul(
+                        part.as_mut(),
+                        Accum::Replace,
+                        uk.as_ref(),
+                        m.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    let w = rows.blocks[bi].weight;
+                    for (c, target) in fresh.iter_mut().enumerate() {
+                        for j in 0..m.ncols() {
+                            target[bi][3 * v0 + j] = (part[(c, j)] / w) as f32;
+                        }
+                    }
+                });
+                cache.extend(fresh);
+            }
+            for (target, row) in basis.iter_mut().zip(cache.iter()) {
+                target.clone_from(row);
+            }
         }
         // Weights W = U sigma; keys of the rig (no residual) exactly zero.
         let mut weights: Vec<Vec<f64>> = (0..n)
@@ -1026,73 +1132,117 @@ impl Plan<'_> {
         // Squared deviations per primitive and frame: a small primitive (an eye) must not hide
         // in a large one's average.
         let prims = rows.frames.primitives.len();
-        let mut pos2 = vec![vec![0.0f64; rows.count()]; prims];
-        let mut nrm2 = vec![vec![0.0f64; rows.count()]; prims];
+        let n = rows.count();
+        let mut pos2 = vec![vec![0.0f64; n]; prims];
+        let mut nrm2 = vec![vec![0.0f64; n]; prims];
         let mut pos_n = vec![0usize; prims];
         let mut nrm_n = vec![0usize; prims];
         let mut worst = 0.0f64;
+        // A frame as a reader plays it: the basis at its weights and the authored targets (as
+        // decoded) at theirs, against the dense frame; a key the authored weights alone play
+        // (rig layout), against the authored targets exact at the exact weights. Per block, in
+        // chunks of vertices, those sums as matrix products (the targets by the frames).
+        let a = rows.authored.iter().map(Vec::len).max().unwrap_or(0);
+        let k = decoded.len();
+        let played = Mat::<f64>::from_fn(k + a, n, |c, f| match c < k {
+            true => weights[f][c] as f64,
+            false => authored_w[f].get(c - k).copied().unwrap_or(0.0),
+        });
+        let exact: Vec<usize> = (0..n).filter(|&f| rows.exact[f]).collect();
+        let keys = Mat::<f64>::from_fn(a, exact.len(), |i, r| {
+            rows.authored[exact[r]].get(i).copied().unwrap_or(0.0)
+        });
         for (bi, b) in rows.blocks.iter().enumerate() {
             if b.attr == Attr::Position {
                 pos_n[b.prim] += b.vertices;
             } else {
                 nrm_n[b.prim] += b.vertices;
             }
-            // Frames in parallel, each summed in vertex order from what the block before left
-            // (normals and tangents share a sum): the same figures on any number of threads.
-            let sums = if b.attr == Attr::Position {
-                &pos2[b.prim]
-            } else {
-                &nrm2[b.prim]
-            };
-            let frame = |row: &mut Vec<f64>, f: usize| -> (f64, f64) {
-                let w = &weights[f];
-                rows.fill(b, f, 0, b.vertices, row);
-                let unweighted = 1.0 / b.weight;
-                let (mut sum, mut most) = (sums[f], 0.0f64);
-                for (v, r) in row.chunks_exact(3).enumerate() {
-                    let mut e = [r[0] * unweighted, r[1] * unweighted, r[2] * unweighted];
-                    if let Some(be) = &self.base_error[bi] {
-                        for i in 0..3 {
-                            e[i] -= be[3 * v + i] as f64;
-                        }
-                    }
-                    for (c, t) in decoded.iter().enumerate() {
-                        let wc = w[c] as f64;
-                        for i in 0..3 {
-                            e[i] -= wc * t[bi][3 * v + i] as f64;
-                        }
-                    }
-                    // The fill took the exact weights times the exact targets; a reader
-                    // blends the decoded ones.
-                    for (i, (&wa, &wd)) in rows.authored[f].iter().zip(&authored_w[f]).enumerate() {
-                        if wa == 0.0 && wd == 0.0 {
-                            continue;
-                        }
-                        let Some(exact) = rows.authored_values(b.prim, b.attr, i) else {
-                            continue;
-                        };
-                        let dec = authored_decoded.as_ref().and_then(|ad| ad[bi][i].as_ref());
-                        for (j, x) in exact[v].to_array().into_iter().enumerate() {
-                            let d = dec.map_or(x, |d| d[3 * v + j] as f64);
-                            e[j] -= wd * d - wa * x;
-                        }
-                    }
-                    let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-                    sum += d2;
-                    most = most.max(d2);
-                }
-                (sum, most)
-            };
-            let per_frame: Vec<(f64, f64)> = (0..weights.len())
-                .into_par_iter()
-                .map_init(|| vec![0.0; 3 * b.vertices], frame)
+            let frames = &rows.frames.primitives[b.prim];
+            let exact_values: Vec<Option<&Vec<DVec3>>> = (0..a)
+                .map(|i| rows.authored_values(b.prim, b.attr, i))
                 .collect();
-            for (f, (sum, most)) in per_frame.into_iter().enumerate() {
-                if b.attr == Attr::Position {
-                    pos2[b.prim][f] = sum;
-                    worst = worst.max(most);
-                } else {
-                    nrm2[b.prim][f] = sum;
+            let dec = authored_decoded.as_ref().map(|ad| &ad[bi]);
+            let chunk = |v0: usize| -> Vec<(f64, f64)> {
+                let v1 = (v0 + MEASURE_CHUNK).min(b.vertices);
+                let cols = 3 * (v1 - v0);
+                // Each target a column over the chunk's values.
+                let exact_col = |i: usize, m: &mut [f64]| {
+                    if let Some(x) = exact_values[i] {
+                        for (o, d) in m.chunks_exact_mut(3).zip(&x[v0..v1]) {
+                            o.copy_from_slice(&d.to_array());
+                        }
+                    }
+                };
+                let mut targets = Mat::<f64>::zeros(cols, k + a);
+                for c in 0..k + a {
+                    let m = targets.col_as_slice_mut(c);
+                    if c < k {
+                        let t = &decoded[c][bi][3 * v0..3 * v1];
+                        m.iter_mut().zip(t).for_each(|(o, x)| *o = *x as f64);
+                    } else if let Some(d) = dec.and_then(|d| d[c - k].as_ref()) {
+                        let t = &d[3 * v0..3 * v1];
+                        m.iter_mut().zip(t).for_each(|(o, x)| *o = *x as f64);
+                    } else {
+                        exact_col(c - k, m);
+                    }
+                }
+                let mut e = Mat::<f64>::zeros(cols, n);
+                if !exact.is_empty() && a > 0 {
+                    let mut x = Mat::<f64>::zeros(cols, a);
+                    (0..a).for_each(|i| exact_col(i, x.col_as_slice_mut(i)));
+                    let mut blend = Mat::<f64>::zeros(cols, exact.len());
+                    let (x, keys) = (x.as_ref(), keys.as_ref());
+                    matmul(blend.as_mut(), Accum::Replace, x, keys, 1.0, Par::Seq);
+                    for (r, &f) in exact.iter().enumerate() {
+                        e.col_as_slice_mut(f).copy_from_slice(blend.col_as_slice(r));
+                    }
+                }
+                for f in (0..n).filter(|&f| !rows.exact[f]) {
+                    let values = Rows::frame_values(frames, b.attr, f).expect("present");
+                    let m = e.col_as_slice_mut(f);
+                    for (o, d) in m.chunks_exact_mut(3).zip(&values[v0..v1]) {
+                        o.copy_from_slice(&d.map(f64::from));
+                    }
+                }
+                let (t, p) = (targets.as_ref(), played.as_ref());
+                matmul(e.as_mut(), Accum::Add, t, p, -1.0, Par::Seq);
+                let be = self.base_error[bi].as_ref().map(|be| &be[3 * v0..3 * v1]);
+                (0..n)
+                    .map(|f| {
+                        let (mut sum, mut most) = (0.0f64, 0.0f64);
+                        for (v, r) in e.col_as_slice(f).chunks_exact(3).enumerate() {
+                            let mut d2 = 0.0;
+                            for i in 0..3 {
+                                let x = r[i] - be.map_or(0.0, |be| be[3 * v + i] as f64);
+                                d2 += x * x;
+                            }
+                            sum += d2;
+                            most = most.max(d2);
+                        }
+                        (sum, most)
+                    })
+                    .collect()
+            };
+            // Chunks of a fixed size, summed in order: the same figures on any number of
+            // threads.
+            let parts: Vec<Vec<(f64, f64)>> = (0..b.vertices)
+                .step_by(MEASURE_CHUNK)
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(chunk)
+                .collect();
+            // Normals and tangents share a sum.
+            let sums = match b.attr {
+                Attr::Position => &mut pos2[b.prim],
+                _ => &mut nrm2[b.prim],
+            };
+            for part in parts {
+                for (f, (sum, most)) in part.into_iter().enumerate() {
+                    sums[f] += sum;
+                    if b.attr == Attr::Position {
+                        worst = worst.max(most);
+                    }
                 }
             }
         }

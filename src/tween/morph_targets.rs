@@ -377,26 +377,32 @@ fn correction(delta: &[[f32; 3]], authored: &[Option<&Vec<DVec3>>], weights: &[f
         .filter_map(|(w, t)| Some((*w, (*t)?)))
         .collect();
     let mut out = vec![0.0f32; 3 * delta.len()];
+    // A few vertices at a time, target after target: each vertex's value takes the targets in
+    // the same order as one vertex at a time would (the same bits), and each target is read
+    // as one run (a vertex at a time read 300 targets' deltas side by side: a 300-shape face
+    // rig's 200 frames took 12 s).
     out.par_chunks_mut(3 * CHUNK)
         .zip(delta.par_chunks(CHUNK))
         .enumerate()
         .for_each(|(k, (out, delta))| {
-            for (i, (o, d)) in out.chunks_exact_mut(3).zip(delta).enumerate() {
-                let v = k * CHUNK + i;
-                let mut x = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
-                for (w, t) in &used {
-                    if let Some(d) = t.get(v) {
-                        x -= *w * *d;
-                    }
+            let v0 = k * CHUNK;
+            let mut x: Vec<DVec3> = (delta.iter())
+                .map(|d| DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64))
+                .collect();
+            for (w, t) in &used {
+                for (x, d) in x.iter_mut().zip(t.get(v0..).unwrap_or_default()) {
+                    *x -= *w * *d;
                 }
+            }
+            for (o, x) in out.chunks_exact_mut(3).zip(&x) {
                 o.copy_from_slice(&x.as_vec3().to_array());
             }
         });
     out
 }
 
-/// Vertices a parallel task corrects at once.
-const CHUNK: usize = 1 << 14;
+/// Vertices a parallel task corrects at once (24 bytes each: a few KB, in the nearest cache).
+const CHUNK: usize = 256;
 
 /// The new targets of one primitive: one per frame played by its own target.
 fn new_targets(
