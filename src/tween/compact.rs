@@ -878,14 +878,16 @@ impl Plan<'_> {
         let rows = self.rows;
         let n = rows.count();
         // Basis rows: (1 / sigma) U^T R, per block, unweighted (normals back in their units).
-        let mut basis: Vec<Vec<Vec<f32>>> = vec![
-            rows.blocks
-                .iter()
-                .map(|b| vec![0.0f32; 3 * b.vertices])
-                .collect();
-            k
-        ];
+        // The frames' own (`--basis off`) here; the singular directions' kept in `basis_rows`.
+        let mut basis: Vec<Vec<Vec<f32>>> = Vec::new();
         if let (Some(Factors::Own(frames)), true) = (factors, k > 0) {
+            basis = vec![
+                rows.blocks
+                    .iter()
+                    .map(|b| vec![0.0f32; 3 * b.vertices])
+                    .collect();
+                k
+            ];
             for (bi, b) in rows.blocks.iter().enumerate() {
                 let mut row = vec![0.0; 3 * b.vertices];
                 for (target, &f) in basis.iter_mut().zip(frames) {
@@ -896,8 +898,8 @@ impl Plan<'_> {
                 }
             }
         }
+        let mut cache = self.basis_rows.lock().expect("one encode at a time");
         if let (Some(Factors::Svd { u, sigma }), true) = (factors, k > 0) {
-            let mut cache = self.basis_rows.lock().expect("one encode at a time");
             if cache.len() < k {
                 // Row c is the same for every k: rows past k made in the same pass (its cost
                 // is in filling the residuals, not in the rows), for the next k tried.
@@ -935,10 +937,11 @@ impl Plan<'_> {
                 });
                 cache.extend(fresh);
             }
-            for (target, row) in basis.iter_mut().zip(cache.iter()) {
-                target.clone_from(row);
-            }
         }
+        let basis = match basis.is_empty() {
+            true => &cache[..k.min(cache.len())],
+            false => &basis[..],
+        };
         // Weights W = U sigma; keys of the rig (no residual) exactly zero.
         let mut weights: Vec<Vec<f64>> = (0..n)
             .map(|r| {
@@ -959,7 +962,7 @@ impl Plan<'_> {
         let total = (k + figures.authored).max(1) as f64;
         let q_pos = 2.0 * QUANT_SHARE * self.tol / total.sqrt();
         let q_nrm = 2.0 * QUANT_SHARE * self.ntol / total.sqrt();
-        for (c, t) in basis.into_iter().enumerate() {
+        for (c, t) in basis.iter().enumerate() {
             let largest_weight = weights.iter().map(|w| w[c].abs()).fold(0.0, f64::max);
             let (step_p, step_n) = (
                 q_pos / largest_weight.max(f64::MIN_POSITIVE),
@@ -1004,7 +1007,7 @@ impl Plan<'_> {
     /// bits the steps allow when `filter`).
     fn target(
         &self,
-        blocks: Vec<Vec<f32>>,
+        blocks: &[Vec<f32>],
         step_p: f64,
         step_n: f64,
         quantize: bool,
@@ -1015,7 +1018,7 @@ impl Plan<'_> {
             self.rows
                 .blocks
                 .iter()
-                .zip(&blocks)
+                .zip(blocks)
                 .filter(|(b, _)| (b.attr == Attr::Position) == (attr == Attr::Position))
                 .flat_map(|(_, v)| v.iter())
                 .fold(0.0f64, |m, x| m.max(x.abs() as f64))

@@ -367,42 +367,68 @@ impl ClipShifts {
     }
 }
 
-/// The frame's value of one attribute as the new target stores it: its delta from the base,
-/// less the authored targets' deltas blended by `weights`.
-fn correction(delta: &[[f32; 3]], authored: &[Option<&Vec<DVec3>>], weights: &[f64]) -> Vec<f32> {
-    let used: Vec<(f64, &Vec<DVec3>)> = weights
-        .iter()
-        .zip(authored)
-        .filter(|(w, _)| **w != 0.0)
-        .filter_map(|(w, t)| Some((*w, (*t)?)))
-        .collect();
-    let mut out = vec![0.0f32; 3 * delta.len()];
-    // A few vertices at a time, target after target: each vertex's value takes the targets in
-    // the same order as one vertex at a time would (the same bits), and each target is read
-    // as one run (a vertex at a time read 300 targets' deltas side by side: a 300-shape face
-    // rig's 200 frames took 12 s).
-    out.par_chunks_mut(3 * CHUNK)
-        .zip(delta.par_chunks(CHUNK))
-        .enumerate()
-        .for_each(|(k, (out, delta))| {
-            let v0 = k * CHUNK;
-            let mut x: Vec<DVec3> = (delta.iter())
-                .map(|d| DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64))
+/// Each frame's value of one attribute as its new target stores it: its delta from the base
+/// (`deltas`), less the authored targets' deltas blended by its `weights`.
+fn corrections(
+    deltas: &[&[[f32; 3]]],
+    authored: &[Option<&Vec<DVec3>>],
+    weights: &[&[f64]],
+) -> Vec<Vec<f32>> {
+    let n = deltas.first().map_or(0, |d| d.len());
+    let mut out = vec![vec![0.0f32; 3 * n]; deltas.len()];
+    // A few vertices at a time, target after target, every frame of the batch: each value takes
+    // the targets in the same order as one vertex at a time would (the same bits), and each
+    // target is read once a batch, as one run (a vertex and a frame at a time read 300 targets'
+    // deltas side by side: a 300-shape face rig's 200 frames took 12 s).
+    let tiles: Vec<Vec<Vec<f32>>> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|k| {
+            let (v0, v1) = (k * CHUNK, ((k + 1) * CHUNK).min(n));
+            let mut x: Vec<Vec<DVec3>> = (deltas.iter())
+                .map(|d| {
+                    d[v0..v1]
+                        .iter()
+                        .map(|d| DVec3::from(d.map(f64::from)))
+                        .collect()
+                })
                 .collect();
-            for (w, t) in &used {
-                for (x, d) in x.iter_mut().zip(t.get(v0..).unwrap_or_default()) {
-                    *x -= *w * *d;
+            for (i, t) in authored.iter().enumerate() {
+                let Some(t) = t else { continue };
+                let t = t.get(v0..).unwrap_or_default();
+                for (x, w) in x.iter_mut().zip(weights) {
+                    let w = w.get(i).copied().unwrap_or(0.0);
+                    if w != 0.0 {
+                        for (x, d) in x.iter_mut().zip(t) {
+                            *x -= w * *d;
+                        }
+                    }
                 }
             }
-            for (o, x) in out.chunks_exact_mut(3).zip(&x) {
-                o.copy_from_slice(&x.as_vec3().to_array());
-            }
-        });
+            (x.iter())
+                .map(|x| x.iter().flat_map(|x| x.as_vec3().to_array()).collect())
+                .collect()
+        })
+        .collect();
+    for (k, tile) in tiles.into_iter().enumerate() {
+        for (o, t) in out.iter_mut().zip(tile) {
+            o[3 * k * CHUNK..3 * k * CHUNK + t.len()].copy_from_slice(&t);
+        }
+    }
     out
 }
 
-/// Vertices a parallel task corrects at once (24 bytes each: a few KB, in the nearest cache).
+/// Vertices a parallel task corrects at once (24 bytes each a frame: a few KB, in the nearest
+/// caches).
 const CHUNK: usize = 256;
+
+/// Frames corrected together (see [`corrections`]): as many as keep a batch's values of one
+/// attribute within [`BATCH_BYTES`], at most 16.
+fn batch_frames(vertices: usize) -> usize {
+    (BATCH_BYTES / (12 * vertices).max(1)).clamp(1, 16)
+}
+
+/// Bytes a batch of corrected frames holds per attribute.
+const BATCH_BYTES: usize = 64 << 20;
 
 /// The new targets of one primitive: one per frame played by its own target.
 fn new_targets(
@@ -441,60 +467,57 @@ fn new_targets(
     }
     let m = w.frames;
     for (track, plays) in m.tracks.iter().zip(plays) {
-        for (i, (f, play)) in track.frames.iter().zip(plays).enumerate() {
-            if !matches!(play, Played::Target(_)) {
-                continue;
-            }
-            let frame = track.first + i;
-            let weights = w.authored(track, f);
-            let mut t = Map::new();
-            let mut put = |name: &str,
-                           delta: &[[f32; 3]],
-                           authored: Vec<Option<&Vec<DVec3>>>,
-                           bounds: bool| {
-                let v = correction(delta, &authored, &weights);
-                t.insert(
-                    name.into(),
-                    json!(out.push_f32(&v, "VEC3", 3, bounds, Some(34962))),
-                );
+        let own: Vec<(usize, &FrameAt)> = (track.frames.iter().enumerate())
+            .zip(plays)
+            .filter(|(_, play)| matches!(play, Played::Target(_)))
+            .map(|((i, f), _)| (i, f))
+            .collect();
+        for batch in own.chunks(batch_frames(read.base.len())) {
+            let weights: Vec<Vec<f64>> = batch.iter().map(|(_, f)| w.authored(track, f)).collect();
+            let weights: Vec<&[f64]> = weights.iter().map(|w| &w[..]).collect();
+            let of = |values: &[Vec<[f32; 3]>], authored: Vec<Option<&Vec<DVec3>>>| {
+                let deltas: Vec<&[[f32; 3]]> = (batch.iter())
+                    .map(|(i, _)| &values[track.first + i][..])
+                    .collect();
+                corrections(&deltas, &authored, &weights)
             };
-            put(
-                "POSITION",
-                &p.positions[frame],
-                read.target_pos.iter().map(Some).collect(),
-                true,
-            );
-            if let Some(n) = &p.normals {
-                put(
-                    "NORMAL",
-                    &n[frame],
-                    read.target_nrm.iter().map(Option::as_ref).collect(),
-                    false,
-                );
-            }
-            if let Some(tg) = &p.tangents {
-                put(
-                    "TANGENT",
-                    &tg[frame],
-                    read.target_tan.iter().map(Option::as_ref).collect(),
-                    false,
-                );
-            }
-            // Attributes not solved: in the frames layout no authored target is left to blend
-            // them, so the frame's target holds their blend; in the rig layout the authored
-            // targets play them and the new target holds zeros (set_targets).
-            if w.layout == Layout::Frames {
-                let weights = blended(track, f);
-                for o in &read.target_other {
-                    let v = blend_other(o, &weights, read.base.len());
-                    let ty = vec_type(o.components);
+            let mut positions = of(&p.positions, read.target_pos.iter().map(Some).collect());
+            let mut normals = (p.normals.as_ref())
+                .map(|n| of(n, read.target_nrm.iter().map(Option::as_ref).collect()));
+            let mut tangents = (p.tangents.as_ref())
+                .map(|t| of(t, read.target_tan.iter().map(Option::as_ref).collect()));
+            for (b, (_, f)) in batch.iter().enumerate() {
+                let mut t = Map::new();
+                let mut put = |name: &str, v: &mut Vec<f32>, bounds: bool| {
+                    let v = std::mem::take(v);
                     t.insert(
-                        o.name.clone(),
-                        json!(out.push_f32(&v, ty, o.components, false, Some(34962))),
+                        name.into(),
+                        json!(out.push_f32(&v, "VEC3", 3, bounds, Some(34962))),
                     );
+                };
+                put("POSITION", &mut positions[b], true);
+                if let Some(n) = &mut normals {
+                    put("NORMAL", &mut n[b], false);
                 }
+                if let Some(tg) = &mut tangents {
+                    put("TANGENT", &mut tg[b], false);
+                }
+                // Attributes not solved: in the frames layout no authored target is left to blend
+                // them, so the frame's target holds their blend; in the rig layout the authored
+                // targets play them and the new target holds zeros (set_targets).
+                if w.layout == Layout::Frames {
+                    let weights = blended(track, f);
+                    for o in &read.target_other {
+                        let v = blend_other(o, &weights, read.base.len());
+                        let ty = vec_type(o.components);
+                        t.insert(
+                            o.name.clone(),
+                            json!(out.push_f32(&v, ty, o.components, false, Some(34962))),
+                        );
+                    }
+                }
+                targets.push(t);
             }
-            targets.push(t);
         }
     }
     targets
