@@ -275,39 +275,12 @@ impl Rows<'_> {
         }
     }
 
-    /// Row `f` of block `b` over vertices `v0..v1` (3 columns each), weighted, into `out`.
-    fn fill(&self, b: &Block, f: usize, v0: usize, v1: usize, out: &mut [f64]) {
-        if self.exact[f] {
-            out.fill(0.0);
-            return;
-        }
-        let p = &self.frames.primitives[b.prim];
-        let values = Self::frame_values(p, b.attr, f).expect("block of a present attribute");
-        for (o, d) in out.chunks_exact_mut(3).zip(&values[v0..v1]) {
-            o.copy_from_slice(&[d[0] as f64, d[1] as f64, d[2] as f64]);
-        }
-        for (i, &w) in self.authored[f].iter().enumerate() {
-            if w == 0.0 {
-                continue;
-            }
-            if let Some(a) = self.authored_values(b.prim, b.attr, i) {
-                for (o, d) in out.chunks_exact_mut(3).zip(&a[v0..v1]) {
-                    o[0] -= w * d.x;
-                    o[1] -= w * d.y;
-                    o[2] -= w * d.z;
-                }
-            }
-        }
-        if b.weight != 1.0 {
-            out.iter_mut().for_each(|x| *x *= b.weight);
-        }
-    }
-
     /// Visit the matrix in column chunks: `visit(block index, first vertex, chunk)` with the
-    /// chunk as a frames x columns matrix. Each chunk is filled on every thread, a few vertices
-    /// each, as [`Rows::fill`] fills a row (the same operations in the same order: the same
-    /// bits), the vertices' authored deltas read once for all frames: a 300-target face rig's
-    /// 298 frames read the targets once per frame (43 GB a pass over 20k vertices), 1.8 s a pass.
+    /// chunk as a frames x columns matrix, weighted: each frame's values less the authored
+    /// targets at its weights, a key of the rig layout zeros. Each chunk is filled on every
+    /// thread, a few vertices each, the vertices' authored deltas read once for all frames (a
+    /// frame at a time read every target again: 43 GB a pass for a 300-target face rig's 298
+    /// frames of 20k vertices, 1.8 s a pass); each value subtracts the targets in their order.
     fn chunks(&self, visit: &mut dyn FnMut(usize, usize, MatRef<f64>)) {
         const VERTICES: usize = 1024;
         /// Vertices a thread fills at a time (their 3 values in every frame).
@@ -888,15 +861,17 @@ impl Plan<'_> {
                     .collect();
                 k
             ];
-            for (bi, b) in rows.blocks.iter().enumerate() {
-                let mut row = vec![0.0; 3 * b.vertices];
+            // The frames' rows as the residuals' passes fill them (each frame alone read every
+            // authored target again, on one thread).
+            rows.chunks(&mut |bi, v0, m| {
+                let w = rows.blocks[bi].weight;
                 for (target, &f) in basis.iter_mut().zip(frames) {
-                    rows.fill(b, f, 0, b.vertices, &mut row);
-                    for (o, x) in target[bi].iter_mut().zip(&row) {
-                        *o = (x / b.weight) as f32;
+                    let out = &mut target[bi][3 * v0..3 * v0 + m.ncols()];
+                    for (j, o) in out.iter_mut().enumerate() {
+                        *o = (m[(f, j)] / w) as f32;
                     }
                 }
-            }
+            });
         }
         let mut cache = self.basis_rows.lock().expect("one encode at a time");
         if let (Some(Factors::Svd { u, sigma }), true) = (factors, k > 0) {
