@@ -3344,6 +3344,7 @@ fn bench_times_whole_commands_in_child_processes() {
         runs,
         [
             "tween -o out.glb",
+            "tween -o meshopt.glb --meshopt",
             "tween -o compact.glb --compact",
             "tween -o out.usdc"
         ]
