@@ -663,8 +663,8 @@ pub struct BenchArgs {
     #[arg(long, value_name = "MESHES")]
     pub scene: Option<usize>,
     /// Instead: write a face rig of this many blend shapes (about 20,000 vertices, 101 keys of
-    /// a weights animation) and time `tween` (.glb, --meshopt, --compact, .usdc) on it, each in a child
-    /// process (e.g. 300).
+    /// a weights animation) and time `tween` (.glb, --meshopt, --compact, .usdc) on it, each
+    /// in a child process (e.g. 300).
     #[arg(long, value_name = "SHAPES")]
     pub rig: Option<usize>,
     /// With --end-to-end: more `tween` options for the timed run (e.g. --e2e-arg=--compact).
