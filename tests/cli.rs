@@ -3312,16 +3312,19 @@ fn bench_times_whole_commands_in_child_processes() {
     assert!(e2e["linear_wall_s"].as_f64().unwrap() > 0.0, "{e2e}");
     let summary = e2e["summary"].as_str().unwrap();
     assert!(summary.contains("3 keys -> 9 frames"), "{summary}");
+    // Each run's command line, its time checked.
+    fn commands(bench: &serde_json::Value) -> Vec<&str> {
+        (bench["runs"].as_array().unwrap().iter())
+            .map(|r| {
+                assert!(r[1].as_f64().unwrap() > 0.0, "{r}");
+                r[0].as_str().unwrap()
+            })
+            .collect()
+    }
     let scene = json(&["bench", "--scene", "12"]);
     assert_eq!(scene["meshes"], 12);
-    let runs: Vec<&str> = (scene["runs"].as_array().unwrap().iter())
-        .map(|r| {
-            assert!(r[1].as_f64().unwrap() > 0.0, "{r}");
-            r[0].as_str().unwrap()
-        })
-        .collect();
     assert_eq!(
-        runs,
+        commands(&scene),
         [
             "tween -o out.glb",
             "tween -o meshopt.glb --meshopt",
@@ -3334,14 +3337,8 @@ fn bench_times_whole_commands_in_child_processes() {
         (rig["shapes"].as_u64(), rig["keys"].as_u64()),
         (Some(2), Some(101))
     );
-    let runs: Vec<&str> = (rig["runs"].as_array().unwrap().iter())
-        .map(|r| {
-            assert!(r[1].as_f64().unwrap() > 0.0, "{r}");
-            r[0].as_str().unwrap()
-        })
-        .collect();
     assert_eq!(
-        runs,
+        commands(&rig),
         [
             "tween -o out.glb",
             "tween -o meshopt.glb --meshopt",

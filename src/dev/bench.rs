@@ -475,9 +475,6 @@ pub struct SceneBench {
 /// inbetween bench --scene 30000
 /// ```
 pub fn scene(meshes: usize) -> Result<SceneBench> {
-    let dir = std::env::temp_dir().join(format!("inbetween-scene-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    let input = dir.join("scene.glb");
     let each = |i: usize| {
         let mut s = synth::tube(2, 4, 1.0, 0.2, 0.2);
         let at = DVec3::new((i % 200) as f64 * 1.5, (i / 200) as f64 * 1.5, 0.0);
@@ -485,15 +482,14 @@ pub fn scene(meshes: usize) -> Result<SceneBench> {
         let key = synth::bend(&s.positions, at.x + 0.5, 0.5, 0.5);
         synth::KeyedMesh::new(&format!("prop{i}"), s, vec![key])
     };
-    synth::KeyframeFile {
+    let file = synth::KeyframeFile {
         meshes: (0..meshes).map(each).collect(),
         key_times: None,
         key_weights: None,
-    }
-    .write(&input)?;
-    let runs = timed_runs(
-        &dir,
-        &input,
+    };
+    let (input_mib, runs) = timed_runs(
+        "scene",
+        &file,
         &[
             ("tween", "out.glb", ""),
             ("tween", "meshopt.glb", "--meshopt"),
@@ -501,8 +497,6 @@ pub fn scene(meshes: usize) -> Result<SceneBench> {
             ("preview", "sheet.png", ""),
         ],
     )?;
-    let input_mib = std::fs::metadata(&input)?.len() as f64 / 1048576.0;
-    let _ = std::fs::remove_dir_all(&dir);
     Ok(SceneBench {
         meshes,
         input_mib,
@@ -510,24 +504,36 @@ pub fn scene(meshes: usize) -> Result<SceneBench> {
     })
 }
 
-/// Each of `cases` (command, output file name in `dir`, more options) run on `input` in a
-/// child process, quietly: (command line after the input, wall seconds), in order.
+/// `file` written to a folder of its own (`inbetween-<what>-<process>` in the temporary
+/// folder), then each of `cases` (command, output file name there, more options) run on it in
+/// a child process, quietly; the folder removed. Returns the file's size in MiB and each run's
+/// command line after the input with its wall seconds, in order.
 fn timed_runs(
-    dir: &std::path::Path,
-    input: &std::path::Path,
+    what: &str,
+    file: &synth::KeyframeFile,
     cases: &[(&str, &str, &str)],
-) -> Result<Vec<(String, f64)>> {
-    let input = input.to_string_lossy().into_owned();
-    let mut runs = Vec::new();
-    for (command, output, more) in cases {
-        let path = dir.join(output).to_string_lossy().into_owned();
-        let mut args = vec![*command, &input, "-o", &path, "-q"];
-        args.extend(more.split_whitespace());
-        let (wall_s, _) = child(&args)?;
-        let line = format!("{command} -o {output} {more}");
-        runs.push((line.trim().to_string(), wall_s));
-    }
-    Ok(runs)
+) -> Result<(f64, Vec<(String, f64)>)> {
+    let dir = std::env::temp_dir().join(format!("inbetween-{what}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let input = dir.join(format!("{what}.glb"));
+    let run = || -> Result<(f64, Vec<(String, f64)>)> {
+        file.write(&input)?;
+        let input_mib = std::fs::metadata(&input)?.len() as f64 / 1048576.0;
+        let input = input.to_string_lossy().into_owned();
+        let mut runs = Vec::new();
+        for (command, output, more) in cases {
+            let path = dir.join(output).to_string_lossy().into_owned();
+            let mut args = vec![*command, &input, "-o", &path, "-q"];
+            args.extend(more.split_whitespace());
+            let (wall_s, _) = child(&args)?;
+            let line = format!("{command} -o {output} {more}");
+            runs.push((line.trim().to_string(), wall_s));
+        }
+        Ok((input_mib, runs))
+    };
+    let result = run();
+    let _ = std::fs::remove_dir_all(&dir);
+    result
 }
 
 /// A face rig of many shapes, each command timed on it in a child process (`inbetween bench
@@ -554,16 +560,10 @@ pub struct RigBench {
 /// inbetween bench --rig 300
 /// ```
 pub fn rig(shapes: usize) -> Result<RigBench> {
-    let dir = std::env::temp_dir().join(format!("inbetween-rig-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    let input = dir.join("rig.glb");
     let file = synth::face_rig_of(141, shapes, 10.0, 10.0);
-    let vertices = file.meshes[0].surface.positions.len();
-    let keys = file.key_times.as_ref().map_or(0, Vec::len);
-    file.write(&input)?;
-    let runs = timed_runs(
-        &dir,
-        &input,
+    let (input_mib, runs) = timed_runs(
+        "rig",
+        &file,
         &[
             ("tween", "out.glb", ""),
             ("tween", "meshopt.glb", "--meshopt"),
@@ -571,12 +571,10 @@ pub fn rig(shapes: usize) -> Result<RigBench> {
             ("tween", "out.usdc", ""),
         ],
     )?;
-    let input_mib = std::fs::metadata(&input)?.len() as f64 / 1048576.0;
-    let _ = std::fs::remove_dir_all(&dir);
     Ok(RigBench {
         shapes,
-        vertices,
-        keys,
+        vertices: file.meshes[0].surface.positions.len(),
+        keys: file.key_times.as_ref().map_or(0, Vec::len),
         input_mib,
         runs,
     })
