@@ -5,8 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 F=../../shared/fixtures
-mkdir -p corpus/{gltf_read,keyframes,blend,bvh,usd_stage}
-for t in gltf_read keyframes usd_stage; do
+mkdir -p corpus/{gltf_read,keyframes,blend,bvh,usd_stage,tween_write}
+for t in gltf_read keyframes usd_stage tween_write; do
   cp ../samples/*.glb corpus/$t/
   [ -d $F ] && cp $F/morph-keyframes/*.glb $F/morph-khronos/SimpleMorph/glTF-Embedded/*.gltf \
     $F/morph-khronos/MorphStressTest/glTF-Embedded-bevy/*.gltf corpus/$t/ || true

@@ -84,3 +84,50 @@ pub fn decoders(data: &[u8]) -> Option<anyhow::Result<()>> {
         }),
     )
 }
+
+/// The `tween_write` target: the whole `tween` job on `data` to .glb, in the rig and the frames
+/// layouts, with `--compact` (the frames, the rig layout's targets less the authored blend,
+/// basis, quantized and sparse targets, meshopt, the writer), in `dir`. `None` where the file is
+/// passed over: unreadable, no morph mesh, or more than 8 morph meshes, 2,000 vertices, 64
+/// targets or 16 keys a track (a run too long to fuzz); else each run's outcome.
+pub fn tween_write(data: &[u8], dir: &Path) -> Option<Vec<anyhow::Result<()>>> {
+    use crate::tween::{
+        find_morph_meshes, run_tween, CompactOptions, KeyOptions, KeySource, Layout, Method,
+        MorphMesh, Timing, TweenJob,
+    };
+    let doc = Document::from_bytes(&dir.join("in.glb"), data, &Access::default()).ok()?;
+    let opts = KeyOptions {
+        source: KeySource::Auto,
+        animation: None,
+    };
+    let meshes = find_morph_meshes(&doc, &opts).ok()?;
+    let small = |m: &MorphMesh| {
+        m.vertex_count() <= 2000
+            && m.target_count <= 64
+            && m.tracks.iter().all(|t| t.times.len() <= 16)
+    };
+    if meshes.is_empty() || meshes.len() > 8 || !meshes.iter().all(small) {
+        return None;
+    }
+    let input = dir.join("in.glb");
+    std::fs::write(&input, data).ok()?;
+    let runs = [Layout::Rig, Layout::Frames].map(|layout| {
+        let job = TweenJob {
+            input: input.clone(),
+            output: dir.join("out.glb"),
+            method: Method::Spline,
+            keys: KeySource::Auto,
+            animation: None,
+            timing: Timing::Tweens(2),
+            quiet: true,
+            looping: None,
+            extend: [0.0, 0.0],
+            report: None,
+            layout,
+            compact: Some(CompactOptions::all()),
+            access: Access::default(),
+        };
+        run_tween(&job).map(|_| ())
+    });
+    Some(runs.into())
+}
