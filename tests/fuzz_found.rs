@@ -114,3 +114,35 @@ fn the_tween_write_harness_writes_the_samples() {
     }
     assert_eq!(written, 4);
 }
+
+/// tween_write, bin-chunk-past-a-short-header.glb: bar_twist.glb with its header's length cut
+/// to 8,972 of its 11,840 bytes and its binary chunk's to 4,294,909,680 (found by the
+/// tween_write target at its first run, 18k runs): the reader took the chunk as a file cut short
+/// and said the file ended "declared - length" bytes before the header's length, which
+/// overflowed (a panic where overflow is checked, "18446744073709548748 bytes" in the line
+/// where not). Now the line says the chunk runs past the file, with both lengths.
+#[test]
+fn tween_write_inputs_are_written_or_refused() {
+    let files = found("tween_write");
+    assert!(!files.is_empty());
+    let dir = tempfile::tempdir().unwrap();
+    for f in files {
+        let data = std::fs::read(&f).unwrap();
+        for r in inbetween::fuzz::tween_write(&data, dir.path())
+            .into_iter()
+            .flatten()
+        {
+            eprintln!("{}: {:?}", f.display(), r.err());
+        }
+        let r = std::process::Command::new(env!("CARGO_BIN_EXE_inbetween"))
+            .args(["inspect", f.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&r.stdout);
+        assert_eq!(r.status.code(), Some(0), "{said}");
+        assert!(
+            said.contains("binary chunk runs past the end of the file (its header declares 8972 bytes, the file has 11840)"),
+            "{said}"
+        );
+    }
+}

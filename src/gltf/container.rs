@@ -90,7 +90,9 @@ pub fn split<'a>(path: &Path, bytes: &'a [u8]) -> Result<Glb<'a>> {
     let mut said = Vec::new();
     if declared != len {
         said.push(match () {
-            _ if cut_short.is_some() => format!("the GLB header declares {declared} bytes and the file ends {} bytes before, inside its binary chunk, which still holds the buffer's bytes (padding a writer left out): read, the output's header written right", declared - len),
+            _ if cut_short.is_some() && declared > len => format!("the GLB header declares {declared} bytes and the file ends {} bytes before, inside its binary chunk, which still holds the buffer's bytes (padding a writer left out): read, the output's header written right", declared - len),
+            // The header's length short of the file's and the binary chunk's past both.
+            _ if cut_short.is_some() => format!("the GLB's binary chunk runs past the end of the file (its header declares {declared} bytes, the file has {len}) and still holds the buffer's bytes: read, the output's header written right"),
             _ if off < len => format!("{} bytes after the GLB's chunks, which its header's length ({declared} bytes) leaves out, are no chunk: not read, the output written without them", len - off),
             _ => format!("the GLB header declares {declared} bytes where its chunks take {len}: read by its chunks, the output's header written right"),
         });
