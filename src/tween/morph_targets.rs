@@ -380,40 +380,41 @@ fn corrections(
     // the targets in the same order as one vertex at a time would (the same bits), and each
     // target is read once a batch, as one run (a vertex and a frame at a time read 300 targets'
     // deltas side by side: a 300-shape face rig's 200 frames took 12 s).
-    let tiles: Vec<Vec<Vec<f32>>> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|k| {
-            let (v0, v1) = (k * CHUNK, ((k + 1) * CHUNK).min(n));
-            let mut x: Vec<Vec<DVec3>> = (deltas.iter())
-                .map(|d| {
-                    d[v0..v1]
-                        .iter()
-                        .map(|d| DVec3::from(d.map(f64::from)))
-                        .collect()
-                })
-                .collect();
-            for (i, t) in authored.iter().enumerate() {
-                let Some(t) = t else { continue };
-                let t = t.get(v0..).unwrap_or_default();
-                for (x, w) in x.iter_mut().zip(weights) {
-                    let w = w.get(i).copied().unwrap_or(0.0);
-                    if w != 0.0 {
-                        for (x, d) in x.iter_mut().zip(t) {
-                            *x -= w * *d;
-                        }
+    // Each tile's part of every frame's values, written in place.
+    let mut tiles: Vec<Vec<&mut [f32]>> = (0..n.div_ceil(CHUNK)).map(|_| Vec::new()).collect();
+    for o in out.iter_mut() {
+        for (tile, part) in tiles.iter_mut().zip(o.chunks_mut(3 * CHUNK)) {
+            tile.push(part);
+        }
+    }
+    tiles.into_par_iter().enumerate().for_each(|(k, parts)| {
+        let (v0, v1) = (k * CHUNK, ((k + 1) * CHUNK).min(n));
+        let mut x: Vec<Vec<DVec3>> = (deltas.iter())
+            .map(|d| {
+                d[v0..v1]
+                    .iter()
+                    .map(|d| DVec3::from(d.map(f64::from)))
+                    .collect()
+            })
+            .collect();
+        for (i, t) in authored.iter().enumerate() {
+            let Some(t) = t else { continue };
+            let t = t.get(v0..).unwrap_or_default();
+            for (x, w) in x.iter_mut().zip(weights) {
+                let w = w.get(i).copied().unwrap_or(0.0);
+                if w != 0.0 {
+                    for (x, d) in x.iter_mut().zip(t) {
+                        *x -= w * *d;
                     }
                 }
             }
-            (x.iter())
-                .map(|x| x.iter().flat_map(|x| x.as_vec3().to_array()).collect())
-                .collect()
-        })
-        .collect();
-    for (k, tile) in tiles.into_iter().enumerate() {
-        for (o, t) in out.iter_mut().zip(tile) {
-            o[3 * k * CHUNK..3 * k * CHUNK + t.len()].copy_from_slice(&t);
         }
-    }
+        for (part, x) in parts.into_iter().zip(&x) {
+            for (o, x) in part.chunks_exact_mut(3).zip(x) {
+                o.copy_from_slice(&x.as_vec3().to_array());
+            }
+        }
+    });
     out
 }
 
