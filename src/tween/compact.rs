@@ -664,7 +664,7 @@ fn fit_authored(rows: &mut Rows, own: &[usize]) -> Result<()> {
 }
 
 /// The dot products of `a` with each of `others` (values `to` makes vectors of), each summed
-/// in vertex order from -0.0 as `Iterator::sum` sums them (the same bits), [`LANES`] at a time so
+/// in vertex order from -0.0 as `Iterator::sum` sums them (the same bits), eight at a time so
 /// that their sums run side by side: one sum's chain of additions waits on each addition (a
 /// 300-target rig's 45,000 products of 20k vertices: 3 s one at a time).
 fn dots<T: Sync>(a: &[DVec3], others: &[&[T]], to: impl Fn(&T) -> DVec3) -> Vec<f64> {
