@@ -3300,11 +3300,20 @@ fn bent_arm(
 
 /// `bench --end-to-end`, `bench --scene` and `bench --rig` run their commands in child
 /// processes and print what they timed as JSON: every run there, each with its wall time, the
-/// summary of the timed tween (and its linear twin) beside it.
+/// summary of the timed tween (and its linear twin) beside it. Every shape of the bench's JSON
+/// (a `--json` row and `--preview` too) as schemas/bench.schema.json describes it.
 #[test]
 fn bench_times_whole_commands_in_child_processes() {
+    // Each output read, and checked against schemas/bench.schema.json.
+    let dir = tempfile::tempdir().unwrap();
+    let python = python();
     let json = |args: &[&str]| -> serde_json::Value {
         let out = run_ok(args);
+        if let Some(py) = &python {
+            let file = dir.path().join("bench.json");
+            std::fs::write(&file, &out.stdout).unwrap();
+            check_schema(py, "bench.schema.json", &file, &args.join(" "));
+        }
         serde_json::from_slice(&out.stdout).unwrap()
     };
     let e2e = json(&["bench", "--end-to-end", "2000", "--e2e-tweens", "3"]);
@@ -3332,6 +3341,10 @@ fn bench_times_whole_commands_in_child_processes() {
             "preview -o sheet.png"
         ]
     );
+    let row = json(&["bench", "--sizes", "2000", "--frames", "2", "--json"]);
+    assert_eq!(row["triangles"], 1980);
+    let preview = json(&["bench", "--preview", "2000"]);
+    assert_eq!(preview["cells"], 12);
     let rig = json(&["bench", "--rig", "2"]);
     assert_eq!(
         (rig["shapes"].as_u64(), rig["keys"].as_u64()),
