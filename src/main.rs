@@ -120,29 +120,27 @@ fn run_eval(args: &EvalArgs) -> ExitCode {
     })
 }
 
+/// What `result` holds, as JSON on stdout (see [`finish`]).
+fn pretty<T: serde::Serialize>(result: anyhow::Result<T>) -> ExitCode {
+    finish(result, |r| {
+        outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
+    })
+}
+
 fn run_bench(args: BenchArgs) -> ExitCode {
     set_threads(args.threads);
     if let Some(triangles) = args.preview {
-        let r = bench::preview(triangles, &args.preview_methods);
-        return finish(r, |r| {
-            outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
-        });
+        return pretty(bench::preview(triangles, &args.preview_methods));
     }
     if let Some(meshes) = args.scene {
-        return finish(bench::scene(meshes), |r| {
-            outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
-        });
+        return pretty(bench::scene(meshes));
     }
     if let Some(shapes) = args.rig {
-        return finish(bench::rig(shapes), |r| {
-            outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
-        });
+        return pretty(bench::rig(shapes));
     }
     if let Some(triangles) = args.end_to_end {
         let r = bench::end_to_end(triangles, args.e2e_tweens, &args.e2e_format, &args.e2e_args);
-        return finish(r, |r| {
-            outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default())
-        });
+        return pretty(r);
     }
     let opts = bench::BenchOptions {
         sizes: args.sizes,

@@ -95,7 +95,8 @@ pub fn tween_write(data: &[u8], dir: &Path) -> Option<Vec<anyhow::Result<()>>> {
         find_morph_meshes, run_tween, CompactOptions, KeyOptions, KeySource, Layout, Method,
         MorphMesh, Timing, TweenJob,
     };
-    let doc = Document::from_bytes(&dir.join("in.glb"), data, &Access::default()).ok()?;
+    let input = dir.join("in.glb");
+    let doc = Document::from_bytes(&input, data, &Access::default()).ok()?;
     let opts = KeyOptions {
         source: KeySource::Auto,
         animation: None,
@@ -109,7 +110,6 @@ pub fn tween_write(data: &[u8], dir: &Path) -> Option<Vec<anyhow::Result<()>>> {
     if meshes.is_empty() || meshes.len() > 8 || !meshes.iter().all(small) {
         return None;
     }
-    let input = dir.join("in.glb");
     std::fs::write(&input, data).ok()?;
     let runs = [Layout::Rig, Layout::Frames].map(|layout| {
         let job = TweenJob {

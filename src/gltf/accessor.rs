@@ -77,19 +77,7 @@ impl Document {
                 acc.count
             )));
         }
-        let ind = &sparse["indices"];
-        let idx_ty = ind["componentType"].as_u64().unwrap_or(0) as u32;
-        let idx_size = match idx_ty {
-            5121 | 5123 | 5125 => comp_size(idx_ty).unwrap_or(4),
-            _ => bail!(self.err(format!("accessor {index}: bad sparse index type"))),
-        };
-        let iv = ind["bufferView"].as_u64().ok_or_else(|| {
-            self.err(format!(
-                "accessor {index}: sparse indices without bufferView"
-            ))
-        })? as usize;
-        let io = ind["byteOffset"].as_u64().unwrap_or(0) as usize;
-        let (ibytes, _) = self.view_slice(iv, io, n, idx_size)?;
+        let indices = self.sparse_indices(index, sparse)?;
         let val = &sparse["values"];
         let vv = val["bufferView"].as_u64().ok_or_else(|| {
             self.err(format!(
@@ -103,8 +91,7 @@ impl Document {
             offset: 0,
             ..*acc
         };
-        for k in 0..n {
-            let target = read_uint(ibytes, k * idx_size, idx_ty) as usize;
+        for (k, &target) in indices.iter().enumerate() {
             if target >= acc.count {
                 bail!(self.err(format!(
                     "accessor {index}: sparse index {target} is out of range"
@@ -116,6 +103,28 @@ impl Document {
             }
         }
         Ok(())
+    }
+
+    /// The element indices `sparse` (the sparse part of accessor `index`) lists, in its order,
+    /// as stored.
+    pub(super) fn sparse_indices(&self, index: usize, sparse: &Value) -> Result<Vec<usize>> {
+        let n = sparse["count"].as_u64().unwrap_or(0) as usize;
+        let ind = &sparse["indices"];
+        let idx_ty = ind["componentType"].as_u64().unwrap_or(0) as u32;
+        let idx_size = match idx_ty {
+            5121 | 5123 | 5125 => comp_size(idx_ty).unwrap_or(4),
+            _ => bail!(self.err(format!("accessor {index}: bad sparse index type"))),
+        };
+        let iv = ind["bufferView"].as_u64().ok_or_else(|| {
+            self.err(format!(
+                "accessor {index}: sparse indices without bufferView"
+            ))
+        })? as usize;
+        let io = ind["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let (ibytes, _) = self.view_slice(iv, io, n, idx_size)?;
+        Ok((0..n)
+            .map(|k| read_uint(ibytes, k * idx_size, idx_ty) as usize)
+            .collect())
     }
 
     /// The largest element count among the accessors whose buffer views hold them.

@@ -12,9 +12,9 @@
 //! - chunks whole in the file past the declared length are read (a header counting the JSON
 //!   chunk only: qmuntal/gltf issue 38, fixed in its pull request 39);
 //! - a binary chunk the file ends inside (its padding counted and not written; assimp's
-//!   exporter miscounted its chunk's padding, its issue 3176) is read as far as it goes: enough where its buffer's `byteLength` lies
-//!   within it; a file cut short (a download stopped) is refused when its buffer is read
-//!   ([`Glb::cut_short`] says so there).
+//!   exporter miscounted its chunk's padding, its issue 3176) is read as far as it goes:
+//!   enough where its buffer's `byteLength` lies within it; a file cut short (a download
+//!   stopped) is refused when its buffer is read ([`Glb::cut_short`] says so there).
 
 use super::read::at;
 use anyhow::{bail, Result};

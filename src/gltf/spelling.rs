@@ -116,14 +116,9 @@ pub fn signed_indices(json: &mut Value) -> Vec<String> {
         acc["componentType"] = unsigned.into();
         fixed.push(a.to_string());
     }
-    match fixed.is_empty() {
-        true => Vec::new(),
-        false => vec![format!(
-            "index accessor{} {} written as signed integers, which glTF does not allow for indices: read and written as the unsigned integers of the same bits",
-            if fixed.len() == 1 { "" } else { "s" },
-            super::read::listed(&fixed)
-        )],
-    }
+    super::mend::said_of(&fixed, |_, s, _, which| {
+        format!("index accessor{s} {which} written as signed integers, which glTF does not allow for indices: read and written as the unsigned integers of the same bits")
+    })
 }
 
 /// Every whole number written as a decimal where glTF asks an integer, made that integer, in

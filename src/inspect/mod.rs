@@ -450,7 +450,6 @@ fn blend_clips(json: &Value) -> Vec<String> {
         .collect()
 }
 
-/// A glTF file's inspection as text for a person.
 /// Each animation as `blend --clips` picks it: its name, where no other carries it, else its
 /// index (an unnamed one, or one whose name others share: `gltf::clip_by` refuses that name).
 fn clip_labels(json: &Value) -> Vec<String> {
@@ -472,6 +471,7 @@ fn clip_labels(json: &Value) -> Vec<String> {
         .collect()
 }
 
+/// A glTF file's inspection as text for a person.
 fn gltf_text(i: &Inspection) -> String {
     let mut s = format!("{}: {} bytes", i.file, i.bytes);
     if let Some(g) = &i.generator {

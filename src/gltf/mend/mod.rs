@@ -195,7 +195,10 @@ fn attribute_sets(json: &Value) -> impl Iterator<Item = &Value> {
 
 /// A line about the accessors `which` (none: no line), `say` given their count, the plural's
 /// `s`, `its` or `their`, and the list.
-fn said_of(which: &[String], say: impl Fn(usize, &str, &str, &str) -> String) -> Vec<String> {
+pub(super) fn said_of(
+    which: &[String],
+    say: impl Fn(usize, &str, &str, &str) -> String,
+) -> Vec<String> {
     let (s, its) = match which.len() {
         0 => return Vec::new(),
         1 => ("", "its"),

@@ -45,8 +45,9 @@ pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> V
                 .as_u64()
                 .is_some_and(|v| plain.contains(&v))
         });
-        let out_of_order =
-            sparse_indices(doc, a).is_some_and(|ix| ix.windows(2).any(|w| w[0] >= w[1]));
+        let out_of_order = (a.get("sparse"))
+            .and_then(|sparse| doc.sparse_indices(i, sparse).ok())
+            .is_some_and(|ix| ix.windows(2).any(|w| w[0] >= w[1]));
         if !(shared || out_of_order) || a["componentType"].as_u64() != Some(5126) {
             continue;
         }
@@ -74,29 +75,4 @@ pub fn sparse_parts(doc: &Document, json: &mut Value, bin: &mut BinBuilder) -> V
         format!("{n} sparse accessor{s} ({which}) listed {its} indices out of order or twice, which glTF does not allow (readers that stop at it, the validator among them, read other values); written dense as they decode, a repeated index's later value kept")
     }));
     said
-}
-
-/// The indices of sparse accessor `a` as stored (`None` where it is not sparse or they lie
-/// outside their view).
-fn sparse_indices(doc: &Document, a: &Value) -> Option<Vec<u32>> {
-    let sparse = &a["sparse"];
-    let count = sparse["count"].as_u64()? as usize;
-    let ix = &sparse["indices"];
-    let view = doc.view(ix["bufferView"].as_u64()? as usize).ok()?;
-    let bytes = view.get(ix["byteOffset"].as_u64().unwrap_or(0) as usize..)?;
-    let size = match ix["componentType"].as_u64()? {
-        5121 => 1,
-        5123 => 2,
-        5125 => 4,
-        _ => return None,
-    };
-    let read = |k: usize| -> Option<u32> {
-        let b = bytes.get(k * size..(k + 1) * size)?;
-        Some(match size {
-            1 => b[0] as u32,
-            2 => u16::from_le_bytes([b[0], b[1]]) as u32,
-            _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-        })
-    };
-    (0..count).map(read).collect()
 }
