@@ -26,8 +26,10 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
 };
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 use glam::DVec3;
@@ -1288,6 +1290,16 @@ pub fn scatter(rhs: &mut [[f64; 3]], corners: [u32; 3], v1: DVec3, v2: DVec3) {
     }
 }
 
+/// A factor whose factorization takes more than this many multiply-adds per stored entry (its
+/// columns long enough to share rows in dense blocks) is analysed as supernodes, and factored
+/// by [`super::cholesky::Plan`]; below it, column by column by faer's simplicial factorization.
+/// faer's own choice (40) was made for its supernodal factorization. Ours, measured against its
+/// simplicial one on square grids of 500 to 20,000 vertices (40 keys, `tween`'s numeric
+/// factorization figure): 0.6-0.8x the time from 28 a entry (8,000 vertices 0.209 -> 0.161 s,
+/// 20,000 vertices 0.74 -> 0.47 s), 1.05-1.15x at 17-20 (2,000-3,000 vertices), 0.65x at 10
+/// (500 vertices, well under a millisecond a factorization). The bench's tubes are above 40.
+const SUPERNODAL_ABOVE: f64 = 20.0;
+
 /// The symbolic Cholesky analysis of `sym` (upper triangle) by faer's AMD ordering; for a
 /// large mesh ([`super::order::MIN_VERTICES`]) also by nested dissection of its `positions`,
 /// the two side by side, keeping the one whose factor stores fewer entries (dissection wins on
@@ -1298,7 +1310,12 @@ fn analyse(
 ) -> Result<SymbolicCholesky<u32>> {
     let n = sym.nrows();
     let by = |ordering: SymmetricOrdering<'_, u32>| {
-        factorize_symbolic_cholesky(sym, Side::Upper, ordering, Default::default())
+        let params = CholeskySymbolicParams {
+            // faer compares against 40 times the threshold.
+            supernodal_flop_ratio_threshold: SupernodalThreshold(SUPERNODAL_ABOVE / 40.0),
+            ..Default::default()
+        };
+        factorize_symbolic_cholesky(sym, Side::Upper, ordering, params)
             .map_err(|e| anyhow!("symbolic factorization failed: {e:?}"))
     };
     if n < super::order::MIN_VERTICES || positions.len() != n {
@@ -1571,6 +1588,26 @@ mod tests {
             [false, true],
             "one simplicial and one supernodal factor"
         );
+    }
+
+    /// Which factorization a mesh gets follows [`SUPERNODAL_ABOVE`]: a flat grid of 91 x 91
+    /// vertices (about 28 multiply-adds per entry of its factor) is factored by supernodes,
+    /// where faer's own threshold would keep it simplicial; one of 21 x 21 (about 10) stays
+    /// simplicial.
+    #[test]
+    fn mid_sized_meshes_are_factored_by_supernodes() {
+        for (side, supernodal) in [(90, true), (20, false)] {
+            let s = crate::dev::synth::grid(side, side, 1.0, 1.0);
+            let n = s.positions.len();
+            let pattern = Pattern::new(n, &s.triangles, &s.positions).unwrap();
+            let raw = pattern.symbolic.raw();
+            assert_eq!(
+                matches!(raw, SymbolicCholeskyRaw::Supernodal(_)),
+                supernodal,
+                "{n} vertices"
+            );
+            assert_eq!(pattern.plan.is_some(), supernodal);
+        }
     }
 
     #[test]
