@@ -109,13 +109,26 @@ pub fn polar(t: &DMat3) -> (DQuat, DMat3) {
 /// (one atan2) between the frames. The same R and S as [`polar`] to round-off, without its
 /// Jacobi sweeps; a collapsed deformed triangle goes to [`polar`].
 pub fn polar_of_triangle(t: &DMat3, v_inv: &DMat3) -> (DQuat, DMat3) {
+    polar_in_plane(t, plane_of(v_inv).as_ref())
+}
+
+/// The reference triangle's orthonormal frame `[e0, f0, n0]` that [`polar_of_triangle`] works
+/// in, from its frame inverse `v_inv` (`None` where V^-1 has no usable rows): made once per
+/// triangle where several keys' gradients from the same reference are decomposed.
+pub fn plane_of(v_inv: &DMat3) -> Option<[DVec3; 3]> {
     // Rows of V^-1: the first lies in the reference plane, the third along its normal.
     let rows = v_inv.transpose();
-    let (Some(e0), Some(n0)) = (rows.x_axis.try_normalize(), rows.z_axis.try_normalize()) else {
+    let (e0, n0) = (rows.x_axis.try_normalize()?, rows.z_axis.try_normalize()?);
+    let e0 = (e0 - n0 * n0.dot(e0)).normalize();
+    Some([e0, n0.cross(e0), n0])
+}
+
+/// [`polar_of_triangle`] given the reference frame [`plane_of`] makes (`None`: [`polar`]); the
+/// same bits as it.
+pub fn polar_in_plane(t: &DMat3, plane: Option<&[DVec3; 3]>) -> (DQuat, DMat3) {
+    let Some(&[e0, f0, n0]) = plane else {
         return polar(t);
     };
-    let e0 = (e0 - n0 * n0.dot(e0)).normalize();
-    let f0 = n0.cross(e0);
     let (te, tf) = (*t * e0, *t * f0);
     let n1 = te.cross(tf);
     let len = n1.length();

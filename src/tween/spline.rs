@@ -34,8 +34,8 @@
 
 use super::clock::{self, Part};
 use super::gradient::{
-    aligned, around_axis, deformation, frame, gradient_operator, polar_of_triangle, quat_log,
-    rotation, sin_cos, sym_eigen,
+    aligned, around_axis, deformation, frame, gradient_operator, plane_of, polar_in_plane,
+    polar_of_triangle, quat_log, rotation, sin_cos, sym_eigen,
 };
 use super::solve::{in_order, scatter, Pattern, Placement, MAX_BLOCK};
 use super::weld::{bbox_diagonal, rms_rel};
@@ -1369,6 +1369,8 @@ impl<'t, 'a> Build<'t, 'a> {
         let axis = tri.axis.as_dvec3().normalize_or_zero();
         // Key b as the first pass left it unless taken across a twist or after a bend.
         let mut recomputed_b = false;
+        // Key a's plane, made once for the keys decomposed in it.
+        let plane = std::cell::OnceCell::new();
         for (w, &key) in win.keys.iter().enumerate().filter(|&(w, _)| w != ia) {
             let x = &self.track.keys[key];
             let [i, j, k] = tri.corners.map(|v| x[v as usize]);
@@ -1386,7 +1388,9 @@ impl<'t, 'a> Build<'t, 'a> {
                     if w == ia + 1 && aligned.is_none() && bend.is_none() {
                         continue;
                     }
-                    let (q, u) = aligned.unwrap_or_else(|| polar_of_triangle(&t, &v_inv));
+                    let (q, u) = aligned.unwrap_or_else(|| {
+                        polar_in_plane(&t, plane.get_or_init(|| plane_of(&v_inv)).as_ref())
+                    });
                     (quat_log(bend.map_or(q, |(_, b)| b.conjugate() * q)), u)
                 }
             };
