@@ -801,6 +801,43 @@ fn held_keys_are_tweened_and_said_so() {
 }
 
 #[test]
+fn eased_keys_are_said_to_be_left_only_by_the_seed_method() {
+    // The Flamingo converted with CUBICSPLINE weights (every tangent zero: an ease out of and
+    // into each key): `spline` and `linear` follow the eases between keys and say nothing;
+    // `seed` does not follow them and the summary says so once; with no frame between keys
+    // (`--rate 10`, its keys' own rate) nothing is said.
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = fx.join("morph-keyframes/Flamingo_cubicspline_unindexed.glb");
+    let eased = |extra: &[&str]| -> Vec<String> {
+        let out = out_in(&dir, "f.glb");
+        let mut args = vec!["tween", s(&input), "-o", s(&out)];
+        args.extend_from_slice(extra);
+        let r = run_ok(&args);
+        let err = String::from_utf8_lossy(&r.stderr).into_owned();
+        err.lines()
+            .filter(|l| l.contains("CUBICSPLINE"))
+            .map(str::to_owned)
+            .collect()
+    };
+    let warned = eased(&["--method", "seed"]);
+    assert_eq!(warned.len(), 1, "{warned:?}");
+    assert!(
+        warned[0].starts_with("warning: ")
+            && warned[0].contains("animation \"KeyAction\" eases its weights")
+            && warned[0].contains("the seed method"),
+        "{warned:?}"
+    );
+    for extra in [
+        &[][..],
+        &["--method", "linear"],
+        &["--method", "seed", "--rate", "10"],
+    ] {
+        assert!(eased(extra).is_empty(), "{extra:?}");
+    }
+}
+
+#[test]
 fn morph_targets_beside_clips_that_only_move_nodes_are_not_taken_as_keys() {
     // flag_wave with its weights clip replaced by one that turns its node: a file whose clips
     // move nodes and animate no weights, as RobotExpressive's face shapes beside its skeletal

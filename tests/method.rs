@@ -774,3 +774,183 @@ fn twists_of_other_shapes_stay_on_the_analytic_pose() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A clip's CUBICSPLINE eases (`Track::eases`) are followed between its keys: by `linear`
+/// exactly, its frames the blends the clip plays at their times (with every tangent zero, an
+/// ease out of and into each key; with each segment's chord slope, the frames of the same keys
+/// played LINEAR); by `spline` from the clip's own motion at the keys: with every tangent zero
+/// the frames a quarter of a segment from its keys lie about the cubic's 0.156 of the way.
+/// Past the ends both go on along the end's tangent.
+#[test]
+fn eased_keys_are_followed_between_them() {
+    use inbetween::tween::{plan, Track};
+    let meshes = common::morph_meshes(&common::sample("flag_wave.glb"));
+    let mesh = &meshes[0];
+    let plain = &mesh.tracks[0];
+    let (times, weights) = (&plain.times, &plain.weights);
+    let k = times.len();
+    assert!(k >= 3, "{k} keys");
+    let with = |eases: Option<Vec<[Vec<f64>; 2]>>| Track {
+        origin: plain.origin.clone(),
+        times: times.clone(),
+        weights: weights.clone(),
+        eases,
+    };
+    let zero = vec![0.0; mesh.target_count];
+    let flat = with(Some(vec![[zero.clone(), zero.clone()]; k]));
+    let chord = |a: usize| -> Vec<f64> {
+        let h = times[a + 1] - times[a];
+        (weights[a].iter().zip(&weights[a + 1]))
+            .map(|(x, y)| (y - x) / h)
+            .collect()
+    };
+    let chords = with(Some(
+        (0..k)
+            .map(|i| {
+                let into = if i > 0 { chord(i - 1) } else { zero.clone() };
+                let out = if i + 1 < k { chord(i) } else { zero.clone() };
+                [into, out]
+            })
+            .collect(),
+    ));
+    let opts = |method| TweenOptions::new(method, Timing::Tweens(3));
+    let d = common::diag(&mesh.primitives[0].base);
+    // The clip's blend at each frame's time.
+    let played = |track: &Track| -> Vec<Vec<DVec3>> {
+        let (welded, _) = track_frames_welded(mesh, track, &opts(Method::Linear)).unwrap();
+        let eases = track.eases.as_ref().unwrap();
+        plan(times, &opts(Method::Linear))
+            .iter()
+            .map(|f| {
+                let (a, b, u) = (f.key_a, f.key_b, f.t);
+                let h = times[b] - times[a];
+                let (u2, u3) = (u * u, u * u * u);
+                let c = [
+                    2.0 * u3 - 3.0 * u2 + 1.0,
+                    u3 - 2.0 * u2 + u,
+                    3.0 * u2 - 2.0 * u3,
+                    u3 - u2,
+                ];
+                let w: Vec<f64> = (0..mesh.target_count)
+                    .map(|i| {
+                        c[0] * weights[a][i]
+                            + c[1] * h * eases[a][1][i]
+                            + c[2] * weights[b][i]
+                            + c[3] * h * eases[b][0][i]
+                    })
+                    .collect();
+                welded.weld(&mesh.pose(&w))
+            })
+            .collect()
+    };
+    let frames_of =
+        |track: &Track, method| track_frames_welded(mesh, track, &opts(method)).unwrap().1;
+    for (what, track) in [("flat", &flat), ("chords", &chords)] {
+        let got = frames_of(track, Method::Linear);
+        for (f, (g, want)) in got.iter().zip(played(track)).enumerate() {
+            assert!(max_dist(g, &want) <= 1e-9 * d, "{what} frame {f}");
+        }
+    }
+    let (lerped, by_chords) = (
+        frames_of(plain, Method::Linear),
+        frames_of(&chords, Method::Linear),
+    );
+    for (f, (a, b)) in lerped.iter().zip(&by_chords).enumerate() {
+        assert!(max_dist(a, b) <= 1e-9 * d, "frame {f}");
+    }
+    // Past the ends (`--extend-before`, `--extend-after`) the motion goes on along the clip's
+    // tangent there: with eases, a stop, so the end keys' poses (where the cubic turns back).
+    let (first, last) = (&lerped[0], &lerped[lerped.len() - 1]);
+    // (`spline`'s solve gives the key back to its per-triangle data's single precision.)
+    for (method, within) in [(Method::Linear, 1e-9), (Method::Spline, 1e-7)] {
+        let mut o = opts(method);
+        o.extend = [0.5, 0.5];
+        let frames = track_frames_welded(mesh, &flat, &o).unwrap().1;
+        let (t, n) = (plan(times, &o), frames.len());
+        let before = t.iter().take_while(|f| f.time < times[0]).count();
+        let after = t.iter().filter(|f| f.time > times[k - 1]).count();
+        assert!(before > 0 && after > 0, "{method:?}");
+        for (f, end) in (0..before)
+            .map(|f| (f, first))
+            .chain((n - after..n).map(|f| (f, last)))
+        {
+            let off = max_dist(&frames[f], end);
+            assert!(off <= within * d, "{method:?} frame {f}: {off} of {d}");
+        }
+    }
+    // Out of and into each key at the cubic's pace: 0.156 of the way a quarter of the span
+    // from it (gradient space is not position space: 0.10-0.22 allowed).
+    let eased = frames_of(&flat, Method::Spline);
+    for a in 0..k - 1 {
+        let (key, next) = (4 * a, 4 * a + 4);
+        let span = max_dist(&eased[next], &eased[key]);
+        for (frame, end) in [(key + 1, key), (next - 1, next)] {
+            let r = max_dist(&eased[frame], &eased[end]) / span;
+            assert!((0.10..0.22).contains(&r), "segment {a} frame {frame}: {r}");
+        }
+    }
+}
+
+/// Where the clip's motion turns nothing (two targets that stretch a sheet along x and along
+/// y: each triangle's stretch is affine in the weights, and a cubic of its keys' stretches and
+/// slopes is the clip's own), `spline` following the eases gives the clip's poses at every
+/// frame, for tangents of any size and sign: the eases' slopes at the keys are taken whole.
+#[test]
+fn eased_stretches_are_the_clip_s_own() {
+    use inbetween::tween::{plan, Track};
+    let s = synth::grid(12, 6, 2.0, 1.0);
+    let along = |sx: f64, sy: f64| -> Vec<DVec3> {
+        (s.positions.iter())
+            .map(|p| DVec3::new(p.x * sx, p.y * sy, p.z))
+            .collect()
+    };
+    let (_dir, path) = write_keys(s.clone(), vec![along(1.6, 1.0), along(1.0, 0.6)]);
+    let meshes = common::morph_meshes(&path);
+    let mesh = &meshes[0];
+    let times = vec![0.0, 0.4, 1.0, 1.3];
+    let weights = vec![
+        vec![0.0, 0.0],
+        vec![1.0, 0.2],
+        vec![0.3, 1.0],
+        vec![0.0, 0.0],
+    ];
+    let eases = vec![
+        [vec![0.0, 0.0], vec![2.0, -1.0]],
+        [vec![0.5, 1.5], vec![-0.4, 3.0]],
+        [vec![-1.2, 0.0], vec![-2.5, -0.7]],
+        [vec![0.3, 0.2], vec![0.0, 0.0]],
+    ];
+    let track = Track {
+        origin: mesh.tracks[0].origin.clone(),
+        times: times.clone(),
+        weights: weights.clone(),
+        eases: Some(eases.clone()),
+    };
+    let d = common::diag(&mesh.primitives[0].base);
+    for method in [Method::Linear, Method::Spline] {
+        let opts = TweenOptions::new(method, Timing::Tweens(5));
+        let (welded, frames) = track_frames_welded(mesh, &track, &opts).unwrap();
+        for (f, at) in plan(&times, &opts).iter().enumerate() {
+            let (a, b, u) = (at.key_a, at.key_b, at.t);
+            let h = times[b] - times[a];
+            let (u2, u3) = (u * u, u * u * u);
+            let c = [
+                2.0 * u3 - 3.0 * u2 + 1.0,
+                u3 - 2.0 * u2 + u,
+                3.0 * u2 - 2.0 * u3,
+                u3 - u2,
+            ];
+            let w: Vec<f64> = (0..2)
+                .map(|i| {
+                    c[0] * weights[a][i]
+                        + c[1] * h * eases[a][1][i]
+                        + c[2] * weights[b][i]
+                        + c[3] * h * eases[b][0][i]
+                })
+                .collect();
+            let want = welded.weld(&mesh.pose(&w));
+            let off = max_dist(&frames[f], &want);
+            assert!(off <= 1e-6 * d, "{method:?} frame {f}: {off} of {d}");
+        }
+    }
+}

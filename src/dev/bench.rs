@@ -182,6 +182,7 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
                 times: &[0.0, 1.0],
                 pattern: Some(&pattern),
                 triangles: &triangles,
+                eases: None,
             }
             .segment(Method::Spline, true, 0, 1)?;
             (row.spline_frame_ms, row.spline_frame_min_ms) = time_frames(&spline);
@@ -209,6 +210,7 @@ pub fn run(opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)) -> Result<Vec
                 times: &times,
                 pattern: Some(&pattern),
                 triangles: &triangles,
+                eases: None,
             }
             .segment(Method::Spline, true, 3, 4)?;
             row.spline_setup_s = t.elapsed().as_secs_f64();

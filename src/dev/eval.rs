@@ -149,6 +149,7 @@ pub fn evaluate(mesh: &MorphMesh, step: usize, methods: &[&str]) -> Result<MeshS
                             times: &kept_times,
                             pattern: Some(&pattern),
                             triangles: &welded.triangles,
+                            eases: None,
                         }
                         .segment(m, true, a, a + 1)?;
                         cache = Some((a, s));

@@ -7,7 +7,7 @@ use super::normals::{arc, carry, tangent_delta, Smoothing};
 use super::options::{Method, TweenOptions};
 use super::report::{FrameReport, MeshReport, Shape};
 use super::schedule::{plan, FrameAt};
-use super::segment::{keys_read, KeyTrack, Segment};
+use super::segment::{keys_read, Eases, KeyTrack, Segment, WeldedPose};
 use super::solve::Pattern;
 use super::weld::Welded;
 use anyhow::{bail, Result};
@@ -26,8 +26,11 @@ pub struct TrackFrames {
     pub origin: TrackOrigin,
     pub first: usize,
     pub frames: Vec<FrameAt>,
-    /// The authored weights of each key.
+    /// The authored weights of each key, their times, and a CUBICSPLINE clip's tangents (see
+    /// [`Track::eases`]).
     pub keys: Vec<Vec<f64>>,
+    pub times: Vec<f64>,
+    pub eases: Option<Vec<[Vec<f64>; 2]>>,
 }
 
 /// Per-primitive morph target deltas, one entry per output frame.
@@ -107,6 +110,12 @@ struct TrackKeys {
     held: Vec<usize>,
 }
 
+impl WeldedPose for MeshTween<'_> {
+    fn welded_pose(&self, weights: &[f64]) -> Vec<DVec3> {
+        self.welded.weld(&self.mesh.pose(weights))
+    }
+}
+
 impl<'a> MeshTween<'a> {
     fn new(mesh: &'a MorphMesh, opts: &'a TweenOptions, key_deltas: bool) -> Result<MeshTween<'a>> {
         let welded = Welded::build(mesh);
@@ -157,6 +166,11 @@ impl<'a> MeshTween<'a> {
             times: &track.times,
             pattern: self.pattern.as_ref(),
             triangles: &self.welded.triangles,
+            eases: track.eases.as_ref().map(|tangents| Eases {
+                weights: &track.weights,
+                tangents,
+                mesh: self,
+            }),
         }
     }
 
@@ -292,6 +306,8 @@ impl<'a> MeshTween<'a> {
             first: out.stats.frames,
             frames: frames.clone(),
             keys: track.weights.clone(),
+            times: track.times.clone(),
+            eases: track.eases.clone(),
         });
         // Frames grouped by segment, each segment prepared once. A frame on a key is that key
         // as it is (nothing solved), and a segment whose frames are all keys is not prepared
@@ -337,7 +353,12 @@ impl<'a> MeshTween<'a> {
         let t0 = Instant::now();
         if self.reads_keys(fs) {
             let count = keys.welded.len();
-            self.hold(track, keys, &keys_read(self.opts.method, count, a, b));
+            let eased = track.eases.is_some();
+            self.hold(
+                track,
+                keys,
+                &keys_read(self.opts.method, count, a, b, eased),
+            );
         }
         let segment = self.set_up(track, keys, fs)?;
         out.stats.setup += t0.elapsed();
@@ -468,11 +489,12 @@ impl<'a> MeshTween<'a> {
             out.stats.side_by_side = true;
             let t0 = Instant::now();
             // The keys the run's segments read.
+            let eased = track.eases.is_some();
             let mut need: Vec<usize> = (run.iter())
                 .filter(|r| self.reads_keys(&frames[(*r).clone()]))
                 .flat_map(|r| {
                     let f = &frames[r.start];
-                    keys_read(self.opts.method, count, f.key_a, f.key_b)
+                    keys_read(self.opts.method, count, f.key_a, f.key_b, eased)
                 })
                 .collect();
             need.sort_unstable();
@@ -758,7 +780,13 @@ pub fn frames_at(
             tween.hold(
                 track,
                 &mut keys,
-                &keys_read(opts.method, track.times.len(), ab.0, ab.1),
+                &keys_read(
+                    opts.method,
+                    track.times.len(),
+                    ab.0,
+                    ab.1,
+                    track.eases.is_some(),
+                ),
             );
             let s = tween
                 .key_track(track, &keys)

@@ -24,7 +24,7 @@ use crate::progress::Progress;
 use crate::usd::{self, Delta, MeshPlan};
 use anyhow::{bail, Result};
 use rayon::prelude::*;
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -72,7 +72,8 @@ pub struct Summary {
     /// factorization, spline window.
     pub setup_parts: [f64; 4],
     /// What a user should know of the input or the output, one line each: keys held (STEP)
-    /// that were tweened, what a USD output could not carry (textures USD cannot read).
+    /// that were tweened, eases (CUBICSPLINE) that `seed`'s frames between keys do not follow, what a
+    /// USD output could not carry (textures USD cannot read).
     pub warnings: Vec<String>,
     /// The compression extensions the input was decoded from (its size is the compressed one).
     pub input_compressed: Vec<String>,
@@ -631,7 +632,7 @@ pub fn run_tween(job: &TweenJob) -> Result<Summary> {
         compact: job.compact,
     };
     let total = check_budget(&doc, &meshes, &opts, Container::of(format).is_some())?;
-    let mut warnings = held_keys(&doc, &meshes);
+    let mut warnings = between_keys(&doc, &meshes, &opts);
     warnings.extend(left_as_authored(&doc, &meshes, job.keys));
     if let (Some(_), Layout::Rig) = (Container::of(format), opts.layout) {
         warnings.extend(shape_normals(&doc, &mut meshes, &opts));
@@ -721,29 +722,47 @@ fn left_as_authored(doc: &Document, meshes: &[MorphMesh], keys: KeySource) -> Ve
     )]
 }
 
-/// A line for each clip whose weights hold each key until the next (STEP interpolation, as
-/// exporters write stepped or "constant" keys: an animator's blocking pass): its keys are
-/// tweened as poses like any others, so the output moves between keys where the input held.
-fn held_keys(doc: &Document, meshes: &[MorphMesh]) -> Vec<String> {
-    let held: BTreeSet<usize> = (meshes.iter().flat_map(|m| &m.tracks))
+/// A line for each clip whose motion between keys the output's frames do not follow: a clip
+/// that holds each key until the next (STEP interpolation, as exporters write stepped or
+/// "constant" keys: an animator's blocking pass) is tweened as poses like any other, so the
+/// output moves where the input held; a clip whose keys carry CUBICSPLINE tangents (eases in
+/// and out) is followed by `spline` and `linear` (see `segment::Eases`) but not by `seed`,
+/// which gets its frames between keys with no eases (said only where frames are written
+/// between the clip's keys).
+fn between_keys(doc: &Document, meshes: &[MorphMesh], opts: &TweenOptions) -> Vec<String> {
+    let interpolation =
+        |a: usize, s: usize| doc.json["animations"][a]["samplers"][s]["interpolation"].as_str();
+    let clips: BTreeMap<usize, &str> = (meshes.iter().flat_map(|m| &m.tracks))
         .filter_map(|t| match t.origin {
             TrackOrigin::Animation {
                 animation, sampler, ..
-            } => Some((animation, sampler)),
+            } => Some((animation, sampler, t)),
             TrackOrigin::Targets { .. } => None,
         })
-        .filter(|&(a, s)| {
-            doc.json["animations"][a]["samplers"][s]["interpolation"].as_str() == Some("STEP")
+        .filter_map(|(a, s, t)| match interpolation(a, s) {
+            Some("STEP") => Some((a, "STEP")),
+            Some("CUBICSPLINE")
+                if opts.method == Method::Seed
+                    && plan(&t.times, opts).iter().any(|f| f.key().is_none()) =>
+            {
+                Some((a, "CUBICSPLINE"))
+            }
+            _ => None,
         })
-        .map(|(a, _)| a)
         .collect();
-    held.into_iter()
-        .map(|a| {
+    clips
+        .into_iter()
+        .map(|(a, interpolation)| {
             let name = gltf::quoted_name(&doc.json["animations"][a], || a.to_string());
-            format!(
-                "{}: animation {name} holds its weights from key to key (STEP interpolation); its keys are tweened as poses, so the output moves between them",
-                doc.path.display()
-            )
+            let path = doc.path.display();
+            match interpolation {
+                "STEP" => format!(
+                    "{path}: animation {name} holds its weights from key to key (STEP interpolation); its keys are tweened as poses, so the output moves between them"
+                ),
+                _ => format!(
+                    "{path}: animation {name} eases its weights between keys (CUBICSPLINE tangents); the seed method's frames between keys do not follow the eases (spline and linear do)"
+                ),
+            }
         })
         .collect()
 }

@@ -67,6 +67,10 @@ pub struct Track {
     pub times: Vec<f64>,
     /// `weights[k][i]`: weight of target i at key k.
     pub weights: Vec<Vec<f64>>,
+    /// A CUBICSPLINE clip's tangents: `eases[k]` holds key k's in- and out-tangents (weights
+    /// per second), the eases into and out of it that frames between keys follow; `None` for
+    /// other clips and for keys from the targets.
+    pub eases: Option<Vec<[Vec<f64>; 2]>>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -382,7 +386,7 @@ fn animation_tracks(
             }
             continue;
         }
-        let (times, weights) = read_weight_keys(doc, ai, si, target_count)?;
+        let (times, weights, eases) = read_weight_keys(doc, ai, si, target_count)?;
         tracks.push(Track {
             origin: TrackOrigin::Animation {
                 animation: ai,
@@ -391,6 +395,7 @@ fn animation_tracks(
             },
             times,
             weights,
+            eases,
         });
     }
     Ok((tracks, dropped))
@@ -408,6 +413,7 @@ fn target_track(target_count: usize, nodes: Vec<usize>) -> Track {
         origin: TrackOrigin::Targets { nodes },
         times: (0..=target_count).map(|k| k as f64).collect(),
         weights,
+        eases: None,
     }
 }
 
@@ -595,13 +601,16 @@ fn other_deltas(
     Ok(out)
 }
 
-/// Key times and weights of sampler `si` of animation `ai`.
+/// Key times and weights of sampler `si` of animation `ai`, and a CUBICSPLINE sampler's in-
+/// and out-tangents (see [`Track::eases`]).
+type WeightKeys = (Vec<f64>, Vec<Vec<f64>>, Option<Vec<[Vec<f64>; 2]>>);
+
 fn read_weight_keys(
     doc: &Document,
     ai: usize,
     si: usize,
     target_count: usize,
-) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
+) -> Result<WeightKeys> {
     let s = &doc.json["animations"][ai]["samplers"][si];
     let what = format!("animation {ai} sampler {si}");
     let (input, output) = match (s["input"].as_u64(), s["output"].as_u64()) {
@@ -635,12 +644,13 @@ fn read_weight_keys(
     if times.windows(2).any(|w| w[1] < w[0]) {
         bail!(doc.err(format!("{what} key times are not increasing")));
     }
-    let weights = (0..k)
-        .map(|i| {
-            let at = i * per_key + if cubic { target_count } else { 0 };
-            values[at..at + target_count].to_vec()
-        })
-        .collect();
+    // A CUBICSPLINE key is its in-tangent, its value and its out-tangent.
+    let part = |i: usize, p: usize| {
+        let at = i * per_key + p * target_count;
+        values[at..at + target_count].to_vec()
+    };
+    let weights = (0..k).map(|i| part(i, cubic as usize)).collect();
+    let eases = cubic.then(|| (0..k).map(|i| [part(i, 0), part(i, 2)]).collect());
     // Key times on a frame grid within float32 precision are taken as the grid's.
-    Ok((snap(&times).0, weights))
+    Ok((snap(&times).0, weights, eases))
 }

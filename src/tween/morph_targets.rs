@@ -524,11 +524,23 @@ fn new_targets(
     targets
 }
 
-/// The authored weights at a frame of `track`: linear between its keys, held at the ends.
+/// The authored weights at a frame of `track`: linear between its keys, or on a CUBICSPLINE
+/// clip's cubic through their tangents; held at the ends.
 fn blended(track: &TrackFrames, f: &FrameAt) -> Vec<f64> {
-    let (a, b) = (&track.keys[f.key_a], &track.keys[f.key_b]);
+    let (ka, kb) = (f.key_a, f.key_b);
+    let (a, b) = (&track.keys[ka], &track.keys[kb]);
     let t = f.t.clamp(0.0, 1.0);
-    a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect()
+    let h = track.times[kb] - track.times[ka];
+    match &track.eases {
+        Some(eases) if h > 0.0 => {
+            let c = super::spline::hermite(t);
+            let (out_a, in_b) = (&eases[ka][1], &eases[kb][0]);
+            (a.iter().zip(b).zip(out_a.iter().zip(in_b)))
+                .map(|((x, y), (ma, mb))| c[0] * x + c[1] * h * ma + c[2] * y + c[3] * h * mb)
+                .collect()
+        }
+        _ => a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect(),
+    }
 }
 
 /// The blend of an unsolved attribute's authored deltas by `weights`, per vertex.

@@ -226,6 +226,9 @@ pub fn close_loop(track: &mut Track) {
     let spacing = if spacing > 0.0 { spacing } else { 1.0 };
     track.times.push(times[k - 1] + spacing);
     track.weights.push(track.weights[0].clone());
+    if let Some(eases) = &mut track.eases {
+        eases.push(eases[0].clone());
+    }
 }
 
 #[cfg(test)]

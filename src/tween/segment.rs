@@ -10,7 +10,17 @@ use glam::DVec3;
 
 /// The tween of one pair of keys, ready to produce frames.
 pub enum Segment {
-    Linear { x0: Vec<DVec3>, x1: Vec<DVec3> },
+    Linear {
+        x0: Vec<DVec3>,
+        x1: Vec<DVec3>,
+    },
+    /// `linear` between keys with authored eases (see [`Eases`]): the cubic Hermite of the
+    /// keys' positions with the tangents the eases give them (per unit of the segment), which
+    /// is the blend the clip plays at each time; past the ends, the line along the tangent.
+    Eased {
+        x: [Vec<DVec3>; 2],
+        tangents: [Vec<DVec3>; 2],
+    },
     Seed(Box<SeedSegment>),
     Spline(Box<SplineSegment>),
 }
@@ -42,6 +52,15 @@ impl Segment {
     pub fn frame(&self, t: f64) -> Vec<DVec3> {
         match self {
             Segment::Linear { x0, x1 } => x0.iter().zip(x1).map(|(a, b)| a.lerp(*b, t)).collect(),
+            Segment::Eased { x, tangents } => {
+                let w = spline::hermite_beyond(t, true);
+                (x[0]
+                    .iter()
+                    .zip(&tangents[0])
+                    .zip(x[1].iter().zip(&tangents[1])))
+                .map(|((&a, &ta), (&b, &tb))| spline::hermite_point(w, [a, ta, b, tb]))
+                .collect()
+            }
             Segment::Seed(s) => on_the_pool(|| s.frame(t)),
             Segment::Spline(s) => on_the_pool(|| s.frame(t)),
         }
@@ -51,7 +70,9 @@ impl Segment {
     /// pass over their factor between up to [`MAX_BLOCK`] frames.
     pub fn frames(&self, ts: &[f64]) -> Vec<Vec<DVec3>> {
         match self {
-            Segment::Linear { .. } => ts.iter().map(|&t| self.frame(t)).collect(),
+            Segment::Linear { .. } | Segment::Eased { .. } => {
+                ts.iter().map(|&t| self.frame(t)).collect()
+            }
             Segment::Seed(s) => on_the_pool(|| s.frames(ts)),
             Segment::Spline(s) => on_the_pool(|| s.frames(ts)),
         }
@@ -63,7 +84,7 @@ impl Segment {
     /// `linear` solves nothing: one frame at a time.
     pub fn block(&self, count: usize, threads: usize) -> usize {
         match self {
-            Segment::Linear { .. } => 1,
+            Segment::Linear { .. } | Segment::Eased { .. } => 1,
             _ => count.div_ceil(threads.max(1)).clamp(1, MAX_BLOCK),
         }
     }
@@ -73,7 +94,7 @@ impl Segment {
     pub fn recycle(self, pattern: Option<&Pattern>) {
         let Some(pattern) = pattern else { return };
         match self {
-            Segment::Linear { .. } => {}
+            Segment::Linear { .. } | Segment::Eased { .. } => {}
             Segment::Seed(s) => s.into_placement().recycle(pattern),
             Segment::Spline(s) => s.into_placement().recycle(pattern),
         }
@@ -82,7 +103,7 @@ impl Segment {
     /// Nonzeros of the Cholesky factor used by the solves (0 for `linear`).
     pub fn factor_nonzeros(&self) -> usize {
         match self {
-            Segment::Linear { .. } => 0,
+            Segment::Linear { .. } | Segment::Eased { .. } => 0,
             Segment::Seed(s) => s.factor_nonzeros(),
             Segment::Spline(s) => s.factor_nonzeros(),
         }
@@ -96,6 +117,63 @@ pub struct KeyTrack<'a> {
     pub times: &'a [f64],
     pub pattern: Option<&'a Pattern>,
     pub triangles: &'a [[u32; 3]],
+    /// A CUBICSPLINE clip's eases, which `spline` and `linear` follow between keys.
+    pub eases: Option<Eases<'a>>,
+}
+
+/// A clip's authored eases into and out of its keys (CUBICSPLINE tangents). A segment from key
+/// a to b that follows them takes its end tangents from them, not from the keys around it:
+/// `spline` from the welded poses a short step ([`EASE_STEP`]) outside the segment along a's
+/// out-tangent and b's in-tangent, decomposed as keys are (so the tangent it gives the
+/// rotations and stretches is the derivative of the clip's own motion there, to about that
+/// step); `linear` from the targets blended by the tangents (the clip's blend at every time,
+/// exactly: a pose is linear in the weights).
+pub struct Eases<'a> {
+    /// Each key's weights (the track's) and in- and out-tangents, weights per second.
+    pub weights: &'a [Vec<f64>],
+    pub tangents: &'a [[Vec<f64>; 2]],
+    /// The mesh, posed by a set of weights.
+    pub mesh: &'a dyn WeldedPose,
+}
+
+/// A mesh's welded pose at a set of weights (its blend of the targets).
+pub trait WeldedPose: Sync {
+    fn welded_pose(&self, weights: &[f64]) -> Vec<DVec3>;
+}
+
+/// The step outside a segment, as a fraction of its span, at which [`Eases`] takes the poses
+/// its end tangents come from: a tangent is then off by about this fraction of the change of
+/// the motion's speed over the segment (none where the tangent is zero: the pose outside is the
+/// key's), and its round-off (a decomposition's 1e-15, divided by the step) near 1e-10.
+pub const EASE_STEP: f64 = 1e-5;
+
+impl Eases<'_> {
+    /// The welded poses `e` seconds before key a along its out-tangent and after key b along
+    /// its in-tangent.
+    fn outside(&self, a: usize, b: usize, e: f64) -> [Vec<DVec3>; 2] {
+        let along = |k: usize, side: usize, step: f64| {
+            let w: Vec<f64> = (self.weights[k].iter())
+                .zip(&self.tangents[k][side])
+                .map(|(w, m)| w + step * m)
+                .collect();
+            self.mesh.welded_pose(&w)
+        };
+        [along(a, 1, -e), along(b, 0, e)]
+    }
+
+    /// The positions' own tangents at a (out) and b (in) over a segment of `h` seconds: the
+    /// targets' deltas blended by the tangents' weights, times h.
+    fn slopes(&self, a: usize, b: usize, h: f64) -> [Vec<DVec3>; 2] {
+        let base = self.mesh.welded_pose(&vec![0.0; self.weights[a].len()]);
+        [(a, 1), (b, 0)].map(|(k, side)| {
+            let moved = self.mesh.welded_pose(&self.tangents[k][side]);
+            moved
+                .iter()
+                .zip(&base)
+                .map(|(m, o)| (*m - *o) * h)
+                .collect()
+        })
+    }
 }
 
 impl KeyTrack<'_> {
@@ -104,6 +182,9 @@ impl KeyTrack<'_> {
     /// first. `pattern` is required by `seed` and `spline`.
     pub fn segment(&self, method: Method, wrap: bool, a: usize, b: usize) -> Result<Segment> {
         let (keys, pattern, triangles) = (self.keys, self.pattern, self.triangles);
+        if let Some(eases) = self.eases_of(method, a, b) {
+            return self.eased(eases, method, a, b);
+        }
         match method {
             Method::Spline if b == a + 1 => {
                 let pattern = pattern.expect("the spline method needs the mesh's pattern");
@@ -123,12 +204,47 @@ impl KeyTrack<'_> {
     }
 }
 
+impl KeyTrack<'_> {
+    /// The eases the segment from key a to b by `method` follows: `spline` and `linear`
+    /// between two keys at different times of a clip that has them.
+    fn eases_of(&self, method: Method, a: usize, b: usize) -> Option<&Eases<'_>> {
+        let eased = matches!(method, Method::Spline | Method::Linear);
+        (self.eases.as_ref()).filter(|_| eased && b == a + 1 && self.times[b] > self.times[a])
+    }
+
+    /// The segment from key a to b = a + 1 following `eases` (see [`Eases`]).
+    fn eased(&self, eases: &Eases, method: Method, a: usize, b: usize) -> Result<Segment> {
+        let h = self.times[b] - self.times[a];
+        let (xa, xb) = (&self.keys[a], &self.keys[b]);
+        if method == Method::Linear {
+            return Ok(Segment::Eased {
+                tangents: eases.slopes(a, b, h),
+                x: [xa.clone(), xb.clone()],
+            });
+        }
+        let e = EASE_STEP * h;
+        let [before, after] = eases.outside(a, b, e);
+        // A track of the two keys and the poses just outside them, whose tangents are the
+        // slopes over those steps.
+        let (ta, tb) = (self.times[a], self.times[b]);
+        let keys = [before, xa.clone(), xb.clone(), after];
+        let times = [ta - e, ta, tb, tb + e];
+        let pattern = self
+            .pattern
+            .expect("the spline method needs the mesh's pattern");
+        let track = SplineTrack::new(&keys, &times, false, pattern, self.triangles)?.stepped_ends();
+        Ok(Segment::Spline(Box::new(
+            track.segment(1)?.straight_beyond(),
+        )))
+    }
+}
+
 /// The keys the segment from key a to key b of a track of `count` keys reads by `method` (see
 /// [`KeyTrack::segment`]), ascending: what a caller holding only some of a long track's keys
 /// must hold for it.
-pub fn keys_read(method: Method, count: usize, a: usize, b: usize) -> Vec<usize> {
+pub fn keys_read(method: Method, count: usize, a: usize, b: usize, eased: bool) -> Vec<usize> {
     match method {
-        Method::Spline if b == a + 1 => spline::keys_read(count, a),
+        Method::Spline if b == a + 1 && !eased => spline::keys_read(count, a),
         _ if a == b => vec![a],
         _ => vec![a.min(b), a.max(b)],
     }
@@ -148,26 +264,29 @@ mod tests {
     use crate::dev::synth;
 
     /// A spline segment reads WINDOW keys either side of its own two (past a track's ends
-    /// round a loop) and the first and last keys; the other methods read their two.
+    /// round a loop) and the first and last keys, or its two where eases give its tangents;
+    /// the other methods read their two.
     #[test]
     fn a_segment_reads_its_window_and_the_track_s_ends() {
         assert_eq!(
-            keys_read(Method::Spline, 20, 5, 6),
+            keys_read(Method::Spline, 20, 5, 6, false),
             [0, 3, 4, 5, 6, 7, 8, 19]
         );
         // Segment 0: keys -2 and -1 of a loop of 19 are 17 and 18.
         assert_eq!(
-            keys_read(Method::Spline, 20, 0, 1),
+            keys_read(Method::Spline, 20, 0, 1, false),
             [0, 1, 2, 3, 17, 18, 19]
         );
         assert_eq!(
-            keys_read(Method::Spline, 20, 18, 19),
+            keys_read(Method::Spline, 20, 18, 19, false),
             [0, 1, 2, 16, 17, 18, 19]
         );
-        assert_eq!(keys_read(Method::Spline, 2, 0, 1), [0, 1]);
-        assert_eq!(keys_read(Method::Spline, 1, 0, 0), [0]);
-        assert_eq!(keys_read(Method::Seed, 20, 5, 6), [5, 6]);
-        assert_eq!(keys_read(Method::Linear, 20, 7, 7), [7]);
+        assert_eq!(keys_read(Method::Spline, 2, 0, 1, false), [0, 1]);
+        assert_eq!(keys_read(Method::Spline, 1, 0, 0, false), [0]);
+        assert_eq!(keys_read(Method::Seed, 20, 5, 6, false), [5, 6]);
+        assert_eq!(keys_read(Method::Linear, 20, 7, 7, false), [7]);
+        // Eases give a spline segment its tangents: it reads its two keys.
+        assert_eq!(keys_read(Method::Spline, 20, 5, 6, true), [5, 6]);
     }
 
     /// Frames solved together (one pass over the triangles' data and over the factor) are
@@ -189,6 +308,7 @@ mod tests {
             times: &[0.0, 1.0, 2.0],
             pattern: Some(&pattern),
             triangles: &s.triangles,
+            eases: None,
         };
         let us = [0.1, 0.3, 0.5, 0.7, 0.9];
         for method in [Method::Seed, Method::Spline] {

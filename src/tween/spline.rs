@@ -254,6 +254,9 @@ pub struct SplineTrack<'a> {
     looped: bool,
     pattern: &'a Pattern,
     triangles: &'a [[u32; 3]],
+    /// Whether the track is a segment's two keys with a pose a short step outside each (see
+    /// [`SplineTrack::stepped_ends`]).
+    stepped_ends: bool,
 }
 
 /// Per valid triangle of a segment. Held in single precision (172 bytes with its `Option`
@@ -322,6 +325,8 @@ pub struct SplineSegment {
     field: Field,
     /// Positions of a and b, for vertices no valid triangle touches.
     x: [Vec<DVec3>; 2],
+    /// Whether frames past the ends go on straight (see [`hermite_beyond`]).
+    straight_beyond: bool,
 }
 
 /// The rotation with log `r` as a twist about `axis` after a swing: R = twist(angle) swing,
@@ -416,7 +421,7 @@ impl TwistLine {
 
 /// Cubic Hermite basis at u in [0, 1]: the weights of the value at a, the tangent at a, the
 /// value at b and the tangent at b (tangents per unit of u).
-fn hermite(u: f64) -> [f64; 4] {
+pub(super) fn hermite(u: f64) -> [f64; 4] {
     let (u2, u3) = (u * u, u * u * u);
     [
         2.0 * u3 - 3.0 * u2 + 1.0,
@@ -426,8 +431,20 @@ fn hermite(u: f64) -> [f64; 4] {
     ]
 }
 
+/// [`hermite`] at u, or where `straight` past the segment's ends (frames of `--extend-before`
+/// and `--extend-after`) the line from the end along its tangent: `[1, u, 0, 0]` before a,
+/// `[0, 0, 1, u - 1]` after b. A clip's eases (see `segment::Eases`) set the tangents there,
+/// and the cubic past them turns back (an ease's zero tangents: the pose of b at u = -1/2).
+pub(super) fn hermite_beyond(u: f64, straight: bool) -> [f64; 4] {
+    match straight {
+        true if u < 0.0 => [1.0, u, 0.0, 0.0],
+        true if u > 1.0 => [0.0, 0.0, 1.0, u - 1.0],
+        _ => hermite(u),
+    }
+}
+
 /// sum_j w_j v_j.
-fn hermite_point(w: [f64; 4], v: [DVec3; 4]) -> DVec3 {
+pub(super) fn hermite_point(w: [f64; 4], v: [DVec3; 4]) -> DVec3 {
     v[0] * w[0] + v[1] * w[1] + v[2] * w[2] + v[3] * w[3]
 }
 
@@ -577,7 +594,19 @@ impl<'a> SplineTrack<'a> {
             looped,
             pattern,
             triangles,
+            stepped_ends: false,
         })
+    }
+
+    /// The track of four keys, a pose a short step before key 1, keys 1 and 2, and a pose a
+    /// short step after key 2, whose segment 1 takes as its end tangents the slopes over those
+    /// steps (a clip's own motion at its keys, see `segment::Eases`), not the spline's.
+    pub fn stepped_ends(self) -> SplineTrack<'a> {
+        assert_eq!(self.keys.len(), 4, "two keys and a step outside each");
+        SplineTrack {
+            stepped_ends: true,
+            ..self
+        }
     }
 
     /// Make the rotation logs from key a to key b agree across neighbouring triangles: starting
@@ -642,6 +671,20 @@ impl<'a> SplineTrack<'a> {
 
     /// The keys whose values set segment a's end tangents (see [`WINDOW`]).
     fn window(&self, a: usize) -> Window {
+        if self.stepped_ends {
+            let t = self.times;
+            let h = t[2] - t[1];
+            let (before, after) = (h / (t[1] - t[0]), h / (t[3] - t[2]));
+            return Window {
+                keys: vec![0, 1, 2, 3],
+                times: t.to_vec(),
+                a: 1,
+                tangents: [
+                    vec![-before, before, 0.0, 0.0],
+                    vec![0.0, 0.0, -after, after],
+                ],
+            };
+        }
         let k = self.keys.len();
         let span = window_span(k, self.looped, a);
         // A loop's keys 0..k-1 (the last repeats the first) continue periodically.
@@ -770,6 +813,7 @@ impl<'a> SplineTrack<'a> {
             offsets,
             field,
             x: [x0.clone(), x1.clone()],
+            straight_beyond: false,
         })
     }
 
@@ -1385,7 +1429,11 @@ impl<'t, 'a> Build<'t, 'a> {
                 Some((angle, u)) => (axis * angle, u),
                 None => {
                     let aligned = across.and_then(|(e, n)| aligned(&t, e, n));
-                    if w == ia + 1 && aligned.is_none() && bend.is_none() {
+                    // b as the first pass left it, but in double precision where the steps
+                    // outside a segment set its tangents: its single-precision log, divided by
+                    // the step, would put the float's rounding in them.
+                    let stepped = self.track.stepped_ends;
+                    if w == ia + 1 && aligned.is_none() && bend.is_none() && !stepped {
                         continue;
                     }
                     let (q, u) = aligned.unwrap_or_else(|| {
@@ -2055,6 +2103,14 @@ fn split_twists(
 }
 
 impl SplineSegment {
+    /// The segment with its frames past its ends on straight lines (see [`hermite_beyond`]).
+    pub fn straight_beyond(self) -> SplineSegment {
+        SplineSegment {
+            straight_beyond: true,
+            ..self
+        }
+    }
+
     pub fn factor_nonzeros(&self) -> usize {
         self.placement.factor_nonzeros()
     }
@@ -2098,7 +2154,8 @@ impl SplineSegment {
     /// [`SplineSegment::systems`] for `N` frames (a frame count known to the compiler: one
     /// frame alone costs what it did before frames shared the pass).
     fn systems_of<const N: usize>(&self, us: &[f64]) -> [(Vec<[f64; 3]>, Vec<DVec3>); N] {
-        let ws: [[f64; 4]; N] = std::array::from_fn(|f| hermite(us[f]));
+        let ws: [[f64; 4]; N] =
+            std::array::from_fn(|f| hermite_beyond(us[f], self.straight_beyond));
         let mut rhs: [Vec<[f64; 3]>; N] =
             std::array::from_fn(|_| vec![[0.0f64; 3]; self.x[0].len()]);
         // Each split component's screw offsets turned with their cross-sections (see [`Screw`]).
