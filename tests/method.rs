@@ -775,6 +775,27 @@ fn twists_of_other_shapes_stay_on_the_analytic_pose() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// The weights a CUBICSPLINE clip (`track`, its eases given) plays at frame `f`: each
+/// weight's cubic Hermite through its keys' values and slopes (tangents per second times the
+/// span), as glTF defines it.
+fn clip_weights(track: &inbetween::tween::Track, f: &inbetween::tween::FrameAt) -> Vec<f64> {
+    let (a, b, u) = (f.key_a, f.key_b, f.t);
+    let (w, eases) = (&track.weights, track.eases.as_ref().expect("eases"));
+    let h = track.times[b] - track.times[a];
+    let (u2, u3) = (u * u, u * u * u);
+    let c = [
+        2.0 * u3 - 3.0 * u2 + 1.0,
+        u3 - 2.0 * u2 + u,
+        3.0 * u2 - 2.0 * u3,
+        u3 - u2,
+    ];
+    (0..w[a].len())
+        .map(|i| {
+            c[0] * w[a][i] + c[1] * h * eases[a][1][i] + c[2] * w[b][i] + c[3] * h * eases[b][0][i]
+        })
+        .collect()
+}
+
 /// A clip's CUBICSPLINE eases (`Track::eases`) are followed between its keys: by `linear`
 /// exactly, its frames the blends the clip plays at their times (with every tangent zero, an
 /// ease out of and into each key; with each segment's chord slope, the frames of the same keys
@@ -818,27 +839,10 @@ fn eased_keys_are_followed_between_them() {
     // The clip's blend at each frame's time.
     let played = |track: &Track| -> Vec<Vec<DVec3>> {
         let (welded, _) = track_frames_welded(mesh, track, &opts(Method::Linear)).unwrap();
-        let eases = track.eases.as_ref().unwrap();
         plan(times, &opts(Method::Linear))
             .iter()
             .map(|f| {
-                let (a, b, u) = (f.key_a, f.key_b, f.t);
-                let h = times[b] - times[a];
-                let (u2, u3) = (u * u, u * u * u);
-                let c = [
-                    2.0 * u3 - 3.0 * u2 + 1.0,
-                    u3 - 2.0 * u2 + u,
-                    3.0 * u2 - 2.0 * u3,
-                    u3 - u2,
-                ];
-                let w: Vec<f64> = (0..mesh.target_count)
-                    .map(|i| {
-                        c[0] * weights[a][i]
-                            + c[1] * h * eases[a][1][i]
-                            + c[2] * weights[b][i]
-                            + c[3] * h * eases[b][0][i]
-                    })
-                    .collect();
+                let w = clip_weights(track, f);
                 welded.weld(&mesh.pose(&w))
             })
             .collect()
@@ -931,23 +935,7 @@ fn eased_stretches_are_the_clip_s_own() {
         let opts = TweenOptions::new(method, Timing::Tweens(5));
         let (welded, frames) = track_frames_welded(mesh, &track, &opts).unwrap();
         for (f, at) in plan(&times, &opts).iter().enumerate() {
-            let (a, b, u) = (at.key_a, at.key_b, at.t);
-            let h = times[b] - times[a];
-            let (u2, u3) = (u * u, u * u * u);
-            let c = [
-                2.0 * u3 - 3.0 * u2 + 1.0,
-                u3 - 2.0 * u2 + u,
-                3.0 * u2 - 2.0 * u3,
-                u3 - u2,
-            ];
-            let w: Vec<f64> = (0..2)
-                .map(|i| {
-                    c[0] * weights[a][i]
-                        + c[1] * h * eases[a][1][i]
-                        + c[2] * weights[b][i]
-                        + c[3] * h * eases[b][0][i]
-                })
-                .collect();
+            let w = clip_weights(&track, at);
             let want = welded.weld(&mesh.pose(&w));
             let off = max_dist(&frames[f], &want);
             assert!(off <= 1e-6 * d, "{method:?} frame {f}: {off} of {d}");
