@@ -353,7 +353,7 @@ impl<'a> MeshTween<'a> {
         let t0 = Instant::now();
         if self.reads_keys(fs) {
             let count = keys.welded.len();
-            let eased = track.eases.is_some();
+            let eased = track.eased(a, b);
             self.hold(
                 track,
                 keys,
@@ -489,12 +489,11 @@ impl<'a> MeshTween<'a> {
             out.stats.side_by_side = true;
             let t0 = Instant::now();
             // The keys the run's segments read.
-            let eased = track.eases.is_some();
             let mut need: Vec<usize> = (run.iter())
                 .filter(|r| self.reads_keys(&frames[(*r).clone()]))
                 .flat_map(|r| {
-                    let f = &frames[r.start];
-                    keys_read(self.opts.method, count, f.key_a, f.key_b, eased)
+                    let (a, b) = (frames[r.start].key_a, frames[r.start].key_b);
+                    keys_read(self.opts.method, count, a, b, track.eased(a, b))
                 })
                 .collect();
             need.sort_unstable();
@@ -785,7 +784,7 @@ pub fn frames_at(
                     track.times.len(),
                     ab.0,
                     ab.1,
-                    track.eases.is_some(),
+                    track.eased(ab.0, ab.1),
                 ),
             );
             let s = tween

@@ -73,6 +73,14 @@ pub struct Track {
     pub eases: Option<Vec<[Vec<f64>; 2]>>,
 }
 
+impl Track {
+    /// Whether the segment from key a to b follows the track's eases: two keys at different
+    /// times of a clip that has them.
+    pub fn eased(&self, a: usize, b: usize) -> bool {
+        self.eases.is_some() && b == a + 1 && self.times[b] > self.times[a]
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum TrackOrigin {
     /// Keys made from the targets; a new animation will drive these nodes.

@@ -240,8 +240,8 @@ impl KeyTrack<'_> {
 }
 
 /// The keys the segment from key a to key b of a track of `count` keys reads by `method` (see
-/// [`KeyTrack::segment`]), ascending: what a caller holding only some of a long track's keys
-/// must hold for it.
+/// [`KeyTrack::segment`]; `eased`: the segment follows its track's eases, `Track::eased`),
+/// ascending: what a caller holding only some of a long track's keys must hold for it.
 pub fn keys_read(method: Method, count: usize, a: usize, b: usize, eased: bool) -> Vec<usize> {
     match method {
         Method::Spline if b == a + 1 && !eased => spline::keys_read(count, a),
