@@ -72,8 +72,8 @@ pub struct Summary {
     /// factorization, spline window.
     pub setup_parts: [f64; 4],
     /// What a user should know of the input or the output, one line each: keys held (STEP)
-    /// that were tweened, eases (CUBICSPLINE) that `seed`'s frames between keys do not follow, what a
-    /// USD output could not carry (textures USD cannot read).
+    /// that were tweened, eases (CUBICSPLINE) that `seed`'s frames between keys do not follow,
+    /// what a USD output could not carry (textures USD cannot read).
     pub warnings: Vec<String>,
     /// The compression extensions the input was decoded from (its size is the compressed one).
     pub input_compressed: Vec<String>,
