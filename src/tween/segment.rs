@@ -179,7 +179,8 @@ impl Eases<'_> {
 impl KeyTrack<'_> {
     /// The segment from key a to key b (a + 1, or a itself for a track with a single key time)
     /// by `method`; with `wrap`, `spline` wraps around a track whose last key repeats its
-    /// first. `pattern` is required by `seed` and `spline`.
+    /// first; with the track's eases, `spline` and `linear` follow them (see [`Eases`]).
+    /// `pattern` is required by `seed` and `spline`.
     pub fn segment(&self, method: Method, wrap: bool, a: usize, b: usize) -> Result<Segment> {
         let (keys, pattern, triangles) = (self.keys, self.pattern, self.triangles);
         if let Some(eases) = self.eases_of(method, a, b) {
@@ -202,9 +203,7 @@ impl KeyTrack<'_> {
             m => Segment::new(m, keys[a].clone(), keys[b].clone(), pattern, triangles),
         }
     }
-}
 
-impl KeyTrack<'_> {
     /// The eases the segment from key a to b by `method` follows: `spline` and `linear`
     /// between two keys at different times of a clip that has them.
     fn eases_of(&self, method: Method, a: usize, b: usize) -> Option<&Eases<'_>> {
