@@ -74,11 +74,17 @@ pub struct Track {
 }
 
 impl Track {
-    /// Whether the segment from key a to b follows the track's eases: two keys at different
-    /// times of a clip that has them.
+    /// Whether the segment from key a to b follows the track's eases: a clip that has them,
+    /// and a segment [`eases_apply`] to.
     pub fn eased(&self, a: usize, b: usize) -> bool {
-        self.eases.is_some() && b == a + 1 && self.times[b] > self.times[a]
+        self.eases.is_some() && eases_apply(&self.times, a, b)
     }
+}
+
+/// Whether a segment from key a to b of keys at `times` can follow eases: two consecutive
+/// keys at different times (not a cut, not a track's single key time).
+pub fn eases_apply(times: &[f64], a: usize, b: usize) -> bool {
+    b == a + 1 && times[b] > times[a]
 }
 
 #[derive(Clone, Debug, PartialEq)]

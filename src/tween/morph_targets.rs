@@ -19,7 +19,7 @@
 use super::base;
 use super::compact::{compact, sparse_pays, CompactFigures, CompactOptions, Compacted, Stored};
 use super::frames::{MeshFrames, PrimitiveFrames, TrackFrames};
-use super::keys::{MorphMesh, OtherDeltas, Primitive, TrackOrigin};
+use super::keys::{eases_apply, MorphMesh, OtherDeltas, Primitive, TrackOrigin};
 use super::options::Layout;
 use super::schedule::FrameAt;
 use crate::gltf::{
@@ -530,9 +530,9 @@ fn blended(track: &TrackFrames, f: &FrameAt) -> Vec<f64> {
     let (ka, kb) = (f.key_a, f.key_b);
     let (a, b) = (&track.keys[ka], &track.keys[kb]);
     let t = f.t.clamp(0.0, 1.0);
-    let h = track.times[kb] - track.times[ka];
     match &track.eases {
-        Some(eases) if h > 0.0 => {
+        Some(eases) if eases_apply(&track.times, ka, kb) => {
+            let h = track.times[kb] - track.times[ka];
             let c = super::spline::hermite(t);
             let (out_a, in_b) = (&eases[ka][1], &eases[kb][0]);
             (a.iter().zip(b).zip(out_a.iter().zip(in_b)))

@@ -1,6 +1,8 @@
 //! Interpolate stage: one segment (a pair of consecutive keys) of a track, ready to produce
-//! frames by the chosen [`Method`]: [`SeedSegment`], [`SplineSegment`], or vertex lerp.
+//! frames by the chosen [`Method`]: [`SeedSegment`], [`SplineSegment`], or vertex lerp (a
+//! clip's own cubic where it eases, see [`Eases`]).
 
+use super::keys::eases_apply;
 use super::options::Method;
 use super::seed::SeedSegment;
 use super::solve::{Pattern, MAX_BLOCK};
@@ -204,11 +206,11 @@ impl KeyTrack<'_> {
         }
     }
 
-    /// The eases the segment from key a to b by `method` follows: `spline` and `linear`
-    /// between two keys at different times of a clip that has them.
+    /// The eases the segment from key a to b by `method` follows: `spline` and `linear`, where
+    /// the clip has them and they apply (`keys::eases_apply`).
     fn eases_of(&self, method: Method, a: usize, b: usize) -> Option<&Eases<'_>> {
         let eased = matches!(method, Method::Spline | Method::Linear);
-        (self.eases.as_ref()).filter(|_| eased && b == a + 1 && self.times[b] > self.times[a])
+        (self.eases.as_ref()).filter(|_| eased && eases_apply(self.times, a, b))
     }
 
     /// The segment from key a to b = a + 1 following `eases` (see [`Eases`]).
