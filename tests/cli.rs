@@ -801,17 +801,19 @@ fn held_keys_are_tweened_and_said_so() {
 }
 
 #[test]
-fn eased_keys_are_said_to_be_left_only_by_the_seed_method() {
+fn eased_keys_the_seed_cannot_follow_are_said() {
     // The Flamingo converted with CUBICSPLINE weights (every tangent zero: an ease out of and
-    // into each key): `spline` and `linear` follow the eases between keys and say nothing;
-    // `seed` does not follow them and the summary says so once; with no frame between keys
+    // into each key): every method follows the eases between keys and says nothing. With key
+    // 1's weights made key 0's and an ease out of key 0 toward target 2, the clip leaves key 0
+    // and comes back: `seed`, whose path is the keys' chord, holds still there, and the
+    // summary says so once; `spline` and `linear` follow; with no frame between keys
     // (`--rate 10`, its keys' own rate) nothing is said.
     let Some(fx) = fixtures() else { return };
     let dir = tempfile::tempdir().unwrap();
     let input = fx.join("morph-keyframes/Flamingo_cubicspline_unindexed.glb");
-    let eased = |extra: &[&str]| -> Vec<String> {
+    let eased = |input: &Path, extra: &[&str]| -> Vec<String> {
         let out = out_in(&dir, "f.glb");
-        let mut args = vec!["tween", s(&input), "-o", s(&out)];
+        let mut args = vec!["tween", s(input), "-o", s(&out)];
         args.extend_from_slice(extra);
         let r = run_ok(&args);
         let err = String::from_utf8_lossy(&r.stderr).into_owned();
@@ -820,20 +822,29 @@ fn eased_keys_are_said_to_be_left_only_by_the_seed_method() {
             .map(str::to_owned)
             .collect()
     };
-    let warned = eased(&["--method", "seed"]);
+    for method in ["seed", "spline", "linear"] {
+        assert!(eased(&input, &["--method", method]).is_empty(), "{method}");
+    }
+    // Sampler 0's output (accessor 18): per key, 14 in-tangents, 14 values, 14 out-tangents.
+    let (a, b) = (out_in(&dir, "a.glb"), out_in(&dir, "b.glb"));
+    let back = out_in(&dir, "back.glb");
+    poke_f32(&input, &a, 18, 42 + 14, 0, 1.0);
+    poke_f32(&a, &b, 18, 42 + 14 + 1, 0, 0.0);
+    poke_f32(&b, &back, 18, 28 + 2, 0, 3.0);
+    let warned = eased(&back, &["--method", "seed"]);
     assert_eq!(warned.len(), 1, "{warned:?}");
     assert!(
         warned[0].starts_with("warning: ")
-            && warned[0].contains("animation \"KeyAction\" eases its weights")
+            && warned[0].contains("animation \"KeyAction\" eases its weights away from and back to keys of the same weights")
             && warned[0].contains("the seed method"),
         "{warned:?}"
     );
     for extra in [
-        &[][..],
+        &["--method", "spline"][..],
         &["--method", "linear"],
         &["--method", "seed", "--rate", "10"],
     ] {
-        assert!(eased(extra).is_empty(), "{extra:?}");
+        assert!(eased(&back, extra).is_empty(), "{extra:?}");
     }
 }
 

@@ -8,7 +8,7 @@ use super::frames::{
     SIDE_BY_SIDE_TRIANGLES,
 };
 use super::keys::{
-    find_morph_meshes, meshes_without_weights_animation, KeyOptions, KeySource, MorphMesh,
+    find_morph_meshes, meshes_without_weights_animation, KeyOptions, KeySource, MorphMesh, Track,
     TrackOrigin,
 };
 use super::morph_targets::{apply_frames, Applied, MostTargets};
@@ -72,7 +72,7 @@ pub struct Summary {
     /// factorization, spline window.
     pub setup_parts: [f64; 4],
     /// What a user should know of the input or the output, one line each: keys held (STEP)
-    /// that were tweened, eases (CUBICSPLINE) that `seed`'s frames between keys do not follow,
+    /// that were tweened, eases (CUBICSPLINE) that `seed`'s frames hold still through,
     /// what a USD output could not carry (textures USD cannot read).
     pub warnings: Vec<String>,
     /// The compression extensions the input was decoded from (its size is the compressed one).
@@ -726,9 +726,9 @@ fn left_as_authored(doc: &Document, meshes: &[MorphMesh], keys: KeySource) -> Ve
 /// that holds each key until the next (STEP interpolation, as exporters write stepped or
 /// "constant" keys: an animator's blocking pass) is tweened as poses like any other, so the
 /// output moves where the input held; a clip whose keys carry CUBICSPLINE tangents (eases in
-/// and out) is followed by `spline` and `linear` (see `segment::Eases`) but not by `seed`,
-/// which gets its frames between keys with no eases (said only where frames are written
-/// between the clip's keys).
+/// and out) is followed by every method (see `segment::Eases`), but `seed` takes its path
+/// between two keys at the eases' pace, so between keys of the same weights that the eases
+/// leave and come back to it holds still (said only where it writes frames there).
 fn between_keys(doc: &Document, meshes: &[MorphMesh], opts: &TweenOptions) -> Vec<String> {
     let interpolation =
         |a: usize, s: usize| doc.json["animations"][a]["samplers"][s]["interpolation"].as_str();
@@ -743,7 +743,8 @@ fn between_keys(doc: &Document, meshes: &[MorphMesh], opts: &TweenOptions) -> Ve
             Some("STEP") => Some((a, "STEP")),
             Some("CUBICSPLINE")
                 if opts.method == Method::Seed
-                    && plan(&t.times, opts).iter().any(|f| f.key().is_none()) =>
+                    && (plan(&t.times, opts).iter())
+                        .any(|f| f.key().is_none() && still_between(t, f.key_a, f.key_b)) =>
             {
                 Some((a, "CUBICSPLINE"))
             }
@@ -760,9 +761,21 @@ fn between_keys(doc: &Document, meshes: &[MorphMesh], opts: &TweenOptions) -> Ve
                     "{path}: animation {name} holds its weights from key to key (STEP interpolation); its keys are tweened as poses, so the output moves between them"
                 ),
                 _ => format!(
-                    "{path}: animation {name} eases its weights between keys (CUBICSPLINE tangents); the seed method's frames between keys do not follow the eases (spline and linear do)"
+                    "{path}: animation {name} eases its weights away from and back to keys of the same weights (CUBICSPLINE tangents); the seed method's frames hold still between such keys (spline and linear follow the eases)"
                 ),
             }
         })
         .collect()
+}
+
+/// Whether `track` eases away from key a and back into key b (a + 1) where the two keys have
+/// the same weights: a motion the seed's path, a key's pose to the other's, cannot follow.
+fn still_between(track: &Track, a: usize, b: usize) -> bool {
+    let Some(eases) = &track.eases else {
+        return false;
+    };
+    let moving = |m: &[f64]| m.iter().any(|&m| m != 0.0);
+    track.eased(a, b)
+        && track.weights[a] == track.weights[b]
+        && (moving(&eases[a][1]) || moving(&eases[b][0]))
 }

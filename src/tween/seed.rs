@@ -8,6 +8,7 @@ use super::gradient::{
     axis_angle_matrix, deformation, frame_above, gradient_operator, polar_of_triangle, quat_log,
 };
 use super::solve::{in_order, scatter, Pattern, Placement};
+use super::spline::hermite_beyond;
 use anyhow::Result;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -47,6 +48,8 @@ pub struct SeedSegment {
     placement: Placement,
     centroid0: Vec<DVec3>,
     centroid1: Vec<DVec3>,
+    /// A clip's pace between the keys (see [`SeedSegment::paced`]), or none: its own.
+    pace: Option<[f64; 2]>,
 }
 
 impl SeedSegment {
@@ -94,7 +97,31 @@ impl SeedSegment {
             placement,
             centroid0,
             centroid1,
+            pace: None,
         })
+    }
+
+    /// The segment taken at a clip's pace: the frame at `t` is the seed's at `s(t)`, the cubic
+    /// Hermite from 0 to 1 with `slopes` (per unit of t) at its ends, and past them the line
+    /// along the end's slope (see [`hermite_beyond`]). For an eased segment these are the
+    /// slopes of the clip's blend along the keys' chord (see `segment::Eases`): zero tangents
+    /// give an ease out and in (`s = 3t^2 - 2t^3`), the chord's slopes the seed's own pace.
+    pub fn paced(self, slopes: [f64; 2]) -> SeedSegment {
+        SeedSegment {
+            pace: Some(slopes),
+            ..self
+        }
+    }
+
+    /// Where on the seed's path from key a to b the frame at `t` lies.
+    fn at(&self, t: f64) -> f64 {
+        match self.pace {
+            Some([ma, mb]) => {
+                let w = hermite_beyond(t, true);
+                w[1] * ma + w[2] + w[3] * mb
+            }
+            None => t,
+        }
     }
 
     pub fn factor_nonzeros(&self) -> usize {
@@ -107,6 +134,7 @@ impl SeedSegment {
     }
 
     pub fn frame(&self, t: f64) -> Vec<DVec3> {
+        let t = self.at(t);
         let (rhs, centroids) = self.system(t);
         self.placement
             .place(rhs, &centroids, |v| self.x0[v].lerp(self.x1[v], t))
@@ -115,6 +143,7 @@ impl SeedSegment {
     /// The frames at `ts`, their solves sharing passes over the factor (see
     /// [`Placement::place_block`]): the same positions as [`SeedSegment::frame`] at each.
     pub fn frames(&self, ts: &[f64]) -> Vec<Vec<DVec3>> {
+        let ts: Vec<f64> = ts.iter().map(|&t| self.at(t)).collect();
         let (rhs, centroids): (Vec<_>, Vec<_>) = ts.iter().map(|&t| self.system(t)).unzip();
         self.placement
             .place_block(rhs, &centroids, |f, v| self.x0[v].lerp(self.x1[v], ts[f]))

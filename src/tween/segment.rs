@@ -1,6 +1,6 @@
 //! Interpolate stage: one segment (a pair of consecutive keys) of a track, ready to produce
-//! frames by the chosen [`Method`]: [`SeedSegment`], [`SplineSegment`], or vertex lerp (a
-//! clip's own cubic where it eases, see [`Eases`]).
+//! frames by the chosen [`Method`]: [`SeedSegment`], [`SplineSegment`], or vertex lerp; each
+//! follows a clip's eases where it has them (see [`Eases`]).
 
 use super::keys::eases_apply;
 use super::options::Method;
@@ -119,7 +119,7 @@ pub struct KeyTrack<'a> {
     pub times: &'a [f64],
     pub pattern: Option<&'a Pattern>,
     pub triangles: &'a [[u32; 3]],
-    /// A CUBICSPLINE clip's eases, which `spline` and `linear` follow between keys.
+    /// A CUBICSPLINE clip's eases, which every method follows between keys.
     pub eases: Option<Eases<'a>>,
 }
 
@@ -129,7 +129,8 @@ pub struct KeyTrack<'a> {
 /// out-tangent and b's in-tangent, decomposed as keys are (so the tangent it gives the
 /// rotations and stretches is the derivative of the clip's own motion there, to about that
 /// step); `linear` from the targets blended by the tangents (the clip's blend at every time,
-/// exactly: a pose is linear in the weights).
+/// exactly: a pose is linear in the weights); `seed`, whose path from a to b is fixed, takes
+/// it at the pace of those tangents along the keys' chord ([`SeedSegment::paced`]).
 pub struct Eases<'a> {
     /// Each key's weights (the track's) and in- and out-tangents, weights per second.
     pub weights: &'a [Vec<f64>],
@@ -181,11 +182,11 @@ impl Eases<'_> {
 impl KeyTrack<'_> {
     /// The segment from key a to key b (a + 1, or a itself for a track with a single key time)
     /// by `method`; with `wrap`, `spline` wraps around a track whose last key repeats its
-    /// first; with the track's eases, `spline` and `linear` follow them (see [`Eases`]).
+    /// first; with the track's eases, the segment follows them (see [`Eases`]).
     /// `pattern` is required by `seed` and `spline`.
     pub fn segment(&self, method: Method, wrap: bool, a: usize, b: usize) -> Result<Segment> {
         let (keys, pattern, triangles) = (self.keys, self.pattern, self.triangles);
-        if let Some(eases) = self.eases_of(method, a, b) {
+        if let Some(eases) = self.eases_of(a, b) {
             return self.eased(eases, method, a, b);
         }
         match method {
@@ -206,22 +207,31 @@ impl KeyTrack<'_> {
         }
     }
 
-    /// The eases the segment from key a to b by `method` follows: `spline` and `linear`, where
-    /// the clip has them and they apply (`keys::eases_apply`).
-    fn eases_of(&self, method: Method, a: usize, b: usize) -> Option<&Eases<'_>> {
-        let eased = matches!(method, Method::Spline | Method::Linear);
-        (self.eases.as_ref()).filter(|_| eased && eases_apply(self.times, a, b))
+    /// The eases the segment from key a to b follows, where the clip has them and they apply
+    /// (`keys::eases_apply`).
+    fn eases_of(&self, a: usize, b: usize) -> Option<&Eases<'_>> {
+        (self.eases.as_ref()).filter(|_| eases_apply(self.times, a, b))
     }
 
     /// The segment from key a to b = a + 1 following `eases` (see [`Eases`]).
     fn eased(&self, eases: &Eases, method: Method, a: usize, b: usize) -> Result<Segment> {
         let h = self.times[b] - self.times[a];
         let (xa, xb) = (&self.keys[a], &self.keys[b]);
-        if method == Method::Linear {
-            return Ok(Segment::Eased {
-                tangents: eases.slopes(a, b, h),
-                x: [xa.clone(), xb.clone()],
-            });
+        match method {
+            Method::Linear => {
+                return Ok(Segment::Eased {
+                    tangents: eases.slopes(a, b, h),
+                    x: [xa.clone(), xb.clone()],
+                })
+            }
+            Method::Seed => {
+                let pace = along_chord(xa, xb, eases.slopes(a, b, h));
+                let (pattern, triangles) = (self.pattern, self.triangles);
+                let pattern = pattern.expect("the seed method needs the mesh's pattern");
+                let seed = SeedSegment::new(xa.clone(), xb.clone(), pattern, triangles)?;
+                return Ok(Segment::Seed(Box::new(seed.paced(pace))));
+            }
+            Method::Spline => {}
         }
         let e = EASE_STEP * h;
         let [before, after] = eases.outside(a, b, e);
@@ -238,6 +248,19 @@ impl KeyTrack<'_> {
             track.segment(1)?.straight_beyond(),
         )))
     }
+}
+
+/// The slopes (per unit of the segment) of the positions' own `tangents` at a and b along the
+/// chord from `xa` to `xb`, as fractions of it (summed over the vertices, so each weighs by how
+/// far it moves): the pace at which [`SeedSegment::paced`] takes the seed's path. Keys that
+/// do not differ give the seed's own pace (slopes 1): its frames hold still there.
+fn along_chord(xa: &[DVec3], xb: &[DVec3], tangents: [Vec<DVec3>; 2]) -> [f64; 2] {
+    let chord: Vec<DVec3> = xa.iter().zip(xb).map(|(a, b)| *b - *a).collect();
+    let length2: f64 = chord.iter().map(|d| d.length_squared()).sum();
+    if length2 <= 0.0 || !length2.is_finite() {
+        return [1.0; 2];
+    }
+    tangents.map(|t| t.iter().zip(&chord).map(|(t, d)| t.dot(*d)).sum::<f64>() / length2)
 }
 
 /// The keys the segment from key a to key b of a track of `count` keys reads by `method` (see
