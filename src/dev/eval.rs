@@ -8,6 +8,11 @@
 //! * `poscr`: Catmull-Rom on vertex positions (uniform in key index, centripetal is not used);
 //! * `seed`: the seed method between the two kept keys;
 //! * `spline`: the C1 gradient-space spline over all kept keys.
+//!
+//! A clip's eases (CUBICSPLINE tangents) are left out: they are the clip's motion at each key
+//! toward its neighbours, which a kept key no longer has (the Flamingo's conversion stops at
+//! every key; kept with them, every other key would be a stop), so each method predicts from
+//! the kept poses and their times alone.
 
 use crate::gltf::Document;
 use crate::tween::{
