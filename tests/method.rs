@@ -899,6 +899,8 @@ fn eased_keys_are_followed_between_them() {
 /// y: each triangle's stretch is affine in the weights, and a cubic of its keys' stretches and
 /// slopes is the clip's own), `spline` following the eases gives the clip's poses at every
 /// frame, for tangents of any size and sign: the eases' slopes at the keys are taken whole.
+/// With one target (the clip moving along each segment's chord) `seed` at the eases' pace
+/// does too.
 #[test]
 fn eased_stretches_are_the_clip_s_own() {
     use inbetween::tween::{plan, Track};
@@ -930,17 +932,29 @@ fn eased_stretches_are_the_clip_s_own() {
         weights: weights.clone(),
         eases: Some(eases.clone()),
     };
-    let d = common::diag(&mesh.primitives[0].base);
-    for method in [Method::Linear, Method::Spline] {
-        let opts = TweenOptions::new(method, Timing::Tweens(5));
-        let (welded, frames) = track_frames_welded(mesh, &track, &opts).unwrap();
-        for (f, at) in plan(&times, &opts).iter().enumerate() {
-            let w = clip_weights(&track, at);
-            let want = welded.weld(&mesh.pose(&w));
-            let off = max_dist(&frames[f], &want);
-            assert!(off <= 1e-6 * d, "{method:?} frame {f}: {off} of {d}");
+    // Every frame of `track` by each of `methods` is the clip's pose at its time.
+    let plays_the_clip = |mesh: &MorphMesh, track: &Track, methods: &[Method], what: &str| {
+        let d = common::diag(&mesh.primitives[0].base);
+        for &method in methods {
+            let opts = TweenOptions::new(method, Timing::Tweens(5));
+            let (welded, frames) = track_frames_welded(mesh, track, &opts).unwrap();
+            for (f, at) in plan(&times, &opts).iter().enumerate() {
+                let w = clip_weights(track, at);
+                let want = welded.weld(&mesh.pose(&w));
+                let off = max_dist(&frames[f], &want);
+                assert!(
+                    off <= 1e-6 * d,
+                    "{what}, {method:?} frame {f}: {off} of {d}"
+                );
+            }
         }
-    }
+    };
+    plays_the_clip(
+        mesh,
+        &track,
+        &[Method::Linear, Method::Spline],
+        "two targets",
+    );
     // One target: the clip moves along the chord between its keys, so `seed`, taking its path
     // at the eases' pace, gives the clip's poses too.
     let (_dir, path) = write_keys(s.clone(), vec![along(1.6, 0.6)]);
@@ -957,19 +971,8 @@ fn eased_stretches_are_the_clip_s_own() {
                 .collect(),
         ),
     };
-    for method in [Method::Seed, Method::Linear, Method::Spline] {
-        let opts = TweenOptions::new(method, Timing::Tweens(5));
-        let (welded, frames) = track_frames_welded(mesh, &track, &opts).unwrap();
-        for (f, at) in plan(&times, &opts).iter().enumerate() {
-            let w = clip_weights(&track, at);
-            let want = welded.weld(&mesh.pose(&w));
-            let off = max_dist(&frames[f], &want);
-            assert!(
-                off <= 1e-6 * d,
-                "one target, {method:?} frame {f}: {off} of {d}"
-            );
-        }
-    }
+    let every = [Method::Seed, Method::Linear, Method::Spline];
+    plays_the_clip(mesh, &track, &every, "one target");
 }
 
 /// The Flamingo's CUBICSPLINE conversion (every tangent zero: a stop at every key), its frames
