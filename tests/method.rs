@@ -801,7 +801,8 @@ fn clip_weights(track: &inbetween::tween::Track, f: &inbetween::tween::FrameAt) 
 /// ease out of and into each key; with each segment's chord slope, the frames of the same keys
 /// played LINEAR); by `spline` from the clip's own motion at the keys: with every tangent zero
 /// the frames a quarter of a segment from its keys lie about the cubic's 0.156 of the way.
-/// Past the ends both go on along the end's tangent.
+/// Past the ends `linear`, `spline` and `seed` (at the eases' pace) go on along the end's
+/// tangent.
 #[test]
 fn eased_keys_are_followed_between_them() {
     use inbetween::tween::{plan, Track};
@@ -865,8 +866,12 @@ fn eased_keys_are_followed_between_them() {
     // Past the ends (`--extend-before`, `--extend-after`) the motion goes on along the clip's
     // tangent there: with eases, a stop, so the end keys' poses (where the cubic turns back).
     let (first, last) = (&lerped[0], &lerped[lerped.len() - 1]);
-    // (`spline`'s solve gives the key back to its per-triangle data's single precision.)
-    for (method, within) in [(Method::Linear, 1e-9), (Method::Spline, 1e-7)] {
+    // (The solves give the key back to about single precision: `spline`'s per-triangle data.)
+    for (method, within) in [
+        (Method::Linear, 1e-9),
+        (Method::Seed, 1e-7),
+        (Method::Spline, 1e-7),
+    ] {
         let mut o = opts(method);
         o.extend = [0.5, 0.5];
         let frames = track_frames_welded(mesh, &flat, &o).unwrap().1;
