@@ -494,7 +494,7 @@ fn every_material_feature(fx: &Path, out: &Path) {
         .as_array_mut()
         .unwrap()
         .push(serde_json::json!({"name": "unused", "emissiveFactor": [1, 1, 0]}));
-    // Material variants choosing it or the first (USD: left out, said; the materials written).
+    // Material variants choosing it or the first (USD: the root prim's variant set).
     json["extensionsUsed"]
         .as_array_mut()
         .unwrap()
@@ -532,7 +532,8 @@ fn close(v: &serde_json::Value, want: &[f64]) -> bool {
 /// the material named after its glTF one, every glTF material is written (used or not),
 /// every texture file resolves (inside the package for
 /// .usdz) to the bytes of its glTF image, and the inputs carry the glTF values; the KTX2
-/// texture is left out with a warning naming it, its material keeping the factor.
+/// texture is left out with a warning naming it, its material keeping the factor; material
+/// variants are a variant set on the root prim that binds each variant's materials.
 #[test]
 fn materials_and_textures_travel_to_usd() {
     let Some(fx) = fixtures() else { return };
@@ -634,10 +635,35 @@ fn materials_and_textures_travel_to_usd() {
                 stderr.contains("material 0 KHR_materials_sheen left out"),
                 "{what}: {stderr}"
             );
-            assert!(
-                stderr.contains("material variants \"day\", \"night\" (KHR_materials_variants) left out: each mesh bound to its default material"),
-                "{what}: {stderr}"
-            );
+            // The material variants: a variant set on the root prim, its selection the
+            // default (each mesh its own material, as glTF shows it with no variant chosen),
+            // "day" binding primitive 0 to material 0 ("red", its own), "night" to the
+            // unused one; primitive 1, mapped by neither, keeps its own in every variant.
+            assert!(!stderr.contains("variants"), "{what}: {stderr}");
+            let set = &looks["variants"]["materialVariant"];
+            assert_eq!(set["selection"], "default", "{what}");
+            let bound = |variant: &str, mesh: usize| -> String {
+                let path = meshes[mesh]["path"].as_str().unwrap();
+                set["bindings"][variant][path]
+                    .as_str()
+                    .unwrap_or("")
+                    .to_owned()
+            };
+            let own1 = meshes[1]["material"].as_str().unwrap();
+            for (variant, zero) in [("default", "red"), ("day", "red"), ("night", "unused")] {
+                let b0 = bound(variant, 0);
+                assert!(
+                    b0.ends_with(&format!("/Materials/{zero}")),
+                    "{what} {variant}: {b0}"
+                );
+                assert_eq!(bound(variant, 1), own1, "{what} {variant}");
+            }
+            let names = set["bindings"]
+                .as_object()
+                .unwrap()
+                .keys()
+                .collect::<Vec<_>>();
+            assert_eq!(names, ["day", "default", "night"], "{what}");
             let tex = |n: &str| &shader(&looks, &red(n))["inputs"];
             assert!(
                 close(&tex("BaseColor")["scale"], &[1.0, 0.5, 0.25, 0.8]),
@@ -1782,5 +1808,68 @@ fn a_blend_s_changing_morph_weights_are_named() {
         let err =
             String::from_utf8_lossy(&r.stderr).to_string() + &String::from_utf8_lossy(&r.stdout);
         assert_eq!(err.contains(line), said, "{}: {err}", input.display());
+    }
+}
+
+/// Material variants on material groups (two primitives drawing one vertex buffer: one Mesh,
+/// a GeomSubset each): each subset bound as its variants map it, one with no material of its
+/// own unbound but where a variant maps it; a variant no primitive maps binds nothing new.
+#[test]
+fn material_variants_bind_subsets_as_the_gltf_maps_them() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("groups.glb");
+    edited_glb(&sample("flag_wave.glb"), &input, |j| {
+        let materials = j["materials"].as_array_mut().unwrap();
+        let red = materials.len();
+        materials.push(serde_json::json!({"name": "red"}));
+        materials.push(serde_json::json!({"name": "blue"}));
+        j["extensionsUsed"] = serde_json::json!(["KHR_materials_variants"]);
+        j["extensions"] = serde_json::json!({"KHR_materials_variants":
+            {"variants": [{"name": "day"}, {"name": "night mode"}, {"name": "spare"}]}});
+        let prims = j["meshes"][0]["primitives"].as_array_mut().unwrap();
+        let mut second = prims[0].clone();
+        second.as_object_mut().unwrap().remove("material");
+        prims[0]["extensions"] = serde_json::json!({"KHR_materials_variants": {"mappings": [
+            {"material": red, "variants": [0]}, {"material": red + 1, "variants": [1]}]}});
+        second["extensions"] = serde_json::json!({"KHR_materials_variants":
+            {"mappings": [{"material": red, "variants": [1]}]}});
+        prims.push(second);
+    });
+    let own = inbetween::gltf::Document::open(&input).unwrap().json["materials"][0]["name"]
+        .as_str()
+        .unwrap()
+        .to_owned();
+    for fmt in FORMATS {
+        let out = dir.path().join(format!("groups.{fmt}"));
+        tween_quietly(&input, &out, &["--fps", "4"]);
+        let what = format!("groups.{fmt}");
+        let looks: serde_json::Value = serde_json::from_slice(&run_tool(
+            &python,
+            "usd_looks.py",
+            &[out.as_os_str()],
+            &what,
+        ))
+        .unwrap();
+        assert_eq!(looks["validation"], serde_json::json!([]), "{what}");
+        let set = &looks["variants"]["materialVariant"];
+        assert_eq!(set["selection"], "default", "{what}");
+        let subsets: Vec<&str> = (looks["subsets"].as_array().unwrap().iter())
+            .map(|s| s["path"].as_str().unwrap())
+            .collect();
+        assert_eq!(subsets.len(), 2, "{what}");
+        let ends = |variant: &str, subset: usize| -> String {
+            let m = set["bindings"][variant][subsets[subset]].as_str().unwrap();
+            m.rsplit('/').next().unwrap_or("").to_owned()
+        };
+        for (variant, want) in [
+            ("default", [own.as_str(), ""]),
+            ("day", ["red", ""]),
+            ("night_mode", ["blue", "red"]),
+            ("spare", [own.as_str(), ""]),
+        ] {
+            let got = [ends(variant, 0), ends(variant, 1)];
+            assert_eq!(got, want, "{what} {variant}");
+        }
     }
 }

@@ -3,7 +3,10 @@
  "subsets": [{"path", "material", "faces"}],
  "materials": [{"path", "surface"}],
  "shaders": [{"path", "id", "inputs": {name: value | {"connect": "PATH.outputs:x"}},
-              "files": {name: {"resolved", "bytes", "crc32"}}}]}
+              "files": {name: {"resolved", "bytes", "crc32"}}}],
+ "variants": {set: {"selection", "bindings": {variant: {mesh or subset path: material}}}}}
+"variants" holds the default prim's variant sets, each variant selected in turn (in the
+session layer) and every Mesh's and GeomSubset's bound material then.
 Values are JSON numbers, lists or strings; asset files are opened through Ar (so inside a
 .usdz too) and given by size and CRC-32. Prims in path order.
 
@@ -71,4 +74,25 @@ for prim in sorted(stage.Traverse(), key=lambda p: str(p.GetPath())):
                 data = bytes(asset.GetBuffer()) if asset else b""
                 files[i.GetBaseName()] = {"resolved": resolved, "bytes": len(data), "crc32": zlib.crc32(data)}
         out["shaders"].append({"path": str(prim.GetPath()), "id": sh.GetShaderId(), "inputs": inputs, "files": files})
+
+
+def bindings():
+    return {
+        str(p.GetPath()): str(UsdShade.MaterialBindingAPI(p).ComputeBoundMaterial()[0].GetPath())
+        for p in stage.Traverse()
+        if p.IsA(UsdGeom.Mesh) or p.IsA(UsdGeom.Subset)
+    }
+
+
+out["variants"] = {}
+root = stage.GetDefaultPrim()
+stage.SetEditTarget(stage.GetSessionLayer())
+for name in root.GetVariantSets().GetNames() if root else []:
+    vset = root.GetVariantSets().GetVariantSet(name)
+    selection = vset.GetVariantSelection()
+    chosen = {}
+    for v in vset.GetVariantNames():
+        vset.SetVariantSelection(v)
+        chosen[v] = bindings()
+    out["variants"][name] = {"selection": selection, "bindings": chosen}
 print(json.dumps(out))

@@ -44,6 +44,11 @@ pub struct Look {
     pub textures: Vec<Texture>,
     /// What could not be carried, one line each (for the summary's warnings).
     pub left_out: Vec<String>,
+    /// The material variants (`KHR_materials_variants`) the root prim's variant set chooses
+    /// between (see `stage::VARIANT_SET`), by glTF variant index, and the variant it selects,
+    /// every primitive with its own material (`default`, unless a glTF variant is so named).
+    pub variants: Vec<String>,
+    pub default_variant: String,
 }
 
 /// One `Material` prim: its shaders, the surface first.
@@ -99,24 +104,25 @@ pub struct Texture {
 /// The surface shader's name in every material.
 pub const SURFACE: &str = "PreviewSurface";
 
-/// The material variants of `KHR_materials_variants` that a primitive maps, named in a line:
-/// the stage binds each mesh its default material (its variants' materials are written among
-/// the unbound ones), and has no variant sets choosing between them.
-fn variants_left_out(json: &Json) -> Option<String> {
+/// The names of the material variants of `KHR_materials_variants` (identifiers, unique), in
+/// the file's order, where a primitive maps one (none otherwise), and the default variant's.
+fn variant_names(json: &Json) -> (Vec<String>, String) {
     let variants = arr(&json["extensions"]["KHR_materials_variants"], "variants");
     let mapped = (arr(json, "meshes").iter())
         .flat_map(|m| arr(m, "primitives"))
         .any(|p| !arr(&p["extensions"]["KHR_materials_variants"], "mappings").is_empty());
-    if variants.is_empty() || !mapped {
-        return None;
+    if !mapped {
+        return (Vec::new(), String::new());
     }
-    let names: Vec<String> = (variants.iter().enumerate())
-        .map(|(i, v)| crate::gltf::quoted_name(v, || i.to_string()))
+    let mut taken = HashMap::new();
+    let names = (variants.iter().enumerate())
+        .map(|(i, v)| {
+            let name = v["name"].as_str().filter(|n| !n.is_empty());
+            let name = name.map_or_else(|| format!("variant{i}"), identifier);
+            super::stage::unique(name, &mut taken)
+        })
         .collect();
-    Some(format!(
-        "material variants {} (KHR_materials_variants) left out: each mesh bound to its default material, the variants' materials written unbound",
-        crate::gltf::listed(&names)
-    ))
+    (names, super::stage::unique("default".into(), &mut taken))
 }
 
 /// Builds the look as primitives ask for materials.
@@ -184,7 +190,7 @@ impl<'a> LookBuilder<'a> {
                 self.material(m, false)?;
             }
         }
-        self.look.left_out.extend(variants_left_out(&self.doc.json));
+        (self.look.variants, self.look.default_variant) = variant_names(&self.doc.json);
         Ok(Look { scope, ..self.look })
     }
 

@@ -17,6 +17,8 @@
 //!   `doubleSided` from the material;
 //! * primitives with the same attributes and targets (material groups drawing one vertex
 //!   buffer) are one Mesh with a `GeomSubset` per primitive bound to its material;
+//! * material variants (`KHR_materials_variants`) are a variant set on the root prim
+//!   ([`VARIANT_SET`]) whose variants bind the primitives they map ([`Variants`]);
 //! * a node's camera or `KHR_lights_punctual` light is a `Camera` or UsdLux light prim below
 //!   its Xform ([`super::camera_light`]);
 //! * a node drawing its mesh once per instance (`EXT_mesh_gpu_instancing`, as gltfpack `-mi`
@@ -60,6 +62,8 @@ pub struct MeshPrim {
     pub double_sided: bool,
     /// The Material prim bound to it (in [`Stage::look`]'s scope).
     pub material: Option<String>,
+    /// The Material prims its material variants bind instead (see [`Variants`]).
+    pub variants: Variants,
     /// For an animated primitive: where its frames come from and their time codes.
     pub animation: Option<Animation>,
     /// For a skinned primitive: its skin, which each sample's points are baked with.
@@ -84,7 +88,24 @@ pub struct Subset {
     pub name: String,
     pub faces: Vec<i32>,
     pub material: Option<String>,
+    pub variants: Variants,
 }
+
+/// The materials of a primitive that `KHR_materials_variants` maps (empty for one it does
+/// not): its own Material prim (then not bound on the prim itself, where it would win over
+/// every variant: a variant's opinion is weaker than the prim's own) and the one each variant
+/// (by index into [`Look::variants`]) binds instead; a variant it does not map binds its own.
+/// Written as over prims in the root prim's variant set [`VARIANT_SET`] (see
+/// [`variant_overs`]).
+#[derive(Default)]
+pub struct Variants {
+    pub own: Option<String>,
+    pub mapped: Vec<(usize, String)>,
+}
+
+/// The variant set on the root prim that chooses between a file's material variants; it
+/// selects [`Look::default_variant`], every mesh with its own material (glTF's default).
+pub const VARIANT_SET: &str = "materialVariant";
 
 /// What a primitive drawing another's vertex buffer adds to it: its faces and its look.
 struct Faces {
@@ -93,6 +114,7 @@ struct Faces {
     /// Its material's base colour (vertex colours are the buffer's, already read).
     color: Option<DisplayColor>,
     material: Option<String>,
+    variants: Variants,
     double_sided: bool,
 }
 
@@ -108,6 +130,7 @@ impl MeshPrim {
                 name: self.name.clone(),
                 faces: (0..start as i32).collect(),
                 material: self.material.take(),
+                variants: std::mem::take(&mut self.variants),
             });
         }
         let count = other.indices.len() / 3;
@@ -115,6 +138,7 @@ impl MeshPrim {
             name: other.name,
             faces: (start as i32..(start + count) as i32).collect(),
             material: other.material,
+            variants: other.variants,
         });
         // USD's fallback display colour where a primitive has none.
         const GRAY: [f32; 3] = [0.5; 3];
@@ -619,6 +643,55 @@ impl Ctx<'_> {
         Ok((color, double_sided, prim))
     }
 
+    /// The binding of primitive `p` whose own Material prim is `material`: on the prim, or
+    /// with its variants where it has some (see [`Variants`]).
+    fn variants(
+        &self,
+        material: Option<String>,
+        p: &Value,
+        vertex_colors: bool,
+    ) -> Result<(Option<String>, Variants)> {
+        let mapped = self.variant_looks(p, vertex_colors)?;
+        Ok(match mapped.is_empty() {
+            true => (material, Variants::default()),
+            false => (
+                None,
+                Variants {
+                    own: material,
+                    mapped,
+                },
+            ),
+        })
+    }
+
+    /// Primitive `p`'s material variants: the Material prim of each variant its
+    /// `KHR_materials_variants` mappings name (made on first use, as [`Ctx::look_of`]'s), in
+    /// variant order; a variant mapped twice takes its first mapping, one the file does not
+    /// declare is passed over.
+    fn variant_looks(&self, p: &Value, vertex_colors: bool) -> Result<Vec<(usize, String)>> {
+        let declared = arr(
+            &self.doc.json["extensions"]["KHR_materials_variants"],
+            "variants",
+        );
+        let mut out = Vec::new();
+        for mapping in arr(&p["extensions"]["KHR_materials_variants"], "mappings") {
+            let Some(m) = mapping["material"].as_u64() else {
+                continue;
+            };
+            let Some(prim) = (self.look.borrow_mut()).material(m as usize, vertex_colors)? else {
+                continue;
+            };
+            for v in arr(mapping, "variants").iter().filter_map(Value::as_u64) {
+                let v = v as usize;
+                if v < declared.len() && !out.iter().any(|(x, _)| *x == v) {
+                    out.push((v, prim.clone()));
+                }
+            }
+        }
+        out.sort();
+        Ok(out)
+    }
+
     /// The instances of a node with a mesh and `EXT_mesh_gpu_instancing` ([`gltf::instances`]),
     /// in single precision, or `None`.
     fn instances(&self, index: usize) -> Result<Option<Instances>> {
@@ -678,11 +751,13 @@ impl Ctx<'_> {
                 let indices = triangle_indices(doc, p, first.points.len(), &what)?;
                 let vertex_colors = p["attributes"]["COLOR_0"].is_u64();
                 let (color, double_sided, material) = self.look_of(p, vertex_colors)?;
+                let (material, variants) = self.variants(material, p, vertex_colors)?;
                 first.absorb(Faces {
                     name: base_name,
                     indices,
                     color: color.map(DisplayColor::Constant),
                     material,
+                    variants,
                     double_sided,
                 });
                 continue;
@@ -713,6 +788,7 @@ impl Ctx<'_> {
                 None => None,
             };
             let (color, double_sided, material) = self.look_of(p, rgba.is_some())?;
+            let (material, variants) = self.variants(material, p, rgba.is_some())?;
             let (color, opacity) = match rgba {
                 Some((v, comps)) => {
                     let c = |x: f64| x.clamp(0.0, 1.0) as f32;
@@ -813,6 +889,7 @@ impl Ctx<'_> {
                 opacity,
                 double_sided,
                 material,
+                variants,
                 animation,
                 skin,
                 subsets: Vec::new(),
@@ -906,6 +983,94 @@ fn prims_of(stage: &Stage) -> Vec<&MeshPrim> {
     }
     let mut out = Vec::new();
     stage.children.iter().for_each(|c| walk(c, &mut out));
+    out
+}
+
+/// The over prims below the root prim that one material variant holds: a path of prim names
+/// down to each Mesh or GeomSubset it binds, and the Material prim it binds there.
+#[derive(Default)]
+pub struct Overs {
+    pub children: Vec<(String, Overs)>,
+    pub material: Option<String>,
+}
+
+impl Overs {
+    fn insert(&mut self, path: &[String], material: &str) {
+        let Some((first, rest)) = path.split_first() else {
+            self.material = Some(material.to_owned());
+            return;
+        };
+        let at = match self.children.iter().position(|(n, _)| n == first) {
+            Some(at) => at,
+            None => {
+                self.children.push((first.clone(), Overs::default()));
+                self.children.len() - 1
+            }
+        };
+        self.children[at].1.insert(rest, material);
+    }
+}
+
+/// Each material variant of the stage with the over prims it binds: the default one
+/// ([`Look::default_variant`], every primitive's own material), then the file's
+/// ([`Look::variants`]); none where the file has none.
+pub fn variant_overs(stage: &Stage) -> Vec<(String, Overs)> {
+    // The default variant first, then the file's.
+    fn bind(out: &mut [(String, Overs)], path: &[String], variants: &Variants) {
+        if variants.mapped.is_empty() {
+            return;
+        }
+        for (v, (_, overs)) in out.iter_mut().enumerate() {
+            let mapped = v.checked_sub(1).and_then(|v| {
+                let at = variants.mapped.iter().find(|(x, _)| *x == v);
+                at.map(|(_, m)| m)
+            });
+            if let Some(material) = mapped.or(variants.own.as_ref()) {
+                overs.insert(path, material);
+            }
+        }
+    }
+    fn walk(p: &Prim, path: &mut Vec<String>, out: &mut [(String, Overs)]) {
+        match p {
+            Prim::Xform { name, children, .. } => {
+                path.push(name.clone());
+                children.iter().for_each(|c| walk(c, path, out));
+                path.pop();
+            }
+            Prim::Instancer(i) => {
+                path.push(i.name.clone());
+                path.push(PROTOTYPES.into());
+                walk(&i.prototype, path, out);
+                path.pop();
+                i.children.iter().for_each(|c| walk(c, path, out));
+                path.pop();
+            }
+            Prim::Mesh(m) => {
+                path.push(m.name.clone());
+                bind(out, path, &m.variants);
+                for sub in &m.subsets {
+                    path.push(sub.name.clone());
+                    bind(out, path, &sub.variants);
+                    path.pop();
+                }
+                path.pop();
+            }
+            Prim::Plain(_) => {}
+        }
+    }
+    let look = &stage.look;
+    if look.variants.is_empty() {
+        return Vec::new();
+    }
+    let mut out: Vec<(String, Overs)> = (std::iter::once(&look.default_variant))
+        .chain(&look.variants)
+        .map(|v| (v.clone(), Overs::default()))
+        .collect();
+    let mut path = Vec::new();
+    stage
+        .children
+        .iter()
+        .for_each(|c| walk(c, &mut path, &mut out));
     out
 }
 

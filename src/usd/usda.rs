@@ -5,8 +5,9 @@
 use super::camera_light::Plain;
 use super::material::{Material, Value, SURFACE};
 use super::stage::{
-    animated, extent, for_each_sample, for_each_skin_sample, Animation, DisplayColor, FrameSource,
-    MeshPrim, Prim, Sample, SampleKey, Stage, PROTOTYPES,
+    animated, extent, for_each_sample, for_each_skin_sample, variant_overs, Animation,
+    DisplayColor, FrameSource, MeshPrim, Overs, Prim, Sample, SampleKey, Stage, PROTOTYPES,
+    VARIANT_SET,
 };
 use crate::output::{naming, Outputs};
 use anyhow::Result;
@@ -33,7 +34,18 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
     writeln!(out, "    upAxis = \"Y\"")?;
     writeln!(out, ")")?;
     writeln!(out)?;
-    writeln!(out, "def Xform \"{}\"", stage.root)?;
+    let variants = variant_overs(stage);
+    if variants.is_empty() {
+        writeln!(out, "def Xform \"{}\"", stage.root)?;
+    } else {
+        writeln!(out, "def Xform \"{}\" (", stage.root)?;
+        writeln!(out, "    prepend variantSets = \"{VARIANT_SET}\"")?;
+        let default = &stage.look.default_variant;
+        writeln!(out, "    variants = {{")?;
+        writeln!(out, "        string {VARIANT_SET} = \"{default}\"")?;
+        writeln!(out, "    }}")?;
+        writeln!(out, ")")?;
+    }
     writeln!(out, "{{")?;
     let look = &stage.look;
     let scope = format!("/{}/{}", stage.root, look.scope);
@@ -48,7 +60,43 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
         }
         writeln!(out, "    }}")?;
     }
+    if !variants.is_empty() {
+        writeln!(out, "    variantSet \"{VARIANT_SET}\" = {{")?;
+        for (name, overs) in &variants {
+            writeln!(out, "        \"{name}\" {{")?;
+            for (child, o) in &overs.children {
+                write_over(child, o, out, "            ", &scope)?;
+            }
+            writeln!(out, "        }}")?;
+        }
+        writeln!(out, "    }}")?;
+    }
     writeln!(out, "}}")?;
+    Ok(())
+}
+
+/// An over prim of a material variant (see [`Overs`]), indented by `pad`: the binding it
+/// gives, then the over prims below it.
+fn write_over(name: &str, o: &Overs, out: &mut dyn Write, pad: &str, scope: &str) -> Result<()> {
+    match &o.material {
+        Some(_) => {
+            writeln!(out, "{pad}over \"{name}\" (")?;
+            writeln!(
+                out,
+                "{pad}    prepend apiSchemas = [\"MaterialBindingAPI\"]"
+            )?;
+            writeln!(out, "{pad})")?;
+        }
+        None => writeln!(out, "{pad}over \"{name}\"")?,
+    }
+    writeln!(out, "{pad}{{")?;
+    if let Some(material) = &o.material {
+        writeln!(out, "{pad}    rel material:binding = <{scope}/{material}>")?;
+    }
+    for (child, o) in &o.children {
+        write_over(child, o, out, &format!("{pad}    "), scope)?;
+    }
+    writeln!(out, "{pad}}}")?;
     Ok(())
 }
 

@@ -14,8 +14,9 @@
 use super::camera_light::Plain;
 use super::material::{Look, Shader, Value, SURFACE};
 use super::stage::{
-    animated, extent, for_each_sample, for_each_skin_sample, Animation, DisplayColor, FrameSource,
-    MeshPrim, Prim, Sample, SampleKey, Stage, PROTOTYPES,
+    animated, extent, for_each_sample, for_each_skin_sample, variant_overs, Animation,
+    DisplayColor, FrameSource, MeshPrim, Overs, Prim, Sample, SampleKey, Stage, PROTOTYPES,
+    VARIANT_SET,
 };
 use anyhow::Result;
 use std::collections::HashMap;
@@ -40,10 +41,12 @@ const T_VEC2F: u64 = 20;
 const T_VEC3F: u64 = 24;
 const T_VEC4F: u64 = 28;
 const T_TOKEN_LIST_OP: u64 = 32;
+const T_STRING_LIST_OP: u64 = 33;
 const T_PATH_LIST_OP: u64 = 34;
 const T_TOKEN_VECTOR: u64 = 41;
 const T_SPECIFIER: u64 = 42;
 const T_VARIABILITY: u64 = 44;
+const T_VARIANT_SELECTION_MAP: u64 = 45;
 const T_TIME_SAMPLES: u64 = 46;
 const T_DOUBLE_VECTOR: u64 = 48;
 
@@ -52,6 +55,8 @@ const SPEC_ATTRIBUTE: u32 = 1;
 const SPEC_PRIM: u32 = 6;
 const SPEC_PSEUDO_ROOT: u32 = 7;
 const SPEC_RELATIONSHIP: u32 = 8;
+const SPEC_VARIANT: u32 = 10;
+const SPEC_VARIANT_SET: u32 = 11;
 
 // List-op header bits (SdfListOp in a crate file).
 const LIST_EXPLICIT: u8 = 1;
@@ -77,6 +82,8 @@ enum Val<'a> {
     Double(f64),
     Bool(bool),
     Specifier,
+    /// The `over` specifier (a prim spec that only adds opinions).
+    Over,
     Uniform,
     TokenVector(Vec<String>),
     Tokens(Vec<&'a str>),
@@ -96,6 +103,10 @@ enum Val<'a> {
     Paths(Vec<usize>),
     /// Tokens prepended to a list (`prepend apiSchemas = [...]`).
     PrependTokens(Vec<&'a str>),
+    /// Strings prepended to a list (`prepend variantSets = [...]`).
+    PrependStrings(Vec<&'a str>),
+    /// A prim's variant selections: (variant set, variant).
+    Selections(Vec<(&'a str, &'a str)>),
 }
 
 /// A path in the spec tree: its parent's index and its element (prim name or property name).
@@ -159,19 +170,10 @@ impl<W: Write + Seek> Writer<W> {
     fn value(&mut self, v: Val) -> Result<u64> {
         Ok(match v {
             Val::Token(t) => rep_inline(T_TOKEN, self.token(t) as u64),
-            Val::String(s) => {
-                let t = self.token(s);
-                let i = match self.strings.iter().position(|&x| x == t) {
-                    Some(i) => i,
-                    None => {
-                        self.strings.push(t);
-                        self.strings.len() - 1
-                    }
-                };
-                rep_inline(T_STRING, i as u64)
-            }
+            Val::String(s) => rep_inline(T_STRING, self.string(s) as u64),
             Val::Bool(b) => rep_inline(T_BOOL, b as u64),
             Val::Specifier => rep_inline(T_SPECIFIER, 0), // def
+            Val::Over => rep_inline(T_SPECIFIER, 1),
             Val::Uniform => rep_inline(T_VARIABILITY, 1),
             Val::Double(d) => {
                 let at = self.pos;
@@ -251,7 +253,40 @@ impl<W: Write + Seek> Writer<W> {
                 }
                 rep_heap(T_TOKEN_LIST_OP, at, false)
             }
+            Val::PrependStrings(items) => {
+                let idx: Vec<u32> = items.iter().map(|s| self.string(s)).collect();
+                let at = self.pos;
+                self.bytes(&[LIST_HAS_PREPENDED])?;
+                self.u64(idx.len() as u64)?;
+                for i in idx {
+                    self.bytes(&i.to_le_bytes())?;
+                }
+                rep_heap(T_STRING_LIST_OP, at, false)
+            }
+            Val::Selections(pairs) => {
+                let idx: Vec<[u32; 2]> = (pairs.iter())
+                    .map(|(set, v)| [self.string(set), self.string(v)])
+                    .collect();
+                let at = self.pos;
+                self.u64(idx.len() as u64)?;
+                for i in idx.iter().flatten() {
+                    self.bytes(&i.to_le_bytes())?;
+                }
+                rep_heap(T_VARIANT_SELECTION_MAP, at, false)
+            }
         })
+    }
+
+    /// The index of string `s` in the STRINGS section (added unless it is there).
+    fn string(&mut self, s: &str) -> u32 {
+        let t = self.token(s);
+        match self.strings.iter().position(|&x| x == t) {
+            Some(i) => i as u32,
+            None => {
+                self.strings.push(t);
+                self.strings.len() as u32 - 1
+            }
+        }
     }
 
     /// A single vector value (not an array) of type `ty`, in the heap.
@@ -706,6 +741,65 @@ impl<W: Write + Seek> Writer<W> {
         self.prim_spec(me, "Shader", props, vec![])
     }
 
+    /// The root prim's variant set of material variants (see [`variant_overs`]), with the
+    /// over prims each variant holds; returns the root prim's fields that name and select it
+    /// (none where the stage has no variants).
+    fn variant_set(&mut self, stage: &Stage, top: usize) -> Result<Vec<u32>> {
+        let variants = variant_overs(stage);
+        if variants.is_empty() {
+            return Ok(Vec::new());
+        }
+        let set = self.path(Some(top), &format!("{{{VARIANT_SET}=}}"), false);
+        let names = variants.iter().map(|(n, _)| n.clone()).collect();
+        let children = self.field("variantChildren", Val::TokenVector(names))?;
+        self.spec(set, vec![children], SPEC_VARIANT_SET);
+        for (name, overs) in &variants {
+            let v = self.path(Some(top), &format!("{{{VARIANT_SET}={name}}}"), false);
+            let mut fields = Vec::new();
+            if !overs.children.is_empty() {
+                let kids = overs.children.iter().map(|(n, _)| n.clone()).collect();
+                fields.push(self.field("primChildren", Val::TokenVector(kids))?);
+            }
+            self.spec(v, fields, SPEC_VARIANT);
+            for (child, o) in &overs.children {
+                self.over(v, child, o)?;
+            }
+        }
+        let default = stage.look.default_variant.as_str();
+        Ok(vec![
+            self.field("variantSetNames", Val::PrependStrings(vec![VARIANT_SET]))?,
+            self.field(
+                "variantSelection",
+                Val::Selections(vec![(VARIANT_SET, default)]),
+            )?,
+            self.field(
+                "variantSetChildren",
+                Val::TokenVector(vec![VARIANT_SET.into()]),
+            )?,
+        ])
+    }
+
+    /// An over prim `name` under `parent` in a variant (see [`Overs`]): the binding it gives
+    /// and the over prims below it.
+    fn over(&mut self, parent: usize, name: &str, o: &Overs) -> Result<()> {
+        let me = self.path(Some(parent), name, false);
+        let mut props = Vec::new();
+        let mut fields = vec![self.field("specifier", Val::Over)?];
+        fields.extend(self.bind(me, &o.material, &mut props)?);
+        for (child, c) in &o.children {
+            self.over(me, child, c)?;
+        }
+        if !props.is_empty() {
+            fields.push(self.field("properties", Val::TokenVector(props))?);
+        }
+        if !o.children.is_empty() {
+            let kids = o.children.iter().map(|(n, _)| n.clone()).collect();
+            fields.push(self.field("primChildren", Val::TokenVector(kids))?);
+        }
+        self.spec(me, fields, SPEC_PRIM);
+        Ok(())
+    }
+
     fn raw_field(&mut self, name: &str, rep: u64) -> u32 {
         let key = (self.token(name), rep);
         let i = self.fields.len() as u32;
@@ -899,7 +993,8 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     if let Some(scope) = w.scope {
         w.look(&stage.look, scope)?;
     }
-    w.prim_spec(top, "Xform", vec![], children)?;
+    let variants = w.variant_set(stage, top)?;
+    w.prim_spec_with(top, "Xform", vec![], children, variants)?;
     let doc = format!("Written by inbetween {}", env!("CARGO_PKG_VERSION"));
     let fields = vec![
         w.field("defaultPrim", Val::Token(&stage.root))?,
