@@ -507,6 +507,14 @@ fn every_material_feature(fx: &Path, out: &Path) {
     write_glb(out, &json, &bin);
 }
 
+/// `tools/usd_looks.py`'s dump of USD file `file`, whose validation by usd-core must be clean.
+fn clean_looks(python: &Path, file: &Path, what: &str) -> serde_json::Value {
+    let out = run_tool(python, "usd_looks.py", &[file.as_os_str()], what);
+    let looks: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(looks["validation"], serde_json::json!([]), "{what}");
+    looks
+}
+
 /// The shader at `path` in a usd_looks.py dump.
 fn shader<'a>(looks: &'a serde_json::Value, path: &str) -> &'a serde_json::Value {
     looks["shaders"]
@@ -557,14 +565,7 @@ fn materials_and_textures_travel_to_usd() {
             let run = run_ok(&["tween", s(input), "-o", s(&out), "--fps", "2"]);
             let stderr = String::from_utf8_lossy(&run.stderr);
             let what = format!("{} .{fmt}", input.display());
-            let looks: serde_json::Value = serde_json::from_slice(&run_tool(
-                &python,
-                "usd_looks.py",
-                &[out.as_os_str()],
-                &what,
-            ))
-            .unwrap();
-            assert_eq!(looks["validation"], serde_json::json!([]), "{what}");
+            let looks = clean_looks(&python, &out, &what);
             // Every primitive bound to the material named after its glTF material.
             let prims = doc.json["meshes"][0]["primitives"].as_array().unwrap();
             let meshes = looks["meshes"].as_array().unwrap();
@@ -877,14 +878,7 @@ fn webp_textures_are_written_as_png() {
         let run = run_ok(&["tween", s(&webp), "-o", s(&out), "--fps", "2"]);
         let stderr = String::from_utf8_lossy(&run.stderr);
         assert!(!stderr.contains("left out"), "{format}: {stderr}");
-        let looks: serde_json::Value = serde_json::from_slice(&run_tool(
-            &python,
-            "usd_looks.py",
-            &[out.as_os_str()],
-            "webp",
-        ))
-        .unwrap();
-        assert_eq!(looks["validation"], serde_json::json!([]), "{format}");
+        let looks = clean_looks(&python, &out, "webp");
         assert_eq!(looks["materials"].as_array().unwrap().len(), 2);
         let readers: Vec<&serde_json::Value> = (looks["shaders"].as_array().unwrap())
             .iter()
@@ -1340,10 +1334,7 @@ fn material_groups_of_one_vertex_buffer_are_subsets_of_one_mesh() {
             (size as f64) < 1.05 * plain_size as f64,
             "{fmt}: {size} bytes against {plain_size}"
         );
-        let looks: serde_json::Value =
-            serde_json::from_slice(&run_tool(&python, "usd_looks.py", &[usd.as_os_str()], fmt))
-                .unwrap();
-        assert_eq!(looks["validation"], serde_json::json!([]), "{fmt}");
+        let looks = clean_looks(&python, &usd, fmt);
         let subsets = looks["subsets"].as_array().unwrap();
         assert_eq!(subsets.len(), 2, "{fmt}: {subsets:?}");
         let bound: Vec<&str> = subsets
@@ -1844,14 +1835,7 @@ fn material_variants_bind_subsets_as_the_gltf_maps_them() {
         let out = dir.path().join(format!("groups.{fmt}"));
         tween_quietly(&input, &out, &["--fps", "4"]);
         let what = format!("groups.{fmt}");
-        let looks: serde_json::Value = serde_json::from_slice(&run_tool(
-            &python,
-            "usd_looks.py",
-            &[out.as_os_str()],
-            &what,
-        ))
-        .unwrap();
-        assert_eq!(looks["validation"], serde_json::json!([]), "{what}");
+        let looks = clean_looks(&python, &out, &what);
         let set = &looks["variants"]["materialVariant"];
         assert_eq!(set["selection"], "default", "{what}");
         let subsets: Vec<&str> = (looks["subsets"].as_array().unwrap().iter())

@@ -245,23 +245,11 @@ impl<W: Write + Seek> Writer<W> {
             }
             Val::PrependTokens(names) => {
                 let idx: Vec<u32> = names.iter().map(|n| self.token(n)).collect();
-                let at = self.pos;
-                self.bytes(&[LIST_HAS_PREPENDED])?;
-                self.u64(idx.len() as u64)?;
-                for i in idx {
-                    self.bytes(&i.to_le_bytes())?;
-                }
-                rep_heap(T_TOKEN_LIST_OP, at, false)
+                self.prepended(T_TOKEN_LIST_OP, &idx)?
             }
             Val::PrependStrings(items) => {
                 let idx: Vec<u32> = items.iter().map(|s| self.string(s)).collect();
-                let at = self.pos;
-                self.bytes(&[LIST_HAS_PREPENDED])?;
-                self.u64(idx.len() as u64)?;
-                for i in idx {
-                    self.bytes(&i.to_le_bytes())?;
-                }
-                rep_heap(T_STRING_LIST_OP, at, false)
+                self.prepended(T_STRING_LIST_OP, &idx)?
             }
             Val::Selections(pairs) => {
                 let idx: Vec<[u32; 2]> = (pairs.iter())
@@ -275,6 +263,17 @@ impl<W: Write + Seek> Writer<W> {
                 rep_heap(T_VARIANT_SELECTION_MAP, at, false)
             }
         })
+    }
+
+    /// A list op of type `ty` holding only prepended items (token or string indices `idx`).
+    fn prepended(&mut self, ty: u64, idx: &[u32]) -> Result<u64> {
+        let at = self.pos;
+        self.bytes(&[LIST_HAS_PREPENDED])?;
+        self.u64(idx.len() as u64)?;
+        for i in idx {
+            self.bytes(&i.to_le_bytes())?;
+        }
+        Ok(rep_heap(ty, at, false))
     }
 
     /// The index of string `s` in the STRINGS section (added unless it is there).
