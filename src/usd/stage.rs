@@ -88,6 +88,7 @@ pub struct Subset {
     pub name: String,
     pub faces: Vec<i32>,
     pub material: Option<String>,
+    /// As [`MeshPrim::variants`], for this subset's primitive.
     pub variants: Variants,
 }
 
