@@ -994,10 +994,8 @@ fn the_seed_takes_its_path_at_the_eases_pace() {
     let eased = &mesh.tracks[0];
     assert!(eased.eases.is_some());
     let unpaced = Track {
-        origin: eased.origin.clone(),
-        times: eased.times.clone(),
-        weights: eased.weights.clone(),
         eases: None,
+        ..eased.clone()
     };
     let d = common::diag(&mesh.primitives[0].base);
     let off = |track: &Track, method| -> (f64, f64) {

@@ -2,7 +2,7 @@
 //! prepared once and its frames solved in parallel chunks, normals carried, and every frame
 //! handed on as per-primitive deltas from the base (streamed to the writer, or collected).
 
-use super::keys::{MorphMesh, Track, TrackOrigin};
+use super::keys::{MorphMesh, Track};
 use super::normals::{arc, carry, tangent_delta, Smoothing};
 use super::options::{Method, TweenOptions};
 use super::report::{FrameReport, MeshReport, Shape};
@@ -23,14 +23,10 @@ const RELEASE_MIN_VERTICES: usize = 100_000;
 
 /// Output of one track: its frames are `first..first + frames.len()` of the mesh's frames.
 pub struct TrackFrames {
-    pub origin: TrackOrigin,
+    /// The keys the frames are made from (their origin, times, authored weights and eases).
+    pub track: Track,
     pub first: usize,
     pub frames: Vec<FrameAt>,
-    /// The authored weights of each key, their times, and a CUBICSPLINE clip's tangents (see
-    /// [`Track::eases`]).
-    pub keys: Vec<Vec<f64>>,
-    pub times: Vec<f64>,
-    pub eases: Option<Vec<[Vec<f64>; 2]>>,
 }
 
 /// Per-primitive morph target deltas, one entry per output frame.
@@ -302,12 +298,9 @@ impl<'a> MeshTween<'a> {
         out.stats.keys += keys.welded.len();
         let frames = plan(&track.times, self.opts);
         out.tracks.push(TrackFrames {
-            origin: track.origin.clone(),
+            track: track.clone(),
             first: out.stats.frames,
             frames: frames.clone(),
-            keys: track.weights.clone(),
-            times: track.times.clone(),
-            eases: track.eases.clone(),
         });
         // Frames grouped by segment, each segment prepared once. A frame on a key is that key
         // as it is (nothing solved), and a segment whose frames are all keys is not prepared

@@ -61,6 +61,7 @@ pub struct OtherDeltas {
 }
 
 /// One key sequence for a mesh.
+#[derive(Clone)]
 pub struct Track {
     pub origin: TrackOrigin,
     /// Key times in seconds, non-decreasing.

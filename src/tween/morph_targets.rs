@@ -19,7 +19,7 @@
 use super::base;
 use super::compact::{compact, sparse_pays, CompactFigures, CompactOptions, Compacted, Stored};
 use super::frames::{MeshFrames, PrimitiveFrames, TrackFrames};
-use super::keys::{eases_apply, MorphMesh, OtherDeltas, Primitive, TrackOrigin};
+use super::keys::{MorphMesh, OtherDeltas, Primitive, TrackOrigin};
 use super::options::Layout;
 use super::schedule::FrameAt;
 use crate::gltf::{
@@ -131,7 +131,7 @@ impl Written<'_> {
             let mut w = vec![0.0f32; width];
             match *play {
                 Played::Key(k) => {
-                    for (o, x) in w.iter_mut().zip(&track.keys[k]) {
+                    for (o, x) in w.iter_mut().zip(&track.track.weights[k]) {
                         *o = *x as f32;
                     }
                 }
@@ -303,7 +303,7 @@ impl ClipShifts {
     }
 
     fn clip(track: &TrackFrames) -> Option<usize> {
-        match track.origin {
+        match track.track.origin {
             TrackOrigin::Animation { animation, .. } => Some(animation),
             TrackOrigin::Targets { .. } => None,
         }
@@ -526,12 +526,13 @@ fn new_targets(
 
 /// The authored weights at a frame of `track`: linear between its keys, or on a CUBICSPLINE
 /// clip's cubic through their tangents; held at the ends.
-fn blended(track: &TrackFrames, f: &FrameAt) -> Vec<f64> {
+fn blended(frames: &TrackFrames, f: &FrameAt) -> Vec<f64> {
+    let track = &frames.track;
     let (ka, kb) = (f.key_a, f.key_b);
-    let (a, b) = (&track.keys[ka], &track.keys[kb]);
+    let (a, b) = (&track.weights[ka], &track.weights[kb]);
     let t = f.t.clamp(0.0, 1.0);
     match &track.eases {
-        Some(eases) if eases_apply(&track.times, ka, kb) => {
+        Some(eases) if track.eased(ka, kb) => {
             let h = track.times[kb] - track.times[ka];
             let c = super::spline::hermite(t);
             let (out_a, in_b) = (&eases[ka][1], &eases[kb][0]);
@@ -832,7 +833,7 @@ fn animate_track(
         .collect();
     let times = increasing_f32(times);
     let input = key_times(out, &times, &mut edits.times);
-    match &track.origin {
+    match &track.track.origin {
         TrackOrigin::Animation {
             animation,
             sampler,
