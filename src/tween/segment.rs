@@ -217,36 +217,32 @@ impl KeyTrack<'_> {
     fn eased(&self, eases: &Eases, method: Method, a: usize, b: usize) -> Result<Segment> {
         let h = self.times[b] - self.times[a];
         let (xa, xb) = (&self.keys[a], &self.keys[b]);
+        let pattern = self.pattern;
         match method {
-            Method::Linear => {
-                return Ok(Segment::Eased {
-                    tangents: eases.slopes(a, b, h),
-                    x: [xa.clone(), xb.clone()],
-                })
-            }
+            Method::Linear => Ok(Segment::Eased {
+                tangents: eases.slopes(a, b, h),
+                x: [xa.clone(), xb.clone()],
+            }),
             Method::Seed => {
                 let pace = along_chord(xa, xb, eases.slopes(a, b, h));
-                let (pattern, triangles) = (self.pattern, self.triangles);
                 let pattern = pattern.expect("the seed method needs the mesh's pattern");
-                let seed = SeedSegment::new(xa.clone(), xb.clone(), pattern, triangles)?;
-                return Ok(Segment::Seed(Box::new(seed.paced(pace))));
+                let seed = SeedSegment::new(xa.clone(), xb.clone(), pattern, self.triangles)?;
+                Ok(Segment::Seed(Box::new(seed.paced(pace))))
             }
-            Method::Spline => {}
+            Method::Spline => {
+                let e = EASE_STEP * h;
+                let [before, after] = eases.outside(a, b, e);
+                // A track of the two keys and the poses just outside them, whose tangents are
+                // the slopes over those steps.
+                let (ta, tb) = (self.times[a], self.times[b]);
+                let keys = [before, xa.clone(), xb.clone(), after];
+                let times = [ta - e, ta, tb, tb + e];
+                let pattern = pattern.expect("the spline method needs the mesh's pattern");
+                let track = SplineTrack::new(&keys, &times, false, pattern, self.triangles)?;
+                let segment = track.stepped_ends().segment(1)?;
+                Ok(Segment::Spline(Box::new(segment.straight_beyond())))
+            }
         }
-        let e = EASE_STEP * h;
-        let [before, after] = eases.outside(a, b, e);
-        // A track of the two keys and the poses just outside them, whose tangents are the
-        // slopes over those steps.
-        let (ta, tb) = (self.times[a], self.times[b]);
-        let keys = [before, xa.clone(), xb.clone(), after];
-        let times = [ta - e, ta, tb, tb + e];
-        let pattern = self
-            .pattern
-            .expect("the spline method needs the mesh's pattern");
-        let track = SplineTrack::new(&keys, &times, false, pattern, self.triangles)?.stepped_ends();
-        Ok(Segment::Spline(Box::new(
-            track.segment(1)?.straight_beyond(),
-        )))
     }
 }
 
