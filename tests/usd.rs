@@ -1857,3 +1857,43 @@ fn material_variants_bind_subsets_as_the_gltf_maps_them() {
         }
     }
 }
+
+/// Names that are not USD identifiers (a Blender-style "flag.001", a space, a colon, a name
+/// in Japanese, two nodes of one name) are made identifiers and unique, and each prim shows
+/// the glTF name it was made from as its `displayName`, so that none is lost; a prim whose
+/// name is the glTF one, or an unnamed object's, has none. The names were lost before.
+#[test]
+fn names_usd_cannot_hold_are_kept_as_display_names() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("names.glb");
+    edited_glb(&sample("flag_wave.glb"), &input, |j| {
+        j["scenes"][0]["name"] = "Shot #1".into();
+        j["nodes"][0]["name"] = "flag.001".into();
+        j["nodes"][1]["name"] = "flag.001".into();
+        j["meshes"][0]["name"] = "旗 mesh".into();
+        j["materials"][0]["name"] = "Cloth: \"red\"".into();
+        j["meshes"][1].as_object_mut().unwrap().remove("name");
+    });
+    for fmt in ["usda", "usdc", "usdz"] {
+        let usd = dir.path().join(format!("out.{fmt}"));
+        tween_quietly(&input, &usd, &[]);
+        clean_usd_report(&python, &usd, fmt);
+        let names: serde_json::Value =
+            serde_json::from_slice(&run_tool(&python, "usd_names.py", &[usd.as_os_str()], fmt))
+                .unwrap();
+        let expect = serde_json::json!({
+            "/Shot__1": "Shot #1",
+            "/Shot__1/flag_001": "flag.001",
+            "/Shot__1/flag_001/__mesh": "旗 mesh",
+            "/Shot__1/flag_001_1": "flag.001",
+            "/Shot__1/flag_001_1/mesh1": null,
+            "/Shot__1/Materials": null,
+            "/Shot__1/Materials/Cloth___red_": "Cloth: \"red\"",
+            "/Shot__1/Materials/Cloth___red_/PreviewSurface": null,
+            "/Shot__1/Materials/pole_material": null,
+            "/Shot__1/Materials/pole_material/PreviewSurface": null,
+        });
+        assert_eq!(names, expect, "{fmt}");
+    }
+}

@@ -24,7 +24,7 @@
 //! ```
 
 use super::material::Value;
-use super::stage::identifier;
+use super::stage::{identifier, shown};
 use crate::gltf::{arr, quoted_name};
 use serde_json::Value as Json;
 use std::collections::HashMap;
@@ -47,6 +47,8 @@ pub type Attr = (&'static str, &'static str, Value);
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plain {
     pub name: String,
+    /// `displayName`: the camera's or light's glTF name where `name` is not it.
+    pub display: Option<String>,
     /// `Camera`, `DistantLight` or `SphereLight`.
     pub type_name: &'static str,
     /// API schemas applied (`prepend apiSchemas`): `ShapingAPI` for a spot light.
@@ -68,12 +70,16 @@ pub fn of_node(
     if let Some(c) = n["camera"].as_u64() {
         let cam = &json["cameras"][c as usize];
         match camera(cam) {
-            Some((type_name, attrs)) => out.push(Plain {
-                name: unique(cam["name"].as_str().unwrap_or("camera"), taken),
-                type_name,
-                api_schemas: Vec::new(),
-                attrs,
-            }),
+            Some((type_name, attrs)) => {
+                let name = unique(cam["name"].as_str().unwrap_or("camera"), taken);
+                out.push(Plain {
+                    display: shown(cam, &name),
+                    name,
+                    type_name,
+                    api_schemas: Vec::new(),
+                    attrs,
+                })
+            }
             None => say(
                 left_out,
                 format!(
@@ -97,6 +103,7 @@ pub fn of_node(
                     say(left_out, line);
                 }
                 p.name = unique(lit["name"].as_str().unwrap_or("light"), taken);
+                p.display = shown(lit, &p.name);
                 out.push(p);
             }
             None => say(
@@ -242,6 +249,7 @@ fn light(l: &Json) -> Option<Plain> {
     };
     finite(&attrs).then_some(Plain {
         name: String::new(),
+        display: None,
         type_name,
         api_schemas,
         attrs,

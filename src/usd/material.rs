@@ -54,6 +54,8 @@ pub struct Look {
 /// One `Material` prim: its shaders, the surface first.
 pub struct Material {
     pub name: String,
+    /// `displayName`: the glTF material's name where `name` is not it.
+    pub display: Option<String>,
     pub shaders: Vec<Shader>,
 }
 
@@ -174,8 +176,16 @@ impl<'a> LookBuilder<'a> {
             name = format!("{base}_{k}");
         }
         let shaders = self.shaders(m, mat, vertex_color)?;
+        // The vertex-colour copy shows the glTF name with the suffix its prim name has.
+        let display = (mat["name"].as_str())
+            .map(|n| match vertex_color {
+                true => format!("{n}_vertexColor"),
+                false => n.to_owned(),
+            })
+            .filter(|n| *n != name);
         self.look.materials.push(Material {
             name: name.clone(),
+            display,
             shaders,
         });
         self.made.insert((m, vertex_color), name.clone());

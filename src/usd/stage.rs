@@ -49,6 +49,8 @@ use std::sync::Arc;
 /// One Mesh prim to write.
 pub struct MeshPrim {
     pub name: String,
+    /// `displayName`: the glTF mesh's name where `name` is not it ([`shown`]).
+    pub display: Option<String>,
     pub points: Vec<[f32; 3]>,
     pub normals: Option<Vec<[f32; 3]>>,
     /// Texture coordinate sets: (`st`, TEXCOORD_0), (`st1`, TEXCOORD_1), ..., V flipped.
@@ -258,9 +260,13 @@ pub fn add(base: &[[f32; 3]], delta: &[[f32; 3]]) -> Vec<[f32; 3]> {
 }
 
 /// A prim of the stage tree.
+// One per node: an Xform's matrix inline (the common prim) over a box per Xform is the choice.
+#[allow(clippy::large_enum_variant)]
 pub enum Prim {
     Xform {
         name: String,
+        /// `displayName`: the glTF node's name where `name` is not it ([`shown`]).
+        display: Option<String>,
         matrix: Option<[f64; 16]>,
         /// The node's local transform at each time code a clip on the stage moves it (time
         /// order); empty when none does, and then `matrix` stands.
@@ -279,6 +285,8 @@ pub enum Prim {
 /// A PointInstancer prim: an instancing node, its instances and its mesh as the prototype.
 pub struct InstancerPrim {
     pub name: String,
+    /// As [`Prim::Xform`]'s.
+    pub display: Option<String>,
     pub matrix: Option<[f64; 16]>,
     pub motion: Vec<(f64, [f64; 16])>,
     pub instances: Instances,
@@ -300,6 +308,8 @@ pub const PROTOTYPES: &str = "Prototypes";
 /// The whole stage.
 pub struct Stage {
     pub root: String,
+    /// `displayName` of the root: the glTF scene's name where `root` is not it.
+    pub root_display: Option<String>,
     pub rate: f64,
     pub start: f64,
     pub end: f64,
@@ -324,6 +334,16 @@ pub fn identifier(s: &str) -> String {
         out.insert(0, '_');
     }
     out
+}
+
+/// The name a prim shows (its `displayName` metadata): the glTF object's own `name` where
+/// the prim's `written` name (made an identifier, unique among its siblings, a primitive's
+/// index added) is not it, so that no name the file gives is lost; none for an unnamed object
+/// or a name kept as it is. E.g. node "Face.001" is prim `Face_001` showing "Face.001".
+pub fn shown(gltf: &Value, written: &str) -> Option<String> {
+    (gltf["name"].as_str())
+        .filter(|n| *n != written)
+        .map(str::to_owned)
 }
 
 /// Unique names among siblings: the first keeps its name, later ones get `_1`, `_2`, ...
@@ -422,6 +442,7 @@ pub fn build_stage(
     };
     let mut stage = Stage {
         root: identifier(&root_name),
+        root_display: scene.and_then(|s| shown(s, &identifier(&root_name))),
         rate,
         start,
         end,
@@ -520,13 +541,16 @@ impl Ctx<'_> {
             Some(instances) => {
                 let mi = node["mesh"].as_u64().unwrap_or(0) as usize;
                 let mesh_name = self.doc.json["meshes"][mi]["name"].as_str();
+                let prototype_name = identifier(mesh_name.unwrap_or(&format!("mesh{mi}")));
                 let prototype = Prim::Xform {
-                    name: identifier(mesh_name.unwrap_or(&format!("mesh{mi}"))),
+                    display: shown(&self.doc.json["meshes"][mi], &prototype_name),
+                    name: prototype_name,
                     matrix: None,
                     motion: Vec::new(),
                     children: mesh,
                 };
                 Prim::Instancer(Box::new(InstancerPrim {
+                    display: shown(node, &name),
                     name,
                     matrix,
                     motion,
@@ -536,6 +560,7 @@ impl Ctx<'_> {
                 }))
             }
             None => Prim::Xform {
+                display: shown(node, &name),
                 name,
                 matrix,
                 motion,
@@ -881,6 +906,7 @@ impl Ctx<'_> {
             });
             let mut prim = MeshPrim {
                 name: base_name,
+                display: None,
                 still,
                 points: f32s(points),
                 normals: normals.map(f32s),
@@ -916,6 +942,7 @@ impl Ctx<'_> {
                     m.name = identifier(&mesh_name);
                 }
                 m.name = unique(std::mem::take(&mut m.name), taken);
+                m.display = shown(mesh, &m.name);
                 Prim::Mesh(Box::new(m))
             })
             .collect())

@@ -35,18 +35,15 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
     writeln!(out, ")")?;
     writeln!(out)?;
     let variants = variant_overs(stage);
-    if variants.is_empty() {
-        writeln!(out, "def Xform \"{}\"", stage.root)?;
-    } else {
-        writeln!(out, "def Xform \"{}\" (", stage.root)?;
-        writeln!(out, "    prepend variantSets = \"{VARIANT_SET}\"")?;
+    let mut meta: Vec<String> = display(&stage.root_display).into_iter().collect();
+    if !variants.is_empty() {
         let default = &stage.look.default_variant;
-        writeln!(out, "    variants = {{")?;
-        writeln!(out, "        string {VARIANT_SET} = \"{default}\"")?;
-        writeln!(out, "    }}")?;
-        writeln!(out, ")")?;
+        meta.push(format!("prepend variantSets = \"{VARIANT_SET}\""));
+        meta.push(format!(
+            "variants = {{\n        string {VARIANT_SET} = \"{default}\"\n    }}"
+        ));
     }
-    writeln!(out, "{{")?;
+    open_prim(out, "", "def Xform", &stage.root, &meta)?;
     let look = &stage.look;
     let scope = format!("/{}/{}", stage.root, look.scope);
     for c in &stage.children {
@@ -75,21 +72,64 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
     Ok(())
 }
 
+/// The metadata line of a prim bound to a material.
+const BINDING_API: &str = "prepend apiSchemas = [\"MaterialBindingAPI\"]";
+
+/// The `displayName` metadata line of a prim that shows another name than its own.
+fn display(name: &Option<String>) -> Option<String> {
+    name.as_ref()
+        .map(|n| format!("displayName = {}", string_text(n)))
+}
+
+/// A string in the text format: in double quotes, a quote, backslash or control character
+/// escaped (`\"`, `\\`, `\n`, `\xHH`); any other character as it is (the file is UTF-8).
+fn string_text(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if (c as u32) < 0x20 || c == '\u{7f}' => {
+                out.push_str(&format!("\\x{:02x}", c as u32))
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// The opening of a prim, indented by `pad`: `def Mesh "name"` (`head` the specifier and
+/// type), its metadata `meta` in parentheses when it has any, one a line, and the brace.
+fn open_prim(
+    out: &mut dyn Write,
+    pad: &str,
+    head: &str,
+    name: &str,
+    meta: &[String],
+) -> Result<()> {
+    if meta.is_empty() {
+        writeln!(out, "{pad}{head} \"{name}\"")?;
+    } else {
+        writeln!(out, "{pad}{head} \"{name}\" (")?;
+        for m in meta {
+            writeln!(out, "{pad}    {m}")?;
+        }
+        writeln!(out, "{pad})")?;
+    }
+    writeln!(out, "{pad}{{")?;
+    Ok(())
+}
+
 /// An over prim of a material variant (see [`Overs`]), indented by `pad`: the binding it
 /// gives, then the over prims below it.
 fn write_over(name: &str, o: &Overs, out: &mut dyn Write, pad: &str, scope: &str) -> Result<()> {
-    match &o.material {
-        Some(_) => {
-            writeln!(out, "{pad}over \"{name}\" (")?;
-            writeln!(
-                out,
-                "{pad}    prepend apiSchemas = [\"MaterialBindingAPI\"]"
-            )?;
-            writeln!(out, "{pad})")?;
-        }
-        None => writeln!(out, "{pad}over \"{name}\"")?,
-    }
-    writeln!(out, "{pad}{{")?;
+    let meta: Vec<String> = o.material.iter().map(|_| BINDING_API.to_owned()).collect();
+    open_prim(out, pad, "over", name, &meta)?;
     if let Some(material) = &o.material {
         writeln!(out, "{pad}    rel material:binding = <{scope}/{material}>")?;
     }
@@ -102,8 +142,8 @@ fn write_over(name: &str, o: &Overs, out: &mut dyn Write, pad: &str, scope: &str
 
 /// A Material prim (in the materials scope) and its shaders; `path` is its own path.
 fn write_material(m: &Material, out: &mut dyn Write, path: &str) -> Result<()> {
-    writeln!(out, "        def Material \"{}\"", m.name)?;
-    writeln!(out, "        {{")?;
+    let meta: Vec<String> = display(&m.display).into_iter().collect();
+    open_prim(out, "        ", "def Material", &m.name, &meta)?;
     writeln!(
         out,
         "            token outputs:surface.connect = <{path}/{SURFACE}.outputs:surface>"
@@ -163,12 +203,13 @@ fn write_prim(
     match prim {
         Prim::Xform {
             name,
+            display: shown,
             matrix,
             motion,
             children,
         } => {
-            writeln!(out, "{pad}def Xform \"{name}\"")?;
-            writeln!(out, "{pad}{{")?;
+            let meta: Vec<String> = display(shown).into_iter().collect();
+            open_prim(out, &pad, "def Xform", name, &meta)?;
             write_transform(out, &pad, matrix, motion)?;
             let path = format!("{path}/{name}");
             for c in children {
@@ -179,8 +220,8 @@ fn write_prim(
         Prim::Mesh(m) => write_mesh(m, out, &pad, scope, spool)?,
         Prim::Plain(p) => write_plain(p, out, &pad)?,
         Prim::Instancer(i) => {
-            writeln!(out, "{pad}def PointInstancer \"{}\"", i.name)?;
-            writeln!(out, "{pad}{{")?;
+            let meta: Vec<String> = display(&i.display).into_iter().collect();
+            open_prim(out, &pad, "def PointInstancer", &i.name, &meta)?;
             write_transform(out, &pad, &i.matrix, &i.motion)?;
             let path = format!("{path}/{}", i.name);
             let p = format!("{pad}    ");
@@ -221,19 +262,12 @@ fn write_prim(
 
 /// A camera or light: its type, API schemas and attributes.
 fn write_plain(p: &Plain, out: &mut dyn Write, pad: &str) -> Result<()> {
-    if p.api_schemas.is_empty() {
-        writeln!(out, "{pad}def {} \"{}\"", p.type_name, p.name)?;
-    } else {
+    let mut meta: Vec<String> = display(&p.display).into_iter().collect();
+    if !p.api_schemas.is_empty() {
         let schemas: Vec<String> = p.api_schemas.iter().map(|s| format!("{s:?}")).collect();
-        writeln!(out, "{pad}def {} \"{}\" (", p.type_name, p.name)?;
-        writeln!(
-            out,
-            "{pad}    prepend apiSchemas = [{}]",
-            schemas.join(", ")
-        )?;
-        writeln!(out, "{pad})")?;
+        meta.push(format!("prepend apiSchemas = [{}]", schemas.join(", ")));
     }
-    writeln!(out, "{pad}{{")?;
+    open_prim(out, pad, &format!("def {}", p.type_name), &p.name, &meta)?;
     for (name, ty, v) in &p.attrs {
         writeln!(out, "{pad}    {ty} {name} = {}", value_text(v))?;
     }
@@ -350,18 +384,9 @@ fn write_mesh(
     scope: &str,
     spool: &Spool,
 ) -> Result<()> {
-    match &m.material {
-        Some(_) => {
-            writeln!(out, "{pad}def Mesh \"{}\" (", m.name)?;
-            writeln!(
-                out,
-                "{pad}    prepend apiSchemas = [\"MaterialBindingAPI\"]"
-            )?;
-            writeln!(out, "{pad})")?;
-        }
-        None => writeln!(out, "{pad}def Mesh \"{}\"", m.name)?,
-    }
-    writeln!(out, "{pad}{{")?;
+    let mut meta: Vec<String> = display(&m.display).into_iter().collect();
+    meta.extend(m.material.iter().map(|_| BINDING_API.to_owned()));
+    open_prim(out, pad, "def Mesh", &m.name, &meta)?;
     let p = format!("{pad}    ");
     if let Some(material) = &m.material {
         writeln!(out, "{p}rel material:binding = <{scope}/{material}>")?;
@@ -435,15 +460,12 @@ fn write_mesh(
     }
     writeln!(out, "{p}uniform token subdivisionScheme = \"none\"")?;
     for sub in &m.subsets {
-        match &sub.material {
-            Some(_) => {
-                writeln!(out, "{p}def GeomSubset \"{}\" (", sub.name)?;
-                writeln!(out, "{p}    prepend apiSchemas = [\"MaterialBindingAPI\"]")?;
-                writeln!(out, "{p})")?;
-            }
-            None => writeln!(out, "{p}def GeomSubset \"{}\"", sub.name)?,
-        }
-        writeln!(out, "{p}{{")?;
+        let meta: Vec<String> = sub
+            .material
+            .iter()
+            .map(|_| BINDING_API.to_owned())
+            .collect();
+        open_prim(out, &p, "def GeomSubset", &sub.name, &meta)?;
         writeln!(out, "{p}    uniform token elementType = \"face\"")?;
         writeln!(out, "{p}    uniform token familyName = \"materialBind\"")?;
         let faces: Vec<String> = sub.faces.iter().map(i32::to_string).collect();

@@ -409,6 +409,7 @@ impl<W: Write + Seek> Writer<W> {
         match prim {
             Prim::Xform {
                 name,
+                display,
                 matrix,
                 motion,
                 children,
@@ -418,7 +419,9 @@ impl<W: Write + Seek> Writer<W> {
                 for c in children {
                     self.prim(c, me, frames)?;
                 }
-                self.prim_spec(me, "Xform", props, children.iter().map(prim_name).collect())
+                let kids = children.iter().map(prim_name).collect();
+                let extra = self.display(display)?;
+                self.prim_spec_with(me, "Xform", props, kids, extra)
             }
             Prim::Mesh(m) => self.mesh(m, parent, frames),
             Prim::Plain(p) => self.plain(p, parent),
@@ -458,7 +461,8 @@ impl<W: Write + Seek> Writer<W> {
                 let kids = std::iter::once(PROTOTYPES.to_string())
                     .chain(i.children.iter().map(prim_name))
                     .collect();
-                self.prim_spec(me, "PointInstancer", props, kids)
+                let extra = self.display(&i.display)?;
+                self.prim_spec_with(me, "PointInstancer", props, kids, extra)
             }
         }
     }
@@ -494,6 +498,13 @@ impl<W: Write + Seek> Writer<W> {
             "xformOp:transform".to_owned(),
             "xformOpOrder".to_owned(),
         ])
+    }
+
+    /// The `displayName` field of a prim that shows another name than its own (none else).
+    fn display(&mut self, name: &Option<String>) -> Result<Vec<u32>> {
+        (name.iter())
+            .map(|n| self.field("displayName", Val::String(n)))
+            .collect()
     }
 
     fn prim_spec(
@@ -619,7 +630,8 @@ impl<W: Write + Seek> Writer<W> {
         let v = self.field("default", Val::Token("none"))?;
         self.attribute(me, "subdivisionScheme", "token", vec![uniform, v])?;
         props.push("subdivisionScheme".into());
-        let extra = self.bind(me, &m.material, &mut props)?;
+        let mut extra = self.display(&m.display)?;
+        extra.extend(self.bind(me, &m.material, &mut props)?);
         for sub in &m.subsets {
             let at = self.path(Some(me), &sub.name, false);
             let mut props = Vec::new();
@@ -673,7 +685,9 @@ impl<W: Write + Seek> Writer<W> {
                 self.shader(s, mp)?;
             }
             let children = m.shaders.iter().map(|s| s.name.clone()).collect();
-            self.prim_spec(mp, "Material", vec!["outputs:surface".into()], children)?;
+            let props = vec!["outputs:surface".into()];
+            let extra = self.display(&m.display)?;
+            self.prim_spec_with(mp, "Material", props, children, extra)?;
         }
         let names = look.materials.iter().map(|m| m.name.clone()).collect();
         self.prim_spec(scope, "Scope", vec![], names)
@@ -704,7 +718,7 @@ impl<W: Write + Seek> Writer<W> {
             self.attribute(me, name, ty, vec![f])?;
             props.push(name.to_string());
         }
-        let mut extra = Vec::new();
+        let mut extra = self.display(&p.display)?;
         if !p.api_schemas.is_empty() {
             let schemas = Val::PrependTokens(p.api_schemas.clone());
             extra.push(self.field("apiSchemas", schemas)?);
@@ -992,8 +1006,9 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     if let Some(scope) = w.scope {
         w.look(&stage.look, scope)?;
     }
-    let variants = w.variant_set(stage, top)?;
-    w.prim_spec_with(top, "Xform", vec![], children, variants)?;
+    let mut extra = w.display(&stage.root_display)?;
+    extra.extend(w.variant_set(stage, top)?);
+    w.prim_spec_with(top, "Xform", vec![], children, extra)?;
     let doc = format!("Written by inbetween {}", env!("CARGO_PKG_VERSION"));
     let fields = vec![
         w.field("defaultPrim", Val::Token(&stage.root))?,
