@@ -1897,3 +1897,66 @@ fn names_usd_cannot_hold_are_kept_as_display_names() {
         assert_eq!(names, expect, "{fmt}");
     }
 }
+
+/// A clip has one place on the timeline, whichever meshes and nodes it drives. Two nodes
+/// sharing the flag's mesh, each with its own weights sampler in one clip, play side by side
+/// (the second played after the first, a clip's length later, before); and a mesh driven by
+/// the second clip only plays it where the mesh the first clip also drives does (at the
+/// start, beside the first clip, before).
+#[test]
+fn a_clip_has_one_place_on_the_timeline() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let plain = sample("flag_wave.glb");
+    let twin = dir.path().join("twin.glb");
+    edited_glb(&plain, &twin, |j| {
+        let node = serde_json::json!({"name": "second", "mesh": 0, "translation": [0, 0, 3]});
+        j["nodes"].as_array_mut().unwrap().push(node);
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(2.into());
+        let a = &mut j["animations"][0];
+        let s = a["samplers"][0].clone();
+        a["samplers"].as_array_mut().unwrap().push(s);
+        let c = serde_json::json!({"sampler": 1, "target": {"node": 2, "path": "weights"}});
+        a["channels"].as_array_mut().unwrap().push(c);
+    });
+    let copy = dir.path().join("copy.glb");
+    edited_glb(&plain, &copy, |j| {
+        let mesh = j["meshes"][0].clone();
+        j["meshes"].as_array_mut().unwrap().push(mesh);
+        let node = serde_json::json!({"name": "second", "mesh": 2, "translation": [0, 0, 3]});
+        j["nodes"].as_array_mut().unwrap().push(node);
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(2.into());
+        let mut b = j["animations"][0].clone();
+        b["name"] = "both".into();
+        let c = serde_json::json!({"sampler": 0, "target": {"node": 2, "path": "weights"}});
+        b["channels"].as_array_mut().unwrap().push(c);
+        j["animations"].as_array_mut().unwrap().push(b);
+    });
+    for (input, flag, second) in [
+        (&twin, (0.0, 60.0, 61), (0.0, 60.0, 61)),
+        (&copy, (0.0, 121.0, 122), (61.0, 121.0, 61)),
+    ] {
+        for fmt in ["usda", "usdc"] {
+            let usd = dir.path().join(format!("out.{fmt}"));
+            tween_quietly(input, &usd, &[]);
+            let r = clean_usd_report(&python, &usd, fmt);
+            let span = |path: &str| {
+                let m = (r["meshes"].as_array().unwrap().iter())
+                    .find(|m| m["path"] == path)
+                    .unwrap_or_else(|| panic!("{path} in {}", r["meshes"]));
+                let t = m["times"].as_array().unwrap();
+                let f = |v: &serde_json::Value| v.as_f64().unwrap();
+                (f(&t[0]), f(&t[t.len() - 1]), t.len())
+            };
+            let what = format!("{} {fmt}", input.display());
+            assert_eq!(span("/samples/flag/flag"), flag, "{what}");
+            assert_eq!(span("/samples/second/flag"), second, "{what}");
+        }
+    }
+}

@@ -358,27 +358,38 @@ impl Run<'_> {
                     .collect()
             })
             .collect();
-        let (rate, codes) = timeline(&times, fallback);
-        // Each clip whose frames the stage plays (the first mesh's placement of it, when
-        // several meshes' tracks come from one clip): its node motion is sampled at its codes.
+        let clip_of = |t: &Track| match t.origin {
+            TrackOrigin::Animation { animation, .. } => Some(animation),
+            TrackOrigin::Targets { .. } => None,
+        };
+        let clip_ids: Vec<Vec<Option<usize>>> = (self.meshes.iter())
+            .map(|m| m.tracks.iter().map(clip_of).collect())
+            .collect();
+        let (rate, codes) = timeline(&times, &clip_ids, fallback);
+        // Each clip whose frames the stage plays: its node motion is sampled at every code
+        // its frames have (one place on the timeline, whichever meshes' tracks it drives).
         let mut clips: Vec<usd::ClipOnStage> = Vec::new();
         for ((m, times), codes) in self.meshes.iter().zip(&times).zip(&codes) {
             let mut at = 0;
             for (track, times) in m.tracks.iter().zip(times) {
                 let codes = &codes[at..at + times.len()];
                 at += times.len();
-                let TrackOrigin::Animation { animation, .. } = track.origin else {
+                let (Some(animation), false) = (clip_of(track), times.is_empty()) else {
                     continue;
                 };
-                if times.is_empty() || clips.iter().any(|c| c.animation == animation) {
-                    continue;
+                match clips.iter_mut().find(|c| c.animation == animation) {
+                    Some(c) => {
+                        c.codes.extend_from_slice(codes);
+                        c.codes.sort_by(f64::total_cmp);
+                        c.codes.dedup();
+                    }
+                    None => clips.push(usd::ClipOnStage {
+                        animation,
+                        codes: codes.to_vec(),
+                        offset: codes[0] - times[0] * rate,
+                        loop_end: (self.job.looping == Some(true)).then(|| times[times.len() - 1]),
+                    }),
                 }
-                clips.push(usd::ClipOnStage {
-                    animation,
-                    codes: codes.to_vec(),
-                    offset: codes[0] - times[0] * rate,
-                    loop_end: (self.job.looping == Some(true)).then(|| times[times.len() - 1]),
-                });
             }
         }
         let carriers = gltf::mesh_nodes(&self.doc.json);

@@ -110,11 +110,18 @@ pub fn snap(times: &[f64]) -> (Vec<f64>, Option<Grid>) {
 }
 
 /// Time codes of a USD point cache: the rate (per second) and every frame's code, for meshes
-/// whose tracks have frames at `tracks[mesh][track][frame]` seconds. On a grid (the coarsest
-/// one all frames lie on) the rate is the grid's and every code is whole; elsewhere the rate
-/// is `fallback` (or one over the shortest spacing). Several tracks of one mesh follow one
-/// another on the timeline, one frame apart.
-pub fn timeline(tracks: &[Vec<Vec<f64>>], fallback: Option<f64>) -> (f64, Vec<Vec<f64>>) {
+/// whose tracks have frames at `tracks[mesh][track][frame]` seconds, each track playing clip
+/// `clips[mesh][track]` (an animation; `None` for the keys made from the targets). On a grid
+/// (the coarsest one all frames lie on) the rate is the grid's and every code is whole;
+/// elsewhere the rate is `fallback` (or one over the shortest spacing). Each clip has one
+/// place on the timeline, shared by every mesh and node it drives (two nodes sharing a mesh,
+/// each with its own weights channel in one clip, play side by side, as in the glTF); clips
+/// follow one another one frame apart, the targets' keys first, then animations in file order.
+pub fn timeline(
+    tracks: &[Vec<Vec<f64>>],
+    clips: &[Vec<Option<usize>>],
+    fallback: Option<f64>,
+) -> (f64, Vec<Vec<f64>>) {
     let all: Vec<f64> = tracks.iter().flatten().flatten().copied().collect();
     let grid = grid_of(&all);
     let rate = match (grid, fallback) {
@@ -138,28 +145,47 @@ pub fn timeline(tracks: &[Vec<Vec<f64>>], fallback: Option<f64>) -> (f64, Vec<Ve
         Some(g) => g.frame(time).unwrap_or(time * rate),
         None => (time * rate * 1e9).round() / 1e9,
     };
-    let codes = tracks
+    let mut codes: Vec<Vec<Vec<f64>>> = tracks
         .iter()
-        .map(|mesh| {
-            let mut codes = Vec::new();
-            let mut next_start: Option<f64> = None;
-            for t in mesh {
-                let first = t.first().copied().map_or(0.0, code);
-                let offset = match next_start {
-                    Some(s) if s > first => s - first,
-                    _ => 0.0,
-                };
-                for &time in t {
-                    // Frames at a cut in the keys share its time: one double step apart here,
-                    // as USD time samples must be.
-                    let c = code(time) + offset;
-                    codes.push(codes.last().map_or(c, |&prev: &f64| c.max(prev.next_up())));
-                }
-                next_start = codes.last().map(|c| c + 1.0);
-            }
-            codes
-        })
+        .map(|mesh| vec![Vec::new(); mesh.len()])
         .collect();
+    let mut order: Vec<Option<usize>> = clips.iter().flatten().copied().collect();
+    order.sort_unstable();
+    order.dedup();
+    let mut next_start: Option<f64> = None;
+    for clip in order {
+        let of_clip = || {
+            (tracks.iter().zip(clips).enumerate()).flat_map(move |(m, (mesh, ids))| {
+                (mesh.iter().zip(ids).enumerate())
+                    .filter(move |(_, (_, id))| **id == clip)
+                    .map(move |(k, (t, _))| (m, k, t))
+            })
+        };
+        let first = (of_clip())
+            .filter_map(|(_, _, t)| t.first().copied().map(code))
+            .fold(f64::INFINITY, f64::min);
+        let offset = match next_start {
+            Some(s) if s > first => s - first,
+            _ => 0.0,
+        };
+        let mut last: Option<f64> = None;
+        for (m, k, t) in of_clip() {
+            let out = &mut codes[m][k];
+            for &time in t {
+                // Frames at a cut in the keys share its time: one double step apart here,
+                // as USD time samples must be.
+                let c = code(time) + offset;
+                out.push(out.last().map_or(c, |&prev: &f64| c.max(prev.next_up())));
+            }
+            if let Some(&l) = out.last() {
+                last = Some(last.map_or(l, |x: f64| x.max(l)));
+            }
+        }
+        if let Some(l) = last {
+            next_start = Some(l + 1.0);
+        }
+    }
+    let codes = codes.into_iter().map(|m| m.concat()).collect();
     (rate, codes)
 }
 
@@ -186,5 +212,33 @@ mod tests {
         // Off any grid: left alone.
         let odd = [0.0, 0.137, 0.291];
         assert_eq!(snap(&odd), (odd.to_vec(), None));
+    }
+
+    #[test]
+    fn each_clip_has_one_place_on_the_timeline() {
+        let keys = |n: usize| (0..n).map(|k| k as f64 / 10.0).collect::<Vec<f64>>();
+        // Mesh 0: clips 0 and 1; mesh 1: clip 1 only; mesh 2: two tracks of clip 0 (two nodes).
+        let tracks = [
+            vec![keys(5), keys(3)],
+            vec![keys(3)],
+            vec![keys(5), keys(5)],
+        ];
+        let clips = [
+            vec![Some(0), Some(1)],
+            vec![Some(1)],
+            vec![Some(0), Some(0)],
+        ];
+        let (rate, codes) = timeline(&tracks, &clips, None);
+        assert_eq!(rate, 10.0);
+        assert_eq!(codes[0], [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+        assert_eq!(codes[1], [5.0, 6.0, 7.0]);
+        assert_eq!(codes[2], [0.0, 1.0, 2.0, 3.0, 4.0, 0.0, 1.0, 2.0, 3.0, 4.0]);
+        // The keys made from the targets come first.
+        let (_, codes) = timeline(
+            &[vec![keys(2)], vec![keys(2)]],
+            &[vec![Some(3)], vec![None]],
+            None,
+        );
+        assert_eq!(codes, [vec![2.0, 3.0], vec![0.0, 1.0]]);
     }
 }

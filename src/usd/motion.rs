@@ -16,7 +16,7 @@ use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// A clip whose frames the stage plays: animation `animation` at time codes `codes`, code =
-/// time x rate + `offset` (clips of one mesh follow one another on the timeline).
+/// time x rate + `offset` (each clip has one place on the timeline; they follow one another).
 pub struct ClipOnStage {
     pub animation: usize,
     pub codes: Vec<f64>,

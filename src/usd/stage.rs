@@ -5,9 +5,10 @@
 //! * stage metadata: `defaultPrim` (a root Xform named after the glTF scene, else the file),
 //!   `upAxis = "Y"`, `metersPerUnit = 1`, `timeCodesPerSecond = framesPerSecond` = the output
 //!   frame rate, start and end time codes covering every frame;
-//! * time code of a frame = its time in seconds times the frame rate; when one mesh has several
-//!   clips they follow one another on the timeline, one frame apart; under each node carrying
-//!   it the mesh plays the clips that drive that node (none: written still);
+//! * time code of a frame = its time in seconds times the frame rate; each clip has one place
+//!   on the timeline, whichever meshes and nodes it drives, clips following one another one
+//!   frame apart (the tween's `timegrid::timeline`); under each node carrying a mesh the
+//!   mesh plays the clips that drive that node (none: written still);
 //! * each glTF node is an Xform (with `xformOp:transform` when it is not the identity, time
 //!   sampled where a clip on the timeline moves the node: [`super::motion`]), each
 //!   triangle primitive a Mesh (`subdivisionScheme = "none"`, `faceVertexCounts` of 3,
