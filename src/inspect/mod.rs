@@ -412,6 +412,17 @@ fn tween_tracks(meshes: &[MorphMesh]) -> Vec<TrackInfo> {
             out.push(TrackInfo {
                 mesh: m.name.clone(),
                 keys_from: match &t.origin {
+                    // Two nodes sharing the mesh, each with its own sampler in one clip: told
+                    // apart by the sampler.
+                    TrackOrigin::Animation {
+                        animation, sampler, ..
+                    } if (m.tracks.iter()).any(|o| {
+                        matches!(&o.origin, TrackOrigin::Animation { animation: a, sampler: s, .. }
+                            if a == animation && s != sampler)
+                    }) =>
+                    {
+                        format!("animation {animation} sampler {sampler}")
+                    }
                     TrackOrigin::Animation { animation, .. } => format!("animation {animation}"),
                     TrackOrigin::Targets { .. } => "targets".into(),
                 },
