@@ -1858,6 +1858,12 @@ fn material_variants_bind_subsets_as_the_gltf_maps_them() {
     }
 }
 
+/// What each prim keeps of its glTF object, by `tools/usd_meta.py`: per path its
+/// displayName (null for none) and its customData "extras" (null for none).
+fn usd_meta(python: &Path, usd: &Path, what: &str) -> serde_json::Value {
+    serde_json::from_slice(&run_tool(python, "usd_meta.py", &[usd.as_os_str()], what)).unwrap()
+}
+
 /// Names that are not USD identifiers (a Blender-style "flag.001", a space, a colon, a name
 /// in Japanese, two nodes of one name) are made identifiers and unique, and each prim shows
 /// the glTF name it was made from as its `displayName`, so that none is lost; a prim whose
@@ -1879,9 +1885,10 @@ fn names_usd_cannot_hold_are_kept_as_display_names() {
         let usd = dir.path().join(format!("out.{fmt}"));
         tween_quietly(&input, &usd, &[]);
         clean_usd_report(&python, &usd, fmt);
-        let names: serde_json::Value =
-            serde_json::from_slice(&run_tool(&python, "usd_names.py", &[usd.as_os_str()], fmt))
-                .unwrap();
+        let shown: serde_json::Map<String, serde_json::Value> =
+            (usd_meta(&python, &usd, fmt).as_object().unwrap().iter())
+                .map(|(path, m)| (path.clone(), m["display"].clone()))
+                .collect();
         let expect = serde_json::json!({
             "/Shot__1": "Shot #1",
             "/Shot__1/flag_001": "flag.001",
@@ -1894,7 +1901,63 @@ fn names_usd_cannot_hold_are_kept_as_display_names() {
             "/Shot__1/Materials/pole_material": null,
             "/Shot__1/Materials/pole_material/PreviewSurface": null,
         });
-        assert_eq!(names, expect, "{fmt}");
+        assert_eq!(serde_json::Value::Object(shown), expect, "{fmt}");
+    }
+}
+
+/// glTF `extras` (Blender's custom properties) of the scene, nodes, meshes and materials are
+/// each prim's `customData = { dictionary extras = {...} }`, every JSON kind kept: booleans,
+/// whole numbers (`int`, or `int64` past 32 bits), reals, strings, arrays of one kind, nested
+/// objects, and a mixed array as its JSON text; null entries and empty objects are left out,
+/// and a mesh's `targetNames` (a point cache has no targets). They were lost before.
+#[test]
+fn extras_travel_to_usd_as_custom_data() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("extras.glb");
+    let props = serde_json::json!({
+        "lod": 2, "visible": true, "weight": 0.25, "big": 1u64 << 40, "note": "a \"b\"\nc",
+        "tags": ["hero", "cloth"], "ids": [1, 2, 3], "reals": [0.5, 1], "flags": [true, false],
+        "none": [], "mixed": [1, "a", null], "gone": null, "empty": {},
+        "nested": {"a b": {"deep": -1.5e-3}, "gone": null}
+    });
+    edited_glb(&sample("flag_wave.glb"), &input, |j| {
+        j["scenes"][0]["extras"] = serde_json::json!({"shot": "sq010_sh020", "frameStart": 1001});
+        j["nodes"][0]["extras"] = props.clone();
+        j["meshes"][0]["extras"] = serde_json::json!({"targetNames": ["a", "b"], "scan": "v3"});
+        j["materials"][0]["extras"] = serde_json::json!({"hint": "cloth"});
+        j["nodes"][1]["extras"] = serde_json::json!({});
+    });
+    let mut kept = props.clone();
+    for k in ["gone", "empty"] {
+        kept.as_object_mut().unwrap().remove(k);
+    }
+    kept["mixed"] = "[1,\"a\",null]".into();
+    kept["nested"].as_object_mut().unwrap().remove("gone");
+    kept["reals"] = serde_json::json!([0.5, 1.0]);
+    for fmt in ["usda", "usdc", "usdz"] {
+        let usd = dir.path().join(format!("out.{fmt}"));
+        tween_quietly(&input, &usd, &[]);
+        clean_usd_report(&python, &usd, fmt);
+        let meta = usd_meta(&python, &usd, fmt);
+        let extras = |path: &str| meta[path]["extras"].clone();
+        let scene = serde_json::json!({"shot": "sq010_sh020", "frameStart": 1001});
+        assert_eq!(extras("/samples"), scene, "{fmt}");
+        assert_eq!(extras("/samples/flag"), kept, "{fmt}");
+        assert_eq!(
+            extras("/samples/flag/flag"),
+            serde_json::json!({"scan": "v3"}),
+            "{fmt}"
+        );
+        let material = serde_json::json!({"hint": "cloth"});
+        assert_eq!(
+            extras("/samples/Materials/flag_material"),
+            material,
+            "{fmt}"
+        );
+        for path in ["/samples/pole", "/samples/pole/pole", "/samples/Materials"] {
+            assert_eq!(extras(path), serde_json::Value::Null, "{fmt} {path}");
+        }
     }
 }
 

@@ -24,7 +24,7 @@
 //! ```
 
 use super::material::Value;
-use super::stage::{identifier, shown};
+use super::stage::{identifier, Meta};
 use crate::gltf::{arr, quoted_name};
 use serde_json::Value as Json;
 use std::collections::HashMap;
@@ -47,8 +47,8 @@ pub type Attr = (&'static str, &'static str, Value);
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plain {
     pub name: String,
-    /// `displayName`: the camera's or light's glTF name where `name` is not it.
-    pub display: Option<String>,
+    /// What it keeps of the glTF camera or light: its name and extras.
+    pub meta: Meta,
     /// `Camera`, `DistantLight` or `SphereLight`.
     pub type_name: &'static str,
     /// API schemas applied (`prepend apiSchemas`): `ShapingAPI` for a spot light.
@@ -73,7 +73,7 @@ pub fn of_node(
             Some((type_name, attrs)) => {
                 let name = unique(cam["name"].as_str().unwrap_or("camera"), taken);
                 out.push(Plain {
-                    display: shown(cam, &name),
+                    meta: Meta::of(cam, &name),
                     name,
                     type_name,
                     api_schemas: Vec::new(),
@@ -103,7 +103,7 @@ pub fn of_node(
                     say(left_out, line);
                 }
                 p.name = unique(lit["name"].as_str().unwrap_or("light"), taken);
-                p.display = shown(lit, &p.name);
+                p.meta = Meta::of(lit, &p.name);
                 out.push(p);
             }
             None => say(
@@ -249,7 +249,7 @@ fn light(l: &Json) -> Option<Plain> {
     };
     finite(&attrs).then_some(Plain {
         name: String::new(),
-        display: None,
+        meta: Meta::default(),
         type_name,
         api_schemas,
         attrs,

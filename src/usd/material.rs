@@ -28,7 +28,7 @@
 //! `image-webp`, stored losslessly); KTX2 and AVIF cannot be read by USD: those textures are
 //! left out and named in [`Look::left_out`].
 
-use super::stage::identifier;
+use super::stage::{identifier, Data, Meta};
 use crate::gltf::{arr, Document};
 use anyhow::Result;
 use serde_json::Value as Json;
@@ -54,8 +54,8 @@ pub struct Look {
 /// One `Material` prim: its shaders, the surface first.
 pub struct Material {
     pub name: String,
-    /// `displayName`: the glTF material's name where `name` is not it.
-    pub display: Option<String>,
+    /// What it keeps of the glTF material: its name and extras.
+    pub meta: Meta,
     pub shaders: Vec<Shader>,
 }
 
@@ -185,7 +185,10 @@ impl<'a> LookBuilder<'a> {
             .filter(|n| *n != name);
         self.look.materials.push(Material {
             name: name.clone(),
-            display,
+            meta: Meta {
+                display,
+                extras: Data::of(&mat["extras"]),
+            },
             shaders,
         });
         self.made.insert((m, vertex_color), name.clone());

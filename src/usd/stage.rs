@@ -31,7 +31,9 @@
 //!   that is not animated but whose joints a clip on the stage moves is sampled at that clip's
 //!   codes;
 //! * names are made valid identifiers (`[A-Za-z_][A-Za-z0-9_]*`), unique among siblings by a
-//!   `_1`, `_2`, ... suffix, deterministically.
+//!   `_1`, `_2`, ... suffix, deterministically; a prim keeps its glTF object's name as
+//!   `displayName` where its own is another, and the object's `extras` as `customData`
+//!   ([`Meta`]).
 
 use super::camera_light::{self, say, Plain};
 use super::material::{st_name, Look, LookBuilder};
@@ -50,8 +52,8 @@ use std::sync::Arc;
 /// One Mesh prim to write.
 pub struct MeshPrim {
     pub name: String,
-    /// `displayName`: the glTF mesh's name where `name` is not it ([`shown`]).
-    pub display: Option<String>,
+    /// What it keeps of the glTF mesh: its name and extras ([`Meta`]).
+    pub meta: Meta,
     pub points: Vec<[f32; 3]>,
     pub normals: Option<Vec<[f32; 3]>>,
     /// Texture coordinate sets: (`st`, TEXCOORD_0), (`st1`, TEXCOORD_1), ..., V flipped.
@@ -266,8 +268,8 @@ pub fn add(base: &[[f32; 3]], delta: &[[f32; 3]]) -> Vec<[f32; 3]> {
 pub enum Prim {
     Xform {
         name: String,
-        /// `displayName`: the glTF node's name where `name` is not it ([`shown`]).
-        display: Option<String>,
+        /// What it keeps of the glTF node: its name and extras ([`Meta`]).
+        meta: Meta,
         matrix: Option<[f64; 16]>,
         /// The node's local transform at each time code a clip on the stage moves it (time
         /// order); empty when none does, and then `matrix` stands.
@@ -287,7 +289,7 @@ pub enum Prim {
 pub struct InstancerPrim {
     pub name: String,
     /// As [`Prim::Xform`]'s.
-    pub display: Option<String>,
+    pub meta: Meta,
     pub matrix: Option<[f64; 16]>,
     pub motion: Vec<(f64, [f64; 16])>,
     pub instances: Instances,
@@ -309,8 +311,8 @@ pub const PROTOTYPES: &str = "Prototypes";
 /// The whole stage.
 pub struct Stage {
     pub root: String,
-    /// `displayName` of the root: the glTF scene's name where `root` is not it.
-    pub root_display: Option<String>,
+    /// What the root keeps of the glTF scene: its name and extras.
+    pub root_meta: Meta,
     pub rate: f64,
     pub start: f64,
     pub end: f64,
@@ -335,6 +337,96 @@ pub fn identifier(s: &str) -> String {
         out.insert(0, '_');
     }
     out
+}
+
+/// What a prim keeps of the glTF object it was made from besides its content: the name it
+/// shows, where its own is another ([`shown`], `displayName`), and the object's `extras`
+/// (`customData = { dictionary extras = {...} }`, [`Data`]: Blender's custom properties).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Meta {
+    pub display: Option<String>,
+    pub extras: Option<Data>,
+}
+
+impl Meta {
+    /// The metadata of a prim named `written` made from glTF object `gltf`.
+    pub fn of(gltf: &Value, written: &str) -> Meta {
+        Meta {
+            display: shown(gltf, written),
+            extras: Data::of(&gltf["extras"]),
+        }
+    }
+
+    /// Leave entry `key` of the extras out (none left: no extras).
+    pub fn leave_out(&mut self, key: &str) {
+        if let Some(Data::Dict(entries)) = &mut self.extras {
+            entries.retain(|(k, _)| k != key);
+            if entries.is_empty() {
+                self.extras = None;
+            }
+        }
+    }
+}
+
+/// A `customData` value made from JSON: a boolean, a number (`int` where it is a whole number
+/// that fits, else `int64`, else `double`), a string, an array of one of those kinds (`bool[]`,
+/// `int[]` or `double[]`, `string[]`; an empty one `string[]`), an object a dictionary (keys in
+/// order, null entries left out); any other array (mixed, nested) its JSON text as a string.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Data {
+    Bool(bool),
+    Int(i32),
+    Int64(i64),
+    Double(f64),
+    String(String),
+    Bools(Vec<bool>),
+    Ints(Vec<i32>),
+    Doubles(Vec<f64>),
+    Strings(Vec<String>),
+    Dict(Vec<(String, Data)>),
+}
+
+impl Data {
+    /// `v` as a `customData` value; `None` for null or an empty object.
+    pub fn of(v: &Value) -> Option<Data> {
+        let int = |v: &Value| v.as_i64().and_then(|i| i32::try_from(i).ok());
+        Some(match v {
+            Value::Null => return None,
+            Value::Bool(b) => Data::Bool(*b),
+            Value::Number(n) => match (int(v), n.as_i64()) {
+                (Some(i), _) => Data::Int(i),
+                (None, Some(i)) => Data::Int64(i),
+                _ => Data::Double(n.as_f64().unwrap_or(0.0)),
+            },
+            Value::String(s) => Data::String(s.clone()),
+            Value::Array(a) if a.iter().all(Value::is_string) => Data::Strings(
+                a.iter()
+                    .filter_map(|s| s.as_str().map(str::to_owned))
+                    .collect(),
+            ),
+            Value::Array(a) if a.iter().all(Value::is_boolean) => {
+                Data::Bools(a.iter().filter_map(Value::as_bool).collect())
+            }
+            Value::Array(a) if a.iter().all(|x| int(x).is_some()) => {
+                Data::Ints(a.iter().filter_map(int).collect())
+            }
+            Value::Array(a) if a.iter().all(Value::is_number) => {
+                Data::Doubles(a.iter().filter_map(Value::as_f64).collect())
+            }
+            Value::Array(_) => Data::String(v.to_string()),
+            Value::Object(o) => {
+                let mut entries: Vec<(String, Data)> = (o.iter())
+                    .filter_map(|(k, v)| Some((k.clone(), Data::of(v)?)))
+                    .collect();
+                if entries.is_empty() {
+                    return None;
+                }
+                // USD keeps a dictionary's keys sorted.
+                entries.sort_by(|a, b| a.0.cmp(&b.0));
+                Data::Dict(entries)
+            }
+        })
+    }
 }
 
 /// The name a prim shows (its `displayName` metadata): the glTF object's own `name` where
@@ -443,7 +535,7 @@ pub fn build_stage(
     };
     let mut stage = Stage {
         root: identifier(&root_name),
-        root_display: scene.and_then(|s| shown(s, &identifier(&root_name))),
+        root_meta: scene.map_or_else(Meta::default, |s| Meta::of(s, &identifier(&root_name))),
         rate,
         start,
         end,
@@ -544,14 +636,18 @@ impl Ctx<'_> {
                 let mesh_name = self.doc.json["meshes"][mi]["name"].as_str();
                 let prototype_name = identifier(mesh_name.unwrap_or(&format!("mesh{mi}")));
                 let prototype = Prim::Xform {
-                    display: shown(&self.doc.json["meshes"][mi], &prototype_name),
+                    // The mesh's extras are its Mesh prims'.
+                    meta: Meta {
+                        display: shown(&self.doc.json["meshes"][mi], &prototype_name),
+                        extras: None,
+                    },
                     name: prototype_name,
                     matrix: None,
                     motion: Vec::new(),
                     children: mesh,
                 };
                 Prim::Instancer(Box::new(InstancerPrim {
-                    display: shown(node, &name),
+                    meta: Meta::of(node, &name),
                     name,
                     matrix,
                     motion,
@@ -561,7 +657,7 @@ impl Ctx<'_> {
                 }))
             }
             None => Prim::Xform {
-                display: shown(node, &name),
+                meta: Meta::of(node, &name),
                 name,
                 matrix,
                 motion,
@@ -907,7 +1003,7 @@ impl Ctx<'_> {
             });
             let mut prim = MeshPrim {
                 name: base_name,
-                display: None,
+                meta: Meta::default(),
                 still,
                 points: f32s(points),
                 normals: normals.map(f32s),
@@ -943,7 +1039,9 @@ impl Ctx<'_> {
                     m.name = identifier(&mesh_name);
                 }
                 m.name = unique(std::mem::take(&mut m.name), taken);
-                m.display = shown(mesh, &m.name);
+                m.meta = Meta::of(mesh, &m.name);
+                // The morph targets' names: a point cache has no targets.
+                m.meta.leave_out("targetNames");
                 Prim::Mesh(Box::new(m))
             })
             .collect())

@@ -5,8 +5,8 @@
 use super::camera_light::Plain;
 use super::material::{Material, Value, SURFACE};
 use super::stage::{
-    animated, extent, for_each_sample, for_each_skin_sample, variant_overs, Animation,
-    DisplayColor, FrameSource, MeshPrim, Overs, Prim, Sample, SampleKey, Stage, PROTOTYPES,
+    animated, extent, for_each_sample, for_each_skin_sample, variant_overs, Animation, Data,
+    DisplayColor, FrameSource, MeshPrim, Meta, Overs, Prim, Sample, SampleKey, Stage, PROTOTYPES,
     VARIANT_SET,
 };
 use crate::output::{naming, Outputs};
@@ -35,12 +35,12 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
     writeln!(out, ")")?;
     writeln!(out)?;
     let variants = variant_overs(stage);
-    let mut meta: Vec<String> = display(&stage.root_display).into_iter().collect();
+    let mut meta = meta_lines(&stage.root_meta);
     if !variants.is_empty() {
         let default = &stage.look.default_variant;
         meta.push(format!("prepend variantSets = \"{VARIANT_SET}\""));
         meta.push(format!(
-            "variants = {{\n        string {VARIANT_SET} = \"{default}\"\n    }}"
+            "variants = {{\n    string {VARIANT_SET} = \"{default}\"\n}}"
         ));
     }
     open_prim(out, "", "def Xform", &stage.root, &meta)?;
@@ -75,10 +75,46 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
 /// The metadata line of a prim bound to a material.
 const BINDING_API: &str = "prepend apiSchemas = [\"MaterialBindingAPI\"]";
 
-/// The `displayName` metadata line of a prim that shows another name than its own.
-fn display(name: &Option<String>) -> Option<String> {
-    name.as_ref()
-        .map(|n| format!("displayName = {}", string_text(n)))
+/// The metadata of a prim from its glTF object ([`Meta`]): `displayName` where it shows
+/// another name than its own, `customData` holding the object's extras.
+fn meta_lines(meta: &Meta) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(n) = &meta.display {
+        out.push(format!("displayName = {}", string_text(n)));
+    }
+    if let Some(extras) = &meta.extras {
+        let entry = data_text("extras", extras).replace('\n', "\n    ");
+        out.push(format!("customData = {{\n    {entry}\n}}"));
+    }
+    out
+}
+
+/// Entry `key` of a dictionary holding `d`, as text: `int lod = 2`, `dictionary x = {...}`
+/// (its own lines indented by four spaces under the first).
+fn data_text(key: &str, d: &Data) -> String {
+    let list = |items: Vec<String>| format!("[{}]", items.join(", "));
+    let (ty, value) = match d {
+        Data::Bool(b) => ("bool", (*b as u8).to_string()),
+        Data::Int(i) => ("int", i.to_string()),
+        Data::Int64(i) => ("int64", i.to_string()),
+        Data::Double(x) => ("double", x.to_string()),
+        Data::String(s) => ("string", string_text(s)),
+        Data::Bools(v) => (
+            "bool[]",
+            list(v.iter().map(|b| (*b as u8).to_string()).collect()),
+        ),
+        Data::Ints(v) => ("int[]", list(v.iter().map(i32::to_string).collect())),
+        Data::Doubles(v) => ("double[]", list(v.iter().map(f64::to_string).collect())),
+        Data::Strings(v) => ("string[]", list(v.iter().map(|s| string_text(s)).collect())),
+        Data::Dict(entries) => {
+            let mut text = String::from("{");
+            for (k, v) in entries {
+                text += &format!("\n    {}", data_text(k, v).replace('\n', "\n    "));
+            }
+            ("dictionary", text + "\n}")
+        }
+    };
+    format!("{ty} {} = {value}", string_text(key))
 }
 
 /// A string in the text format: in double quotes, a quote, backslash or control character
@@ -104,7 +140,8 @@ fn string_text(s: &str) -> String {
 }
 
 /// The opening of a prim, indented by `pad`: `def Mesh "name"` (`head` the specifier and
-/// type), its metadata `meta` in parentheses when it has any, one a line, and the brace.
+/// type), its metadata `meta` in parentheses when it has any (each entry's lines indented
+/// under the prim), and the brace.
 fn open_prim(
     out: &mut dyn Write,
     pad: &str,
@@ -116,8 +153,8 @@ fn open_prim(
         writeln!(out, "{pad}{head} \"{name}\"")?;
     } else {
         writeln!(out, "{pad}{head} \"{name}\" (")?;
-        for m in meta {
-            writeln!(out, "{pad}    {m}")?;
+        for line in meta.iter().flat_map(|m| m.lines()) {
+            writeln!(out, "{pad}    {line}")?;
         }
         writeln!(out, "{pad})")?;
     }
@@ -142,8 +179,13 @@ fn write_over(name: &str, o: &Overs, out: &mut dyn Write, pad: &str, scope: &str
 
 /// A Material prim (in the materials scope) and its shaders; `path` is its own path.
 fn write_material(m: &Material, out: &mut dyn Write, path: &str) -> Result<()> {
-    let meta: Vec<String> = display(&m.display).into_iter().collect();
-    open_prim(out, "        ", "def Material", &m.name, &meta)?;
+    open_prim(
+        out,
+        "        ",
+        "def Material",
+        &m.name,
+        &meta_lines(&m.meta),
+    )?;
     writeln!(
         out,
         "            token outputs:surface.connect = <{path}/{SURFACE}.outputs:surface>"
@@ -203,13 +245,12 @@ fn write_prim(
     match prim {
         Prim::Xform {
             name,
-            display: shown,
+            meta,
             matrix,
             motion,
             children,
         } => {
-            let meta: Vec<String> = display(shown).into_iter().collect();
-            open_prim(out, &pad, "def Xform", name, &meta)?;
+            open_prim(out, &pad, "def Xform", name, &meta_lines(meta))?;
             write_transform(out, &pad, matrix, motion)?;
             let path = format!("{path}/{name}");
             for c in children {
@@ -220,8 +261,13 @@ fn write_prim(
         Prim::Mesh(m) => write_mesh(m, out, &pad, scope, spool)?,
         Prim::Plain(p) => write_plain(p, out, &pad)?,
         Prim::Instancer(i) => {
-            let meta: Vec<String> = display(&i.display).into_iter().collect();
-            open_prim(out, &pad, "def PointInstancer", &i.name, &meta)?;
+            open_prim(
+                out,
+                &pad,
+                "def PointInstancer",
+                &i.name,
+                &meta_lines(&i.meta),
+            )?;
             write_transform(out, &pad, &i.matrix, &i.motion)?;
             let path = format!("{path}/{}", i.name);
             let p = format!("{pad}    ");
@@ -262,7 +308,7 @@ fn write_prim(
 
 /// A camera or light: its type, API schemas and attributes.
 fn write_plain(p: &Plain, out: &mut dyn Write, pad: &str) -> Result<()> {
-    let mut meta: Vec<String> = display(&p.display).into_iter().collect();
+    let mut meta = meta_lines(&p.meta);
     if !p.api_schemas.is_empty() {
         let schemas: Vec<String> = p.api_schemas.iter().map(|s| format!("{s:?}")).collect();
         meta.push(format!("prepend apiSchemas = [{}]", schemas.join(", ")));
@@ -384,7 +430,7 @@ fn write_mesh(
     scope: &str,
     spool: &Spool,
 ) -> Result<()> {
-    let mut meta: Vec<String> = display(&m.display).into_iter().collect();
+    let mut meta = meta_lines(&m.meta);
     meta.extend(m.material.iter().map(|_| BINDING_API.to_owned()));
     open_prim(out, pad, "def Mesh", &m.name, &meta)?;
     let p = format!("{pad}    ");

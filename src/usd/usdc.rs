@@ -14,8 +14,8 @@
 use super::camera_light::Plain;
 use super::material::{Look, Shader, Value, SURFACE};
 use super::stage::{
-    animated, extent, for_each_sample, for_each_skin_sample, variant_overs, Animation,
-    DisplayColor, FrameSource, MeshPrim, Overs, Prim, Sample, SampleKey, Stage, PROTOTYPES,
+    animated, extent, for_each_sample, for_each_skin_sample, variant_overs, Animation, Data,
+    DisplayColor, FrameSource, MeshPrim, Meta, Overs, Prim, Sample, SampleKey, Stage, PROTOTYPES,
     VARIANT_SET,
 };
 use anyhow::Result;
@@ -30,12 +30,14 @@ const MIN_COMPRESSED_ARRAY: usize = 16;
 // Value types (crate type enum).
 const T_BOOL: u64 = 1;
 const T_INT: u64 = 3;
+const T_INT64: u64 = 5;
 const T_FLOAT: u64 = 8;
 const T_DOUBLE: u64 = 9;
 const T_STRING: u64 = 10;
 const T_TOKEN: u64 = 11;
 const T_ASSET_PATH: u64 = 12;
 const T_MATRIX4D: u64 = 15;
+const T_DICTIONARY: u64 = 31;
 const T_QUATH: u64 = 18;
 const T_VEC2F: u64 = 20;
 const T_VEC3F: u64 = 24;
@@ -409,7 +411,7 @@ impl<W: Write + Seek> Writer<W> {
         match prim {
             Prim::Xform {
                 name,
-                display,
+                meta,
                 matrix,
                 motion,
                 children,
@@ -420,7 +422,7 @@ impl<W: Write + Seek> Writer<W> {
                     self.prim(c, me, frames)?;
                 }
                 let kids = children.iter().map(prim_name).collect();
-                let extra = self.display(display)?;
+                let extra = self.meta(meta)?;
                 self.prim_spec_with(me, "Xform", props, kids, extra)
             }
             Prim::Mesh(m) => self.mesh(m, parent, frames),
@@ -461,7 +463,7 @@ impl<W: Write + Seek> Writer<W> {
                 let kids = std::iter::once(PROTOTYPES.to_string())
                     .chain(i.children.iter().map(prim_name))
                     .collect();
-                let extra = self.display(&i.display)?;
+                let extra = self.meta(&i.meta)?;
                 self.prim_spec_with(me, "PointInstancer", props, kids, extra)
             }
         }
@@ -500,11 +502,74 @@ impl<W: Write + Seek> Writer<W> {
         ])
     }
 
-    /// The `displayName` field of a prim that shows another name than its own (none else).
-    fn display(&mut self, name: &Option<String>) -> Result<Vec<u32>> {
-        (name.iter())
-            .map(|n| self.field("displayName", Val::String(n)))
-            .collect()
+    /// The metadata fields of a prim from its glTF object ([`Meta`]): `displayName` where it
+    /// shows another name than its own, `customData` holding the object's extras.
+    fn meta(&mut self, meta: &Meta) -> Result<Vec<u32>> {
+        let mut out = Vec::new();
+        if let Some(n) = &meta.display {
+            out.push(self.field("displayName", Val::String(n))?);
+        }
+        if let Some(extras) = &meta.extras {
+            let dict = Data::Dict(vec![("extras".to_owned(), extras.clone())]);
+            let rep = self.data(&dict)?;
+            out.push(self.raw_field("customData", rep));
+        }
+        Ok(out)
+    }
+
+    /// Write (or inline) a `customData` value and return its ValueRep. A dictionary is its
+    /// entry count, then per entry the key's string index, a forward offset to the value's
+    /// rep (8: right after it; the values are written before the dictionary) and the rep.
+    fn data(&mut self, d: &Data) -> Result<u64> {
+        Ok(match d {
+            Data::Bool(b) => self.value(Val::Bool(*b))?,
+            Data::Int(i) => rep_inline(T_INT, *i as u32 as u64),
+            Data::Int64(i) => {
+                let at = self.pos;
+                self.bytes(&i.to_le_bytes())?;
+                rep_heap(T_INT64, at, false)
+            }
+            Data::Double(x) => self.value(Val::Double(*x))?,
+            Data::String(s) => self.value(Val::String(s))?,
+            Data::Bools(v) => {
+                let at = self.pos;
+                self.u64(v.len() as u64)?;
+                self.bytes(&v.iter().map(|&b| b as u8).collect::<Vec<u8>>())?;
+                rep_heap(T_BOOL, at, true)
+            }
+            Data::Ints(v) => self.value(Val::Ints(v.clone()))?,
+            Data::Doubles(v) => {
+                let at = self.pos;
+                self.u64(v.len() as u64)?;
+                self.bytes(&v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>())?;
+                rep_heap(T_DOUBLE, at, true)
+            }
+            Data::Strings(v) => {
+                let idx: Vec<u32> = v.iter().map(|s| self.string(s)).collect();
+                let at = self.pos;
+                self.u64(idx.len() as u64)?;
+                self.bytes(
+                    &idx.iter()
+                        .flat_map(|i| i.to_le_bytes())
+                        .collect::<Vec<u8>>(),
+                )?;
+                rep_heap(T_STRING, at, true)
+            }
+            Data::Dict(entries) => {
+                let mut body = Vec::with_capacity(entries.len());
+                for (k, v) in entries {
+                    body.push((self.string(k), self.data(v)?));
+                }
+                let at = self.pos;
+                self.u64(body.len() as u64)?;
+                for (key, rep) in body {
+                    self.bytes(&key.to_le_bytes())?;
+                    self.bytes(&8i64.to_le_bytes())?;
+                    self.u64(rep)?;
+                }
+                rep_heap(T_DICTIONARY, at, false)
+            }
+        })
     }
 
     fn prim_spec(
@@ -630,7 +695,7 @@ impl<W: Write + Seek> Writer<W> {
         let v = self.field("default", Val::Token("none"))?;
         self.attribute(me, "subdivisionScheme", "token", vec![uniform, v])?;
         props.push("subdivisionScheme".into());
-        let mut extra = self.display(&m.display)?;
+        let mut extra = self.meta(&m.meta)?;
         extra.extend(self.bind(me, &m.material, &mut props)?);
         for sub in &m.subsets {
             let at = self.path(Some(me), &sub.name, false);
@@ -686,7 +751,7 @@ impl<W: Write + Seek> Writer<W> {
             }
             let children = m.shaders.iter().map(|s| s.name.clone()).collect();
             let props = vec!["outputs:surface".into()];
-            let extra = self.display(&m.display)?;
+            let extra = self.meta(&m.meta)?;
             self.prim_spec_with(mp, "Material", props, children, extra)?;
         }
         let names = look.materials.iter().map(|m| m.name.clone()).collect();
@@ -718,7 +783,7 @@ impl<W: Write + Seek> Writer<W> {
             self.attribute(me, name, ty, vec![f])?;
             props.push(name.to_string());
         }
-        let mut extra = self.display(&p.display)?;
+        let mut extra = self.meta(&p.meta)?;
         if !p.api_schemas.is_empty() {
             let schemas = Val::PrependTokens(p.api_schemas.clone());
             extra.push(self.field("apiSchemas", schemas)?);
@@ -1006,7 +1071,7 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     if let Some(scope) = w.scope {
         w.look(&stage.look, scope)?;
     }
-    let mut extra = w.display(&stage.root_display)?;
+    let mut extra = w.meta(&stage.root_meta)?;
     extra.extend(w.variant_set(stage, top)?);
     w.prim_spec_with(top, "Xform", vec![], children, extra)?;
     let doc = format!("Written by inbetween {}", env!("CARGO_PKG_VERSION"));
