@@ -1887,6 +1887,7 @@ fn names_usd_cannot_hold_are_kept_as_display_names() {
         clean_usd_report(&python, &usd, fmt);
         let shown: serde_json::Map<String, serde_json::Value> =
             (usd_meta(&python, &usd, fmt).as_object().unwrap().iter())
+                .filter(|(path, _)| path.as_str() != "/")
                 .map(|(path, m)| (path.clone(), m["display"].clone()))
                 .collect();
         let expect = serde_json::json!({
@@ -1909,7 +1910,8 @@ fn names_usd_cannot_hold_are_kept_as_display_names() {
 /// each prim's `customData = { dictionary extras = {...} }`, every JSON kind kept: booleans,
 /// whole numbers (`int`, or `int64` past 32 bits), reals, strings, arrays of one kind, nested
 /// objects, and a mixed array as its JSON text; null entries and empty objects are left out,
-/// and a mesh's `targetNames` (a point cache has no targets). They were lost before.
+/// and a mesh's `targetNames` (a point cache has no targets). The asset's copyright, generator
+/// and extras are the layer's `customLayerData`. They were lost before.
 #[test]
 fn extras_travel_to_usd_as_custom_data() {
     let Some(python) = python() else { return };
@@ -1927,7 +1929,12 @@ fn extras_travel_to_usd_as_custom_data() {
         j["meshes"][0]["extras"] = serde_json::json!({"targetNames": ["a", "b"], "scan": "v3"});
         j["materials"][0]["extras"] = serde_json::json!({"hint": "cloth"});
         j["nodes"][1]["extras"] = serde_json::json!({});
+        j["asset"]["copyright"] = "© 2026 Studio \"X\"".into();
+        j["asset"]["extras"] = serde_json::json!({"author": "someone", "license": "CC-BY-4.0"});
     });
+    let generator =
+        inbetween::gltf::Document::open(&input).unwrap().json["asset"]["generator"].clone();
+    assert!(generator.is_string());
     let mut kept = props.clone();
     for k in ["gone", "empty"] {
         kept.as_object_mut().unwrap().remove(k);
@@ -1958,6 +1965,13 @@ fn extras_travel_to_usd_as_custom_data() {
         for path in ["/samples/pole", "/samples/pole/pole", "/samples/Materials"] {
             assert_eq!(extras(path), serde_json::Value::Null, "{fmt} {path}");
         }
+        // The asset's copyright, generator and extras (a licence to credit) are the layer's.
+        let layer = serde_json::json!({
+            "copyright": "© 2026 Studio \"X\"",
+            "extras": {"author": "someone", "license": "CC-BY-4.0"},
+            "sourceGenerator": generator,
+        });
+        assert_eq!(meta["/"], layer, "{fmt}");
     }
 }
 

@@ -1,6 +1,7 @@
 """Print what every prim of a USD file (usd-core) keeps of its glTF object, as JSON: per prim
 path its displayName (null where it shows its own name) and its customData "extras" (null
-where it has none; arrays as lists, 64-bit and 32-bit integers alike as numbers).
+where it has none; arrays as lists, 64-bit and 32-bit integers alike as numbers); and under
+"/" (the layer) its customLayerData (the glTF asset's copyright, generator and extras).
 
 Usage: usd_meta.py FILE.usd[a|c|z]
 """
@@ -19,7 +20,7 @@ def plain(v):
 
 
 stage = Usd.Stage.Open(sys.argv[1])
-out = {}
+out = {"/": plain(stage.GetRootLayer().customLayerData)}
 for prim in stage.Traverse():
     extras = prim.GetCustomDataByKey("extras")
     out[str(prim.GetPath())] = {

@@ -4,7 +4,8 @@
 //! Conventions (the README repeats them):
 //! * stage metadata: `defaultPrim` (a root Xform named after the glTF scene, else the file),
 //!   `upAxis = "Y"`, `metersPerUnit = 1`, `timeCodesPerSecond = framesPerSecond` = the output
-//!   frame rate, start and end time codes covering every frame;
+//!   frame rate, start and end time codes covering every frame, `customLayerData` the glTF
+//!   asset's copyright, generator and extras ([`layer_data`]);
 //! * time code of a frame = its time in seconds times the frame rate; each clip has one place
 //!   on the timeline, whichever meshes and nodes it drives, clips following one another one
 //!   frame apart (the tween's `timegrid::timeline`); under each node carrying a mesh the
@@ -313,6 +314,9 @@ pub struct Stage {
     pub root: String,
     /// What the root keeps of the glTF scene: its name and extras.
     pub root_meta: Meta,
+    /// The layer's `customLayerData`: the glTF asset's copyright, generator and extras
+    /// (Sketchfab's author, licence and source), see [`layer_data`].
+    pub layer_data: Option<Data>,
     pub rate: f64,
     pub start: f64,
     pub end: f64,
@@ -429,6 +433,24 @@ impl Data {
     }
 }
 
+/// What the layer keeps of the glTF `asset`: its `copyright`, its `generator` (as
+/// `sourceGenerator`: the layer's own is `doc`) and its `extras` (Sketchfab's author, licence,
+/// source and title), as a `customLayerData` dictionary; `None` when it has none of them.
+pub fn layer_data(asset: &Value) -> Option<Data> {
+    let mut entries = Vec::new();
+    for (key, name) in [
+        ("copyright", "copyright"),
+        ("extras", "extras"),
+        ("generator", "sourceGenerator"),
+    ] {
+        if let Some(d) = Data::of(&asset[key]) {
+            entries.push((name.to_owned(), d));
+        }
+    }
+    entries.sort_by(|a, b| a.0.cmp(&b.0));
+    (!entries.is_empty()).then_some(Data::Dict(entries))
+}
+
 /// The name a prim shows (its `displayName` metadata): the glTF object's own `name` where
 /// the prim's `written` name (made an identifier, unique among its siblings, a primitive's
 /// index added) is not it, so that no name the file gives is lost; none for an unnamed object
@@ -536,6 +558,7 @@ pub fn build_stage(
     let mut stage = Stage {
         root: identifier(&root_name),
         root_meta: scene.map_or_else(Meta::default, |s| Meta::of(s, &identifier(&root_name))),
+        layer_data: layer_data(&json["asset"]),
         rate,
         start,
         end,

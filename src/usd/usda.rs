@@ -26,6 +26,10 @@ fn write_usda(stage: &Stage, out: &mut dyn Write, spool: &Spool) -> Result<()> {
         "    doc = \"Written by inbetween {}\"",
         env!("CARGO_PKG_VERSION")
     )?;
+    if let Some(Data::Dict(entries)) = &stage.layer_data {
+        let text = dict_text(entries).replace('\n', "\n    ");
+        writeln!(out, "    customLayerData = {text}")?;
+    }
     writeln!(out, "    endTimeCode = {}", stage.end)?;
     writeln!(out, "    framesPerSecond = {}", stage.rate)?;
     writeln!(out, "    metersPerUnit = 1")?;
@@ -83,10 +87,19 @@ fn meta_lines(meta: &Meta) -> Vec<String> {
         out.push(format!("displayName = {}", string_text(n)));
     }
     if let Some(extras) = &meta.extras {
-        let entry = data_text("extras", extras).replace('\n', "\n    ");
-        out.push(format!("customData = {{\n    {entry}\n}}"));
+        let entries = [("extras".to_owned(), extras.clone())];
+        out.push(format!("customData = {}", dict_text(&entries)));
     }
     out
+}
+
+/// A dictionary's entries as text, in braces, one a line, indented by four spaces.
+fn dict_text(entries: &[(String, Data)]) -> String {
+    let mut text = String::from("{");
+    for (k, v) in entries {
+        text += &format!("\n    {}", data_text(k, v).replace('\n', "\n    "));
+    }
+    text + "\n}"
 }
 
 /// Entry `key` of a dictionary holding `d`, as text: `int lod = 2`, `dictionary x = {...}`
@@ -106,13 +119,7 @@ fn data_text(key: &str, d: &Data) -> String {
         Data::Ints(v) => ("int[]", list(v.iter().map(i32::to_string).collect())),
         Data::Doubles(v) => ("double[]", list(v.iter().map(f64::to_string).collect())),
         Data::Strings(v) => ("string[]", list(v.iter().map(|s| string_text(s)).collect())),
-        Data::Dict(entries) => {
-            let mut text = String::from("{");
-            for (k, v) in entries {
-                text += &format!("\n    {}", data_text(k, v).replace('\n', "\n    "));
-            }
-            ("dictionary", text + "\n}")
-        }
+        Data::Dict(entries) => ("dictionary", dict_text(entries)),
     };
     format!("{ty} {} = {value}", string_text(key))
 }

@@ -1075,7 +1075,14 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
     extra.extend(w.variant_set(stage, top)?);
     w.prim_spec_with(top, "Xform", vec![], children, extra)?;
     let doc = format!("Written by inbetween {}", env!("CARGO_PKG_VERSION"));
-    let fields = vec![
+    let layer_data = match &stage.layer_data {
+        Some(d) => {
+            let rep = w.data(d)?;
+            Some(w.raw_field("customLayerData", rep))
+        }
+        None => None,
+    };
+    let mut fields = vec![
         w.field("defaultPrim", Val::Token(&stage.root))?,
         w.field("documentation", Val::String(&doc))?,
         w.field("endTimeCode", Val::Double(stage.end))?,
@@ -1086,6 +1093,7 @@ pub fn write_usdc<W: Write + Seek>(stage: &Stage, out: W, source: &mut FrameSour
         w.field("upAxis", Val::Token("Y"))?,
         w.field("primChildren", Val::TokenVector(vec![stage.root.clone()]))?,
     ];
+    fields.extend(layer_data);
     w.spec(root, fields, SPEC_PSEUDO_ROOT);
     w.finish()
 }
