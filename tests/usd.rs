@@ -904,62 +904,84 @@ fn webp_textures_are_written_as_png() {
     }
 }
 
+/// The flag sample with a node "second" carrying mesh `mesh` off to the side, then `edit`.
+fn flag_and_second(path: &Path, mesh: usize, edit: impl FnOnce(&mut serde_json::Value)) {
+    edited_glb(&sample("flag_wave.glb"), path, |j| {
+        let node = serde_json::json!({"name": "second", "mesh": mesh, "translation": [0, 0, 3]});
+        j["nodes"].as_array_mut().unwrap().push(node);
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(2.into());
+        edit(j);
+    });
+}
+
 /// A mesh carried by two nodes: each node's Mesh plays the frames of the clips that drive its
-/// node (a clip per node, one after the other on the timeline), and a node no clip drives
-/// stays still, as in the glTF. Both nodes played every clip before, the still one included.
+/// node, and a node no clip drives stays still, as in the glTF (both nodes played every clip
+/// before, the still one included). A clip has one place on the timeline, whichever meshes and
+/// nodes it drives: a clip per node follow one another; two nodes each with its own weights
+/// sampler in one clip play side by side (the second a clip's length later before); a copy
+/// of the mesh driven by the second clip only plays it where the flag does (at the start,
+/// beside the first clip, before).
 #[test]
 fn each_instance_plays_the_clips_that_drive_its_node() {
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let plain = sample("flag_wave.glb");
-    let instanced = |name: &str, clip: bool| {
+    let input = |name: &str, mesh: usize, edit: &dyn Fn(&mut serde_json::Value)| {
         let path = dir.path().join(name);
-        edited_glb(&plain, &path, |j| {
-            let node = serde_json::json!({"name": "second", "mesh": 0, "translation": [0, 0, 3]});
-            j["nodes"].as_array_mut().unwrap().push(node);
-            j["scenes"][0]["nodes"]
-                .as_array_mut()
-                .unwrap()
-                .push(2.into());
-            if clip {
-                let mut a = j["animations"][0].clone();
-                a["name"] = "second".into();
-                a["channels"][0]["target"]["node"] = 2.into();
-                j["animations"].as_array_mut().unwrap().push(a);
-            }
-        });
+        flag_and_second(&path, mesh, edit);
         path
     };
-    for (input, second) in [
-        (instanced("still.glb", false), None),
-        (instanced("clips.glb", true), Some((61.0, 121.0))),
+    let still = input("still.glb", 0, &|_| {});
+    let clips = input("clips.glb", 0, &|j| {
+        let mut a = j["animations"][0].clone();
+        a["name"] = "second".into();
+        a["channels"][0]["target"]["node"] = 2.into();
+        j["animations"].as_array_mut().unwrap().push(a);
+    });
+    let twin = input("twin.glb", 0, &|j| {
+        let a = &mut j["animations"][0];
+        let s = a["samplers"][0].clone();
+        a["samplers"].as_array_mut().unwrap().push(s);
+        let c = serde_json::json!({"sampler": 1, "target": {"node": 2, "path": "weights"}});
+        a["channels"].as_array_mut().unwrap().push(c);
+    });
+    let copy = input("copy.glb", 2, &|j| {
+        let mesh = j["meshes"][0].clone();
+        j["meshes"].as_array_mut().unwrap().push(mesh);
+        let mut b = j["animations"][0].clone();
+        b["name"] = "both".into();
+        let c = serde_json::json!({"sampler": 0, "target": {"node": 2, "path": "weights"}});
+        b["channels"].as_array_mut().unwrap().push(c);
+        j["animations"].as_array_mut().unwrap().push(b);
+    });
+    for (input, flag, second) in [
+        (&still, (0.0, 60.0, 61), None),
+        (&clips, (0.0, 60.0, 61), Some((61.0, 121.0, 61))),
+        (&twin, (0.0, 60.0, 61), Some((0.0, 60.0, 61))),
+        (&copy, (0.0, 121.0, 122), Some((61.0, 121.0, 61))),
     ] {
         for fmt in ["usda", "usdc"] {
+            let what = format!("{} {fmt}", input.display());
             let usd = dir.path().join(format!("out.{fmt}"));
-            tween_quietly(&input, &usd, &[]);
+            tween_quietly(input, &usd, &[]);
             let r = clean_usd_report(&python, &usd, fmt);
             let mesh = |path: &str| {
-                let m = r["meshes"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .find(|m| m["path"] == path);
+                let m = (r["meshes"].as_array().unwrap().iter()).find(|m| m["path"] == path);
                 m.unwrap_or_else(|| panic!("{path} in {}", r["meshes"]))
                     .clone()
             };
             let span = |m: &serde_json::Value| {
                 let t = m["times"].as_array().unwrap();
-                (
-                    t[0].as_f64().unwrap(),
-                    t[t.len() - 1].as_f64().unwrap(),
-                    t.len(),
-                )
+                let f = |v: &serde_json::Value| v.as_f64().unwrap();
+                (f(&t[0]), f(&t[t.len() - 1]), t.len())
             };
-            assert_eq!(span(&mesh("/samples/flag/flag")), (0.0, 60.0, 61), "{fmt}");
+            assert_eq!(span(&mesh("/samples/flag/flag")), flag, "{what}");
             let other = mesh("/samples/second/flag");
             match second {
-                None => assert_eq!(other["static"], true, "{fmt}: the undriven instance"),
-                Some((a, b)) => assert_eq!(span(&other), (a, b, 61), "{fmt}"),
+                None => assert_eq!(other["static"], true, "{what}: the undriven instance"),
+                Some(s) => assert_eq!(span(&other), s, "{what}"),
             }
         }
     }
@@ -1972,68 +1994,5 @@ fn extras_travel_to_usd_as_custom_data() {
             "sourceGenerator": generator,
         });
         assert_eq!(meta["/"], layer, "{fmt}");
-    }
-}
-
-/// A clip has one place on the timeline, whichever meshes and nodes it drives. Two nodes
-/// sharing the flag's mesh, each with its own weights sampler in one clip, play side by side
-/// (the second played after the first, a clip's length later, before); and a mesh driven by
-/// the second clip only plays it where the mesh the first clip also drives does (at the
-/// start, beside the first clip, before).
-#[test]
-fn a_clip_has_one_place_on_the_timeline() {
-    let Some(python) = python() else { return };
-    let dir = tempfile::tempdir().unwrap();
-    let plain = sample("flag_wave.glb");
-    let twin = dir.path().join("twin.glb");
-    edited_glb(&plain, &twin, |j| {
-        let node = serde_json::json!({"name": "second", "mesh": 0, "translation": [0, 0, 3]});
-        j["nodes"].as_array_mut().unwrap().push(node);
-        j["scenes"][0]["nodes"]
-            .as_array_mut()
-            .unwrap()
-            .push(2.into());
-        let a = &mut j["animations"][0];
-        let s = a["samplers"][0].clone();
-        a["samplers"].as_array_mut().unwrap().push(s);
-        let c = serde_json::json!({"sampler": 1, "target": {"node": 2, "path": "weights"}});
-        a["channels"].as_array_mut().unwrap().push(c);
-    });
-    let copy = dir.path().join("copy.glb");
-    edited_glb(&plain, &copy, |j| {
-        let mesh = j["meshes"][0].clone();
-        j["meshes"].as_array_mut().unwrap().push(mesh);
-        let node = serde_json::json!({"name": "second", "mesh": 2, "translation": [0, 0, 3]});
-        j["nodes"].as_array_mut().unwrap().push(node);
-        j["scenes"][0]["nodes"]
-            .as_array_mut()
-            .unwrap()
-            .push(2.into());
-        let mut b = j["animations"][0].clone();
-        b["name"] = "both".into();
-        let c = serde_json::json!({"sampler": 0, "target": {"node": 2, "path": "weights"}});
-        b["channels"].as_array_mut().unwrap().push(c);
-        j["animations"].as_array_mut().unwrap().push(b);
-    });
-    for (input, flag, second) in [
-        (&twin, (0.0, 60.0, 61), (0.0, 60.0, 61)),
-        (&copy, (0.0, 121.0, 122), (61.0, 121.0, 61)),
-    ] {
-        for fmt in ["usda", "usdc"] {
-            let usd = dir.path().join(format!("out.{fmt}"));
-            tween_quietly(input, &usd, &[]);
-            let r = clean_usd_report(&python, &usd, fmt);
-            let span = |path: &str| {
-                let m = (r["meshes"].as_array().unwrap().iter())
-                    .find(|m| m["path"] == path)
-                    .unwrap_or_else(|| panic!("{path} in {}", r["meshes"]));
-                let t = m["times"].as_array().unwrap();
-                let f = |v: &serde_json::Value| v.as_f64().unwrap();
-                (f(&t[0]), f(&t[t.len() - 1]), t.len())
-            };
-            let what = format!("{} {fmt}", input.display());
-            assert_eq!(span("/samples/flag/flag"), flag, "{what}");
-            assert_eq!(span("/samples/second/flag"), second, "{what}");
-        }
     }
 }
