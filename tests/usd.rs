@@ -1932,7 +1932,8 @@ fn names_usd_cannot_hold_are_kept_as_display_names() {
 /// each prim's `customData = { dictionary extras = {...} }`, every JSON kind kept: booleans,
 /// whole numbers (`int`, or `int64` past 32 bits), reals, strings, arrays of one kind, nested
 /// objects, and a mixed array as its JSON text; null entries and empty objects are left out,
-/// and a mesh's `targetNames` (a point cache has no targets). The asset's copyright, generator
+/// and a mesh's `targetNames` (a point cache has no targets); reals at the ends of their
+/// range exactly (the text in exponent form, which usd-core reads without a warning). The asset's copyright, generator
 /// and extras are the layer's `customLayerData`. They were lost before.
 #[test]
 fn extras_travel_to_usd_as_custom_data() {
@@ -1943,7 +1944,8 @@ fn extras_travel_to_usd_as_custom_data() {
         "lod": 2, "visible": true, "weight": 0.25, "big": 1u64 << 40, "note": "a \"b\"\nc",
         "tags": ["hero", "cloth"], "ids": [1, 2, 3], "reals": [0.5, 1], "flags": [true, false],
         "none": [], "mixed": [1, "a", null], "gone": null, "empty": {},
-        "nested": {"a b": {"deep": -1.5e-3}, "gone": null}
+        "nested": {"a b": {"deep": -1.5e-3}, "gone": null},
+        "huge": 1e300, "tiny": 5e-324, "u64": u64::MAX, "nul": "a\u{0}b"
     });
     edited_glb(&sample("flag_wave.glb"), &input, |j| {
         j["scenes"][0]["extras"] = serde_json::json!({"shot": "sq010_sh020", "frameStart": 1001});
@@ -1964,6 +1966,9 @@ fn extras_travel_to_usd_as_custom_data() {
     kept["mixed"] = "[1,\"a\",null]".into();
     kept["nested"].as_object_mut().unwrap().remove("gone");
     kept["reals"] = serde_json::json!([0.5, 1.0]);
+    // Past int64 a double; a NUL (which ends a string in .usdc's tables) the replacement.
+    kept["u64"] = serde_json::json!(u64::MAX as f64);
+    kept["nul"] = "a\u{fffd}b".into();
     for fmt in ["usda", "usdc", "usdz"] {
         let usd = dir.path().join(format!("out.{fmt}"));
         tween_quietly(&input, &usd, &[]);

@@ -375,7 +375,8 @@ impl Meta {
 /// A `customData` value made from JSON: a boolean, a number (`int` where it is a whole number
 /// that fits, else `int64`, else `double`), a string, an array of one of those kinds (`bool[]`,
 /// `int[]` or `double[]`, `string[]`; an empty one `string[]`), an object a dictionary (keys in
-/// order, null entries left out); any other array (mixed, nested) its JSON text as a string.
+/// order, null entries left out); any other array (mixed, nested) its JSON text as a string;
+/// text as [`usd_text`] makes it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Data {
     Bool(bool),
@@ -402,12 +403,10 @@ impl Data {
                 (None, Some(i)) => Data::Int64(i),
                 _ => Data::Double(n.as_f64().unwrap_or(0.0)),
             },
-            Value::String(s) => Data::String(s.clone()),
-            Value::Array(a) if a.iter().all(Value::is_string) => Data::Strings(
-                a.iter()
-                    .filter_map(|s| s.as_str().map(str::to_owned))
-                    .collect(),
-            ),
+            Value::String(s) => Data::String(usd_text(s)),
+            Value::Array(a) if a.iter().all(Value::is_string) => {
+                Data::Strings(a.iter().filter_map(|s| s.as_str().map(usd_text)).collect())
+            }
             Value::Array(a) if a.iter().all(Value::is_boolean) => {
                 Data::Bools(a.iter().filter_map(Value::as_bool).collect())
             }
@@ -417,10 +416,10 @@ impl Data {
             Value::Array(a) if a.iter().all(Value::is_number) => {
                 Data::Doubles(a.iter().filter_map(Value::as_f64).collect())
             }
-            Value::Array(_) => Data::String(v.to_string()),
+            Value::Array(_) => Data::String(usd_text(&v.to_string())),
             Value::Object(o) => {
                 let mut entries: Vec<(String, Data)> = (o.iter())
-                    .filter_map(|(k, v)| Some((k.clone(), Data::of(v)?)))
+                    .filter_map(|(k, v)| Some((usd_text(k), Data::of(v)?)))
                     .collect();
                 if entries.is_empty() {
                     return None;
@@ -458,7 +457,13 @@ pub fn layer_data(asset: &Value) -> Option<Data> {
 pub fn shown(gltf: &Value, written: &str) -> Option<String> {
     (gltf["name"].as_str())
         .filter(|n| *n != written)
-        .map(str::to_owned)
+        .map(usd_text)
+}
+
+/// `s` as a USD string can hold it: a NUL character (which ends a string in the binary
+/// format's tables: the tokens after it would shift) as U+FFFD, the replacement character.
+pub fn usd_text(s: &str) -> String {
+    s.replace('\0', "\u{fffd}")
 }
 
 /// Unique names among siblings: the first keeps its name, later ones get `_1`, `_2`, ...

@@ -93,6 +93,18 @@ fn meta_lines(meta: &Meta) -> Vec<String> {
     out
 }
 
+/// A double as the text format reads it back exactly and without a word: the shortest
+/// decimal, or in exponent form where that would be long or read as an integer out of range
+/// (1e300, 5e-324, 2^64).
+fn double_text(x: f64) -> String {
+    let plain = x.to_string();
+    if plain.len() > 20 || (!plain.contains('.') && x.abs() >= 1e15) {
+        format!("{x:e}")
+    } else {
+        plain
+    }
+}
+
 /// A dictionary's entries as text, in braces, one a line, indented by four spaces.
 fn dict_text(entries: &[(String, Data)]) -> String {
     let mut text = String::from("{");
@@ -110,14 +122,17 @@ fn data_text(key: &str, d: &Data) -> String {
         Data::Bool(b) => ("bool", (*b as u8).to_string()),
         Data::Int(i) => ("int", i.to_string()),
         Data::Int64(i) => ("int64", i.to_string()),
-        Data::Double(x) => ("double", x.to_string()),
+        Data::Double(x) => ("double", double_text(*x)),
         Data::String(s) => ("string", string_text(s)),
         Data::Bools(v) => (
             "bool[]",
             list(v.iter().map(|b| (*b as u8).to_string()).collect()),
         ),
         Data::Ints(v) => ("int[]", list(v.iter().map(i32::to_string).collect())),
-        Data::Doubles(v) => ("double[]", list(v.iter().map(f64::to_string).collect())),
+        Data::Doubles(v) => (
+            "double[]",
+            list(v.iter().map(|x| double_text(*x)).collect()),
+        ),
         Data::Strings(v) => ("string[]", list(v.iter().map(|s| string_text(s)).collect())),
         Data::Dict(entries) => ("dictionary", dict_text(entries)),
     };
