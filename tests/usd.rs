@@ -561,7 +561,9 @@ fn materials_and_textures_travel_to_usd() {
             .collect();
         let materials = doc.json["materials"].as_array().unwrap();
         for fmt in FORMATS {
-            let out = dir.path().join(format!("look.{fmt}"));
+            // An output named with an @ (and a space and quotes): its texture files' asset
+            // paths are delimited by @@@ in the text format (an unreadable .usda before).
+            let out = dir.path().join(format!("look@v2 \"x\".{fmt}"));
             let run = run_ok(&["tween", s(input), "-o", s(&out), "--fps", "2"]);
             let stderr = String::from_utf8_lossy(&run.stderr);
             let what = format!("{} .{fmt}", input.display());

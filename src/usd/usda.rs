@@ -250,6 +250,9 @@ fn value_text(v: &Value) -> String {
         Value::Vec4(x) => list(x),
         Value::Token(t) => format!("{t:?}"),
         Value::Text(t) => format!("{t:?}"),
+        // A path with an @ in it (an output named "shot@v2") is delimited by @@@, as USD's
+        // text format asks; an @@@ in it escaped.
+        Value::Asset(a) if a.contains('@') => format!("@@@{}@@@", a.replace("@@@", "\\@@@")),
         Value::Asset(a) => format!("@{a}@"),
         Value::Connect { .. } => unreachable!("connections are written as .connect"),
     }
