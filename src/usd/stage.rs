@@ -228,6 +228,15 @@ impl Animation {
             .filter_map(|(c, i)| per_sample.get(i).map(|&v| (c, v)))
             .collect();
         out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Two tracks of one clip driving the node (a file with two weights channels on it in
+        // one animation): one sample a code, the later track's, as a player applies channels.
+        out.dedup_by(|later, kept| {
+            let same = later.0 == kept.0;
+            if same {
+                *kept = *later;
+            }
+            same
+        });
         out
     }
 
@@ -1300,5 +1309,29 @@ fn sample(
         extent: extent(&points),
         points,
         normals,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_prim_has_one_sample_a_time_code() {
+        // Two tracks of one clip on one node (frames 0-2 and 3-5 at the same codes), and an
+        // extra sample between: one sample a code, the later track's.
+        let a = Animation {
+            mesh: 0,
+            primitive: 0,
+            times: vec![0.0, 1.0, 2.0, 0.0, 1.0, 2.0],
+            played: None,
+            normals: false,
+            instance: 0,
+            skin_only: false,
+            extra: vec![1.5],
+        };
+        let per_sample = ['a', 'b', 'c', 'd', 'e', 'f', 'x'];
+        let want = [(0.0, 'd'), (1.0, 'e'), (1.5, 'x'), (2.0, 'f')];
+        assert_eq!(a.ordered(&per_sample), want);
     }
 }
