@@ -1606,7 +1606,8 @@ fn walked_and_run(input: &Path, out: &Path) -> (serde_json::Value, Vec<u8>) {
 /// A channel that repeats another's target and sampler (glTF allows one channel a target; the
 /// validator refuses the repeat): left out of the output, which plays the same keys, said in a
 /// line. Parrot's weights channel repeated tweens to the frames of the original; Fox's walk
-/// with two of its channels repeated blends to the very bytes of the original's blend.
+/// with two of its channels repeated blends to the very bytes of the original's blend. So is
+/// one shadowed by a later channel of the same target with other keys (below).
 #[test]
 fn a_channel_repeating_another_is_left_out() {
     let Some(fx) = fixtures() else { return };
@@ -1635,6 +1636,65 @@ fn a_channel_repeating_another_is_left_out() {
         walked_and_run(&fox, &a),
         walked_and_run(&fx.join("skinned/Fox.glb"), &b)
     );
+    // A channel whose target a later channel animates with other keys (the validator's
+    // ANIMATION_DUPLICATE_TARGETS, in and out before): left out, the later one playing, its
+    // sampler with it where no other channel plays it. Parrot with a STEP copy of its clip
+    // first tweens to the original's frames; Fox's walk with a channel on a joint another
+    // channel turns, with a third's keys, first, blends to the original's bytes.
+    let shadowed = |file: &str, anim: usize, edit: &dyn Fn(&mut serde_json::Value)| {
+        let name = Path::new(file).file_name().unwrap().to_str().unwrap();
+        let out = dir.path().join(format!("shadowed_{name}"));
+        edited_glb(&fx.join(file), &out, |j| edit(&mut j["animations"][anim]));
+        out
+    };
+    let parrot = shadowed("morph-keyframes/Parrot.glb", 0, &|a| {
+        let mut step = a["samplers"][0].clone();
+        step["interpolation"] = "STEP".into();
+        a["samplers"].as_array_mut().unwrap().push(step);
+        let mut first = a["channels"][0].clone();
+        first["sampler"] = 1.into();
+        a["channels"].as_array_mut().unwrap().insert(0, first);
+    });
+    let said = "1 channel whose target a later channel animates with other keys";
+    let (ja, _) = tweened(&parrot, &a, &[said]);
+    // The same clip (the left-out sampler's accessors stay in the file, unused).
+    let clip = |j: &serde_json::Value| {
+        let mut c = j["animations"].clone();
+        c[0]["samplers"][0]["input"] = 0.into();
+        c[0]["samplers"][0]["output"] = 0.into();
+        c
+    };
+    assert_eq!(clip(&ja), clip(&jb));
+    let b_out = dir.path().join("parrot.glb");
+    tweened(&fx.join("morph-keyframes/Parrot.glb"), &b_out, &[]);
+    assert_eq!(read_targets(&a, 0, 0), read_targets(&b_out, 0, 0));
+    assert_eq!(weight_keys(&a), weight_keys(&b_out));
+    let fox = shadowed("skinned/Fox.glb", 1, &|a| {
+        let list = a["channels"].as_array().unwrap();
+        let c = (list.iter().skip(4))
+            .find(|c| c["target"]["path"] == list[3]["target"]["path"])
+            .unwrap();
+        let first = serde_json::json!({"sampler": c["sampler"], "target": list[3]["target"]});
+        a["channels"].as_array_mut().unwrap().insert(0, first);
+    });
+    assert_eq!(
+        walked_and_run(&fox, &a),
+        walked_and_run(&fx.join("skinned/Fox.glb"), &b)
+    );
+}
+
+/// The key times and weights of the first channel of the first animation (the gltf crate).
+fn weight_keys(path: &Path) -> (Vec<f32>, Vec<f32>) {
+    let (doc, buffers, _) = gltf::import(path).unwrap();
+    let channel = doc.animations().next().unwrap().channels().next().unwrap();
+    let reader = channel.reader(|b| Some(&buffers[b.index()]));
+    let times = reader.read_inputs().unwrap().collect();
+    match reader.read_outputs().unwrap() {
+        gltf::animation::util::ReadOutputs::MorphTargetWeights(w) => {
+            (times, w.into_f32().collect())
+        }
+        _ => panic!("{}: no weights", path.display()),
+    }
 }
 
 /// Empty lists (glTF asks at least one entry of every list written: the validator's

@@ -192,7 +192,12 @@ pub fn read_channels(
 ) -> Result<Vec<Channel>> {
     let samplers = arr(anim, "samplers");
     let mut channels = Vec::new();
-    for ch in arr(anim, "channels") {
+    let shadowed = super::mend::shadowed(anim);
+    for (ch, _) in arr(anim, "channels")
+        .iter()
+        .zip(shadowed)
+        .filter(|(_, s)| !s)
+    {
         // A node's property, by `node` and `path` or through KHR_animation_pointer; a
         // pointer to anything else (a material's colour, a light) is no node's.
         let Some((node, property)) = node_target(&ch["target"]) else {

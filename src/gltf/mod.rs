@@ -45,6 +45,7 @@ pub use encode::{
     exp_roundtrip, oct_roundtrip, row_components, ELEMENT_MARK, FILTER_GROUP, FILTER_MARK, OCT_MARK,
 };
 pub use instancing::{instances, Instances};
+pub use mend::shadowed;
 pub use read::{
     arr, at, listed, listed_or_none, mesh_nodes, node_target, quoted_name, starts_like_bvh,
     target_names, weights_target, Document, WeightsTarget,

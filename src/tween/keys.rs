@@ -345,7 +345,11 @@ impl MeshUsers {
         let nodes = mesh_nodes(json);
         let mut channels: HashMap<usize, Vec<(usize, usize, usize)>> = HashMap::new();
         for (ai, anim) in arr(json, "animations").iter().enumerate() {
+            let shadowed = crate::gltf::shadowed(anim);
             for (ci, ch) in arr(anim, "channels").iter().enumerate() {
+                if shadowed[ci] {
+                    continue; // a later channel's keys play
+                }
                 let sampler = ch["sampler"].as_u64().unwrap_or(u64::MAX) as usize;
                 let aimed: &[usize] = match weights_target(&ch["target"]) {
                     Some(WeightsTarget::Node(n)) => &[n],

@@ -3,7 +3,10 @@
 //! with neither, having lost its weights): left out of the output, which plays the same. So
 //! is a channel that repeats another's target and sampler ([`repeated_channels`],
 //! [`drop_repeated_channels`]): glTF allows one channel a target, and the other plays the
-//! same keys. Repeats on other samplers (which keys win is each player's choice) are left.
+//! same keys. A channel whose target a later channel animates with other keys ([`shadowed`];
+//! which keys win is each player's choice: three.js averages them) is left out too, so that
+//! the output is valid; every stage reads the later channel's keys, as a player applying
+//! channels in order shows them.
 
 use crate::gltf::read::{arr, listed, quoted_name};
 use serde_json::Value;
@@ -43,6 +46,24 @@ fn repeats(anim: &Value) -> Vec<bool> {
         .collect()
 }
 
+/// Which channels of `anim` a later channel shadows: one whose target a later channel (not
+/// itself a repeat, see [`repeats`]) animates with another sampler. The readers leave them
+/// out (the later channel's keys play), as the output does ([`drop_repeated_channels`]).
+pub fn shadowed(anim: &Value) -> Vec<bool> {
+    let repeat = repeats(anim);
+    let targets: Vec<String> = (arr(anim, "channels").iter())
+        .map(|c| canonical(&c["target"]))
+        .collect();
+    let mut later = std::collections::HashSet::new();
+    let mut out = vec![false; targets.len()];
+    for i in (0..targets.len()).rev() {
+        if !repeat[i] && !later.insert(&targets[i]) {
+            out[i] = true;
+        }
+    }
+    out
+}
+
 /// `v` as text with every object's keys in order: the same text for values JSON holds equal,
 /// in whatever order a writer put their keys.
 fn canonical(v: &Value) -> String {
@@ -75,6 +96,14 @@ pub fn repeated_channels(json: &Value) -> Vec<String> {
                 "animation {name}: {n} channel{s} repeating another's target and sampler (glTF allows one channel a target): left out, {its} keys played by the other"
             ));
         }
+        let n = shadowed(anim).into_iter().filter(|&r| r).count();
+        if n > 0 {
+            let name = quoted_name(anim, || format!("{a}"));
+            let (s, whose) = if n == 1 { ("", "its") } else { ("s", "their") };
+            lines.push(format!(
+                "animation {name}: {n} channel{s} whose target a later channel animates with other keys (glTF allows one channel a target; players differ on which wins): left out, the later one playing {whose} target"
+            ));
+        }
     }
     lines
 }
@@ -86,10 +115,43 @@ pub fn drop_repeated_channels(json: &mut Value) {
         return;
     };
     for anim in anims {
-        let keep: Vec<bool> = repeats(anim).into_iter().map(|r| !r).collect();
+        let keep: Vec<bool> = (repeats(anim).into_iter().zip(shadowed(anim)))
+            .map(|(r, s)| !r && !s)
+            .collect();
+        let sampler_of = |c: &Value| c["sampler"].as_u64().map(|s| s as usize);
+        let dropped: Vec<usize> = (arr(anim, "channels").iter().zip(&keep))
+            .filter(|(_, k)| !**k)
+            .filter_map(|(c, _)| sampler_of(c))
+            .collect();
         if let Some(channels) = anim.get_mut("channels").and_then(Value::as_array_mut) {
             let mut k = keep.iter();
             channels.retain(|_| *k.next().unwrap());
+        }
+        // A sampler only a left-out channel played (a shadowed channel's) goes too, the
+        // others renumbered; unused samplers the input has otherwise stay as they are.
+        let used: std::collections::HashSet<usize> = arr(anim, "channels")
+            .iter()
+            .filter_map(sampler_of)
+            .collect();
+        let freed: std::collections::BTreeSet<usize> =
+            dropped.into_iter().filter(|s| !used.contains(s)).collect();
+        if freed.is_empty() {
+            continue;
+        }
+        if let Some(samplers) = anim.get_mut("samplers").and_then(Value::as_array_mut) {
+            let mut i = 0;
+            samplers.retain(|_| {
+                i += 1;
+                !freed.contains(&(i - 1))
+            });
+        }
+        let shift = |s: usize| s - freed.range(..s).count();
+        if let Some(channels) = anim.get_mut("channels").and_then(Value::as_array_mut) {
+            for c in channels {
+                if let Some(s) = sampler_of(c) {
+                    c["sampler"] = shift(s).into();
+                }
+            }
         }
     }
 }

@@ -32,7 +32,7 @@ mod targets;
 mod weights;
 
 pub use animations::{
-    drop_empty_animations, drop_repeated_channels, empty_animations, repeated_channels,
+    drop_empty_animations, drop_repeated_channels, empty_animations, repeated_channels, shadowed,
 };
 pub use bounds::bounds;
 pub use data_uris::image_data_uris;
