@@ -83,26 +83,24 @@ fn canonical(v: &Value) -> String {
     }
 }
 
-/// A line naming the input's animations with channels that repeat another's target and
-/// sampler, which the output leaves out ([`drop_repeated_channels`], when it is written).
+/// A line per kind naming the input's animations with channels that repeat another's target
+/// and sampler, or that a later channel shadows ([`shadowed`]), which the output leaves out
+/// ([`drop_repeated_channels`], when it is written).
 pub fn repeated_channels(json: &Value) -> Vec<String> {
     let mut lines = Vec::new();
     for (a, anim) in arr(json, "animations").iter().enumerate() {
-        let n = repeats(anim).into_iter().filter(|&r| r).count();
-        if n > 0 {
-            let name = quoted_name(anim, || format!("{a}"));
-            let (s, its) = if n == 1 { ("", "its") } else { ("s", "their") };
-            lines.push(format!(
-                "animation {name}: {n} channel{s} repeating another's target and sampler (glTF allows one channel a target): left out, {its} keys played by the other"
-            ));
-        }
-        let n = shadowed(anim).into_iter().filter(|&r| r).count();
-        if n > 0 {
-            let name = quoted_name(anim, || format!("{a}"));
-            let (s, whose) = if n == 1 { ("", "its") } else { ("s", "their") };
-            lines.push(format!(
-                "animation {name}: {n} channel{s} whose target a later channel animates with other keys (glTF allows one channel a target; players differ on which wins): left out, the later one playing {whose} target"
-            ));
+        let kinds = [
+            (repeats(anim), "repeating another's target and sampler (glTF allows one channel a target): left out, {its} keys played by the other"),
+            (shadowed(anim), "whose target a later channel animates with other keys (glTF allows one channel a target; players differ on which wins): left out, the later one playing {its} target"),
+        ];
+        for (marked, what) in kinds {
+            let n = marked.into_iter().filter(|&r| r).count();
+            if n > 0 {
+                let name = quoted_name(anim, || format!("{a}"));
+                let (s, its) = if n == 1 { ("", "its") } else { ("s", "their") };
+                let what = what.replace("{its}", its);
+                lines.push(format!("animation {name}: {n} channel{s} {what}"));
+            }
         }
     }
     lines
