@@ -209,27 +209,18 @@ impl<W: Write + Seek> Writer<W> {
             }
             Val::Vec3fs(v) => self.vec3f_array(v)?,
             Val::Quaths(v) => {
-                let at = self.pos;
-                self.u64(v.len() as u64)?;
                 let raw: Vec<u8> = (v.iter().flatten())
                     .flat_map(|&x| half::f16::from_f32(x).to_le_bytes())
                     .collect();
-                self.bytes(&raw)?;
-                rep_heap(T_QUATH, at, true)
+                self.array(T_QUATH, v.len(), &raw)?
             }
             Val::Vec2fs(v) => {
-                let at = self.pos;
-                self.u64(v.len() as u64)?;
                 let raw: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
-                self.bytes(&raw)?;
-                rep_heap(T_VEC2F, at, true)
+                self.array(T_VEC2F, v.len(), &raw)?
             }
             Val::Floats(v) => {
-                let at = self.pos;
-                self.u64(v.len() as u64)?;
                 let raw: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
-                self.bytes(&raw)?;
-                rep_heap(T_FLOAT, at, true)
+                self.array(T_FLOAT, v.len(), &raw)?
             }
             Val::Float(x) => rep_inline(T_FLOAT, x.to_bits() as u64),
             Val::Vec2(v) => self.floats_value(T_VEC2F, v)?,
@@ -311,11 +302,17 @@ impl<W: Write + Seek> Writer<W> {
     }
 
     fn vec3f_array(&mut self, v: &[[f32; 3]]) -> Result<u64> {
-        let at = self.pos;
-        self.u64(v.len() as u64)?;
         let raw: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
-        self.bytes(&raw)?;
-        Ok(rep_heap(T_VEC3F, at, true))
+        self.array(T_VEC3F, v.len(), &raw)
+    }
+
+    /// An uncompressed array of `len` elements of type `ty` whose bytes are `raw`: its count,
+    /// then the elements as they are.
+    fn array(&mut self, ty: u64, len: usize, raw: &[u8]) -> Result<u64> {
+        let at = self.pos;
+        self.u64(len as u64)?;
+        self.bytes(raw)?;
+        Ok(rep_heap(ty, at, true))
     }
 
     /// A TimeSamples value over arrays already in the file (`reps[f]` at `times[f]`):
@@ -532,28 +529,19 @@ impl<W: Write + Seek> Writer<W> {
             Data::Double(x) => self.value(Val::Double(*x))?,
             Data::String(s) => self.value(Val::String(s))?,
             Data::Bools(v) => {
-                let at = self.pos;
-                self.u64(v.len() as u64)?;
-                self.bytes(&v.iter().map(|&b| b as u8).collect::<Vec<u8>>())?;
-                rep_heap(T_BOOL, at, true)
+                let raw: Vec<u8> = v.iter().map(|&b| b as u8).collect();
+                self.array(T_BOOL, v.len(), &raw)?
             }
             Data::Ints(v) => self.value(Val::Ints(v.clone()))?,
             Data::Doubles(v) => {
-                let at = self.pos;
-                self.u64(v.len() as u64)?;
-                self.bytes(&v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>())?;
-                rep_heap(T_DOUBLE, at, true)
+                let raw: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+                self.array(T_DOUBLE, v.len(), &raw)?
             }
             Data::Strings(v) => {
-                let idx: Vec<u32> = v.iter().map(|s| self.string(s)).collect();
-                let at = self.pos;
-                self.u64(idx.len() as u64)?;
-                self.bytes(
-                    &idx.iter()
-                        .flat_map(|i| i.to_le_bytes())
-                        .collect::<Vec<u8>>(),
-                )?;
-                rep_heap(T_STRING, at, true)
+                let raw: Vec<u8> = (v.iter())
+                    .flat_map(|s| self.string(s).to_le_bytes())
+                    .collect();
+                self.array(T_STRING, v.len(), &raw)?
             }
             Data::Dict(entries) => {
                 let mut body = Vec::with_capacity(entries.len());
