@@ -445,18 +445,11 @@ impl Data {
 /// `sourceGenerator`: the layer's own is `doc`) and its `extras` (Sketchfab's author, licence,
 /// source and title), as a `customLayerData` dictionary; `None` when it has none of them.
 pub fn layer_data(asset: &Value) -> Option<Data> {
-    let mut entries = Vec::new();
-    for (key, name) in [
-        ("copyright", "copyright"),
-        ("extras", "extras"),
-        ("generator", "sourceGenerator"),
-    ] {
-        if let Some(d) = Data::of(&asset[key]) {
-            entries.push((name.to_owned(), d));
-        }
-    }
-    entries.sort_by(|a, b| a.0.cmp(&b.0));
-    (!entries.is_empty()).then_some(Data::Dict(entries))
+    Data::of(&json!({
+        "copyright": asset["copyright"],
+        "extras": asset["extras"],
+        "sourceGenerator": asset["generator"],
+    }))
 }
 
 /// The name a prim shows (its `displayName` metadata): the glTF object's own `name` where

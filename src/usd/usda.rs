@@ -248,8 +248,8 @@ fn value_text(v: &Value) -> String {
         Value::Vec2(x) => list(x),
         Value::Vec3(x) => list(x),
         Value::Vec4(x) => list(x),
-        Value::Token(t) => format!("{t:?}"),
-        Value::Text(t) => format!("{t:?}"),
+        Value::Token(t) => string_text(t),
+        Value::Text(t) => string_text(t),
         // A path with an @ in it (an output named "shot@v2") is delimited by @@@, as USD's
         // text format asks; an @@@ in it escaped.
         Value::Asset(a) if a.contains('@') => format!("@@@{}@@@", a.replace("@@@", "\\@@@")),
@@ -335,7 +335,7 @@ fn write_prim(
 fn write_plain(p: &Plain, out: &mut dyn Write, pad: &str) -> Result<()> {
     let mut meta = meta_lines(&p.meta);
     if !p.api_schemas.is_empty() {
-        let schemas: Vec<String> = p.api_schemas.iter().map(|s| format!("{s:?}")).collect();
+        let schemas: Vec<String> = p.api_schemas.iter().map(|s| string_text(s)).collect();
         meta.push(format!("prepend apiSchemas = [{}]", schemas.join(", ")));
     }
     open_prim(out, pad, &format!("def {}", p.type_name), &p.name, &meta)?;
