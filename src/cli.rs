@@ -7,7 +7,8 @@ use inbetween::blend::{BlendJob, CycleMethod};
 use inbetween::gltf::Access;
 use inbetween::preview;
 use inbetween::tween::{
-    Basis, CompactOptions, KeySource, Layout, Method, Timing, TweenJob, DEFAULT_TOLERANCE,
+    typed_rate, Basis, CompactOptions, KeySource, Layout, Method, Timing, TweenJob,
+    DEFAULT_TOLERANCE,
 };
 use std::path::PathBuf;
 
@@ -204,7 +205,9 @@ pub struct TimingArgs {
     /// between two keys gets round(gap x RATE) - 1 evenly spaced frames, and keys already
     /// closer than 1/RATE s get none (a clip baked at 30 or 60 samples a second stays as it
     /// is). Keys on a 1/10, 1/15 or 1/30 s grid give frames exactly on the 30 per second grid.
-    #[arg(long, value_name = "RATE", conflicts_with_all = ["tweens", "fps"], allow_negative_numbers = true)]
+    /// A rate is a number or a fraction (24000/1001; 23.976, 29.97 and 59.94 are read as the
+    /// NTSC rates they stand for).
+    #[arg(long, value_name = "RATE", conflicts_with_all = ["tweens", "fps"], allow_negative_numbers = true, value_parser = per_second)]
     rate: Option<f64>,
     /// Instead: exactly N frames inserted evenly between each pair of consecutive keys.
     #[arg(
@@ -216,8 +219,8 @@ pub struct TimingArgs {
     tweens: Option<usize>,
     /// Instead: frames at this fixed rate (per second) from the first key over the keys' time
     /// span; the first and the last key are always frames, keys between them only where the
-    /// grid meets them.
-    #[arg(long, value_name = "FPS", allow_negative_numbers = true)]
+    /// grid meets them. A number or a fraction, as --rate.
+    #[arg(long, value_name = "FPS", allow_negative_numbers = true, value_parser = per_second)]
     fps: Option<f64>,
     /// Close every key sequence into a loop (append its first key after the last) and let
     /// `spline` wrap around it. Without it, tracks whose last key equals the first wrap.
@@ -242,6 +245,21 @@ pub struct TimingArgs {
         allow_negative_numbers = true
     )]
     extend_after: f64,
+}
+
+/// A rate given as a number (`30`; `29.97`, `23.976` and `59.94` read as the NTSC rates they
+/// stand for) or as a fraction of two (`30000/1001`): its value, whatever its sign (the
+/// timing's own check refuses what a run cannot use, in the words it uses for both forms).
+fn per_second(text: &str) -> Result<f64, String> {
+    let number = |t: &str| {
+        t.trim().parse::<f64>().map_err(|e| {
+            format!("{e} (a rate is a number such as 30 or a fraction such as 30000/1001)")
+        })
+    };
+    match text.split_once('/') {
+        Some((n, d)) => Ok(number(n)? / number(d)?),
+        None => Ok(typed_rate(number(text)?)),
+    }
 }
 
 impl TimingArgs {

@@ -197,6 +197,83 @@ fn key_times_snap_to_their_grid() {
     }
 }
 
+/// Parrot with its keys moved onto the NTSC grid of 30000/1001 frames a second, three frames
+/// apart (as a clip baked at 29.97 stores them), written to `out`.
+fn parrot_at_ntsc(parrot: &Path, out: &Path) -> Vec<f32> {
+    let (mut json, mut bin) = glb_parts(parrot);
+    let input = json["animations"][0]["samplers"][0]["input"]
+        .as_u64()
+        .unwrap() as usize;
+    let acc = json["accessors"][input].clone();
+    let n = acc["count"].as_u64().unwrap() as usize;
+    let times: Vec<f32> = (0..n)
+        .map(|k| (3.0 * k as f64 * 1001.0 / 30000.0) as f32)
+        .collect();
+    json["accessors"][input]["min"] = serde_json::json!([times[0]]);
+    json["accessors"][input]["max"] = serde_json::json!([times[n - 1]]);
+    let view = &json["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap_or(0) + acc["byteOffset"].as_u64().unwrap_or(0);
+    for (k, t) in times.iter().enumerate() {
+        let i = at as usize + 4 * k;
+        bin[i..i + 4].copy_from_slice(&t.to_le_bytes());
+    }
+    write_glb(out, &json, &bin);
+    times
+}
+
+#[test]
+fn ntsc_rates_typed_or_as_fractions_land_on_the_keys() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("parrot_2997.glb");
+    let keys = parrot_at_ntsc(&fx.join("morph-keyframes/Parrot.glb"), &input);
+    let keyed = played(&input, 0, 0, 0);
+    let mut outputs = Vec::new();
+    for fps in ["29.97", "30000/1001"] {
+        let out = dir.path().join(format!("fps{}.glb", outputs.len()));
+        let r = run_ok(&["tween", s(&input), "-o", s(&out), "--fps", fps]);
+        let summary = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            summary.contains("(30000/1001 frames/s over"),
+            "{fps}: {summary}"
+        );
+        let p = played(&out, 0, 0, 0);
+        assert_eq!(p.times.len(), 3 * (keys.len() - 1) + 1, "--fps {fps}");
+        for (j, t) in p.times.iter().enumerate() {
+            assert_eq!(
+                *t,
+                (j as f64 * 1001.0 / 30000.0) as f32,
+                "--fps {fps}: frame {j}"
+            );
+        }
+        // Every key is a frame, posed as the input poses it at its time.
+        for (k, pose) in keyed.positions.iter().enumerate() {
+            for (a, b) in p.positions[3 * k].iter().zip(pose) {
+                for c in 0..3 {
+                    assert!(
+                        (a[c] - b[c]).abs() <= 1e-4,
+                        "--fps {fps}: key {k} {a:?} {b:?}"
+                    );
+                }
+            }
+        }
+        outputs.push(std::fs::read(&out).unwrap());
+    }
+    assert!(
+        outputs[0] == outputs[1],
+        "29.97 and 30000/1001 write the same file"
+    );
+    // The rate's other spellings: 23.976 is 24000/1001, a plain decimal stays itself.
+    let out = dir.path().join("film.glb");
+    let r = run_ok(&["tween", s(&input), "-o", s(&out), "--rate", "23.976"]);
+    assert!(String::from_utf8_lossy(&r.stderr).contains("24000/1001 frames/s between keys"));
+    let r = run_ok(&["tween", s(&input), "-o", s(&out), "--fps", "29.9"]);
+    assert!(String::from_utf8_lossy(&r.stderr).contains("(29.9 frames/s over"));
+    let r = inbetween(&["tween", s(&input), "-o", s(&out), "--fps", "30000/x"]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("a fraction such as 30000/1001"));
+}
+
 #[test]
 fn inspect_describes_every_fixture_by_its_schema() {
     let dir = tempfile::tempdir().unwrap();

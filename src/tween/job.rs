@@ -16,7 +16,7 @@ use super::options::{Layout, Method, Timing, TweenOptions};
 use super::report::{CompactMesh, CompactReport, MeshReport, Report};
 use super::schedule::{close_loop, frame_estimate, plan, MAX_FRAMES};
 use super::target_normals;
-use super::timegrid::timeline;
+use super::timegrid::{rate_text, timeline};
 use crate::gltf::{self, Access, Container, Document};
 use crate::memory::{memory_available, peak_rss_mib};
 use crate::output::{Format, Outputs};
@@ -109,9 +109,9 @@ impl Summary {
         let setup: f64 = self.meshes.iter().map(|m| m.setup.as_secs_f64()).sum();
         let solve: f64 = self.meshes.iter().map(|m| m.solve.as_secs_f64()).sum();
         let timing = match job.timing {
-            Timing::Rate(r) => format!("every key kept, {r} frames/s between keys"),
+            Timing::Rate(r) => format!("every key kept, {} frames/s between keys", rate_text(r)),
             Timing::Tweens(n) => format!("{n} between each pair of keys"),
-            Timing::Fps(f) => format!("{f} frames/s over the keys' span"),
+            Timing::Fps(f) => format!("{} frames/s over the keys' span", rate_text(f)),
         };
         let growth = self.output_bytes as f64 / self.input_bytes.max(1) as f64;
         let mut out = format!(

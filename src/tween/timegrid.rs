@@ -41,6 +41,36 @@ const RATES: &[(f64, f64)] = &[
     (120000.0, 1001.0),
 ];
 
+/// How near a rate given as a decimal must lie to an NTSC rate of [`RATES`] (relative) to be
+/// read as it: 29.97, 23.976 and 59.94 lie 1.0e-6 of themselves from 30000/1001, 24000/1001
+/// and 60000/1001, the rates editing tools and DCCs mean by them; no other rate of the table
+/// lies within 1e-3 of one.
+pub const NTSC_TYPED: f64 = 1e-5;
+
+/// The rate a decimal someone typed stands for: the NTSC rate of [`RATES`] within
+/// [`NTSC_TYPED`] of it (29.97 is 30000/1001, so frames land on keys baked at 29.97 and a USD
+/// output's time codes are whole), else the number itself.
+pub fn typed_rate(rate: f64) -> f64 {
+    RATES
+        .iter()
+        .map(|&(num, den)| num / den)
+        .filter(|_| rate.is_finite())
+        .find(|r| r.fract() != 0.0 && (rate - r).abs() <= NTSC_TYPED * r)
+        .unwrap_or(rate)
+}
+
+/// A rate as the summary shows it: an NTSC rate of [`RATES`] as its fraction (30000/1001),
+/// any other as its number.
+pub fn rate_text(rate: f64) -> String {
+    match RATES
+        .iter()
+        .find(|&&(num, den)| den != 1.0 && num / den == rate)
+    {
+        Some((num, den)) => format!("{num}/{den}"),
+        None => format!("{rate}"),
+    }
+}
+
 /// How far (in frames of the grid) a time may lie from a grid point and still be on it: a
 /// float32 key time carries about 1e-7 of itself, and exporters that sum spans in float32 drift
 /// by a few hundred of those over thousands of keys (AnimatedMorphSphere's 7.2 s is stored as
@@ -212,6 +242,20 @@ mod tests {
         // Off any grid: left alone.
         let odd = [0.0, 0.137, 0.291];
         assert_eq!(snap(&odd), (odd.to_vec(), None));
+    }
+
+    #[test]
+    fn typed_ntsc_rates_are_their_fractions() {
+        for (typed, num) in [(29.97, 30000.0), (23.976, 24000.0), (59.94, 60000.0)] {
+            assert_eq!(typed_rate(typed), num / 1001.0);
+            assert_eq!(rate_text(typed_rate(typed)), format!("{num}/1001"));
+        }
+        for other in [30.0, 24.0, 25.0, 29.9, 23.97, 1000.0, 0.0, -29.97] {
+            assert_eq!(typed_rate(other), other);
+        }
+        assert!(typed_rate(f64::NAN).is_nan());
+        assert_eq!(rate_text(30.0), "30");
+        assert_eq!(rate_text(29.97), "29.97");
     }
 
     #[test]
