@@ -1,8 +1,51 @@
 //! Space warp (ALGORITHMS.md B.3, Kovar, Gleicher & Pighin 2002): the rotation about the up axis
 //! and the floor translation that best carry one clip's joint positions onto the other's.
 
+use super::measure::Travel;
 use super::rig::{Pose, Rig};
 use glam::{DMat4, DQuat, DVec3};
+use serde::Serialize;
+
+/// A velocity below this many leg lengths a second is no travel to match (a root drifting on
+/// the spot; walks and runs travel 1-3 leg lengths a second, on still ground or a treadmill).
+pub const STILL: f64 = 0.05;
+
+/// How the second clip was made to travel as the first: the velocity (scene units per second,
+/// on the floor) added to its root over its own time.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MatchedTravel {
+    /// It steps in place and the first clip has root motion: it moves along at its treadmill's
+    /// speed, so that its planted feet stay still.
+    Along([f64; 3]),
+    /// It has root motion and the first clip steps in place: it is held on the spot, its root
+    /// at its mean speed taken away, so that its planted feet move back as on a treadmill.
+    OnTheSpot([f64; 3]),
+}
+
+impl MatchedTravel {
+    /// Blending a clip that steps in place with one that travels mixes a still root with a
+    /// moving one: the blend's root moves at the weight's share of one speed while its legs
+    /// step at the mix of both strides (a walk with root motion and a run in place at 0.5:
+    /// root 0.89 leg lengths a second, legs stepping for about 2), which the clean-up hides by
+    /// stretching the legs. The second clip is made the first's kind (`a`, `b` their travels,
+    /// `scale` the leg length); `None` where both are of one kind.
+    pub fn of(a: &Travel, b: &Travel, scale: f64) -> Option<MatchedTravel> {
+        let moving = |v: DVec3| v.length() > STILL * scale;
+        match (a.in_place(), b.in_place()) {
+            (false, true) if moving(b.ground) => Some(MatchedTravel::Along((-b.ground).to_array())),
+            (true, false) if moving(b.root) => Some(MatchedTravel::OnTheSpot((-b.root).to_array())),
+            _ => None,
+        }
+    }
+
+    /// The velocity added (scene units per second).
+    pub fn velocity(&self) -> DVec3 {
+        match self {
+            MatchedTravel::Along(v) | MatchedTravel::OnTheSpot(v) => DVec3::from_array(*v),
+        }
+    }
+}
 
 /// A rotation by `angle` (radians) about +Y followed by a floor translation (x, 0, z).
 #[derive(Clone, Copy, Debug, PartialEq)]

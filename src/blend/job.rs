@@ -2,6 +2,7 @@
 //! weight), append the new animations to the glTF document, or write BVH files with the first
 //! capture's skeleton; the files (and the report) are staged and appear together.
 
+use super::align::MatchedTravel;
 use super::by_name;
 use super::cycles::CycleMethod;
 use super::plan::{blend, gait, BlendOptions, Blended, Gait, Report};
@@ -95,7 +96,25 @@ impl BlendDone {
             r.clips[0].figures.sliding.mean,
             r.clips[1].figures.sliding.mean,
             r.naive.sliding.mean,
-        )
+        ) + &self.travel_note()
+    }
+
+    /// What was done where one clip steps in place and the other travels (empty otherwise).
+    fn travel_note(&self) -> String {
+        let r = &self.report;
+        let Some(m) = r.matched_travel else {
+            return String::new();
+        };
+        let speed = m.velocity().length() / r.leg_scale;
+        let [a, b] = [&r.clips[0].name, &r.clips[1].name];
+        match m {
+            MatchedTravel::Along(_) => format!(
+                "; \"{b}\" steps in place and \"{a}\" travels: \"{b}\" moved along at its treadmill's {speed:.2} leg/s"
+            ),
+            MatchedTravel::OnTheSpot(_) => format!(
+                "; \"{b}\" travels and \"{a}\" steps in place: \"{b}\" held on the spot (its {speed:.2} leg/s taken away)"
+            ),
+        }
     }
 }
 

@@ -61,17 +61,38 @@ pub struct Figures {
     pub jerk: f64,
 }
 
-/// Figures of `track`. A foot counts as planted where the contact test finds it planted or,
-/// per leg and frame, `expected` says it should be (empty: nothing more), so a motion whose
-/// feet never settle is still measured where its sources plant them.
-pub fn figures(
+/// How a motion travels, in scene units per second (horizontal): its root's mean velocity
+/// from its first frame to its last, and the velocity of the ground under its planted feet
+/// ([`ground_under`]: zero for a clip with root motion, the treadmill's for one in place).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Travel {
+    pub root: DVec3,
+    pub ground: DVec3,
+}
+
+impl Travel {
+    /// Whether the motion steps in place: its ground moves under it.
+    pub fn in_place(&self) -> bool {
+        self.ground != DVec3::ZERO
+    }
+}
+
+/// How `track` travels, its feet planted where the contact test finds them.
+pub fn travel(track: &Track, root: usize, legs: &[Leg], scale: f64) -> Travel {
+    planted(track, root, legs, scale, &[]).travel
+}
+
+/// The horizontal moves of planted feet from frame to frame (a looping track's step from its
+/// last frame back to the first too, so that the figures do not depend on where the loop
+/// starts) and how the track travels. A foot counts as planted where the contact test finds it
+/// planted or, per leg and frame, `expected` says it should be.
+fn planted(
     track: &Track,
     root: usize,
-    joints: &[usize],
     legs: &[Leg],
     scale: f64,
     expected: &[Vec<bool>],
-) -> Figures {
+) -> Planted {
     let n = track.len();
     let dt = track.dt;
     let flags: Vec<Vec<bool>> = legs
@@ -87,32 +108,72 @@ pub fn figures(
             f
         })
         .collect();
-    // A looping track's step from its last frame back to the first counts too, so that the
-    // figures do not depend on where the loop starts; there the feet come back by the loop's
-    // travel (the root's, from its first frame to where it comes back to it: was taken as the
-    // root's mean step times the frame count, which a clean-up moving the root unevenly made
-    // wrong by up to 2.4e-3 leg across the seam of Fox's walk).
+    // Across a loop's seam the feet come back by the loop's travel (the root's, from its first
+    // frame to where it comes back to it: was taken as the root's mean step times the frame
+    // count, which a clean-up moving the root unevenly made wrong by up to 2.4e-3 leg across
+    // the seam of Fox's walk).
     let wraps = track.looping && n > 2;
     let travel = if wraps { track.travel } else { DVec3::ZERO };
     let steps = if wraps { n } else { n.saturating_sub(1) };
-    let mut planted_moves = Vec::new();
+    let mut moves = Vec::new();
     for (leg, f) in legs.iter().zip(&flags) {
         for i in 0..steps {
             let k = (i + 1) % n;
             if f[i] && f[k] {
                 let seam = if k == 0 { travel } else { DVec3::ZERO };
-                planted_moves.push(flat(track.pos[k][leg.end()] - track.pos[i][leg.end()]) + seam);
+                moves.push(flat(track.pos[k][leg.end()] - track.pos[i][leg.end()]) + seam);
             }
         }
     }
-    let ground_step = if planted_moves.is_empty() {
+    let ground_step = if moves.is_empty() {
         DVec3::ZERO
     } else {
-        planted_moves.iter().sum::<DVec3>() / planted_moves.len() as f64
+        moves.iter().sum::<DVec3>() / moves.len() as f64
     };
     let duration = (n.max(2) - 1) as f64 * dt;
-    let root_speed = flat(track.pos[n - 1][root] - track.pos[0][root]).length() / duration;
-    let ground = ground_under(root_speed * dt, ground_step);
+    let shift = flat(track.pos[n - 1][root] - track.pos[0][root]);
+    let root_speed = shift.length() / duration;
+    Planted {
+        moves,
+        root_speed,
+        ground: ground_under(root_speed * dt, ground_step),
+        travel: Travel {
+            root: shift / duration,
+            ground: ground_under(root_speed * dt, ground_step) / dt,
+        },
+    }
+}
+
+/// What [`planted`] finds: the planted feet's moves, the root's speed (scene units per second)
+/// and the ground's step per frame (the figures are made from these), and the travel.
+struct Planted {
+    moves: Vec<DVec3>,
+    root_speed: f64,
+    ground: DVec3,
+    travel: Travel,
+}
+
+/// Figures of `track`. A foot counts as planted where the contact test finds it planted or,
+/// per leg and frame, `expected` says it should be (empty: nothing more), so a motion whose
+/// feet never settle is still measured where its sources plant them.
+pub fn figures(
+    track: &Track,
+    root: usize,
+    joints: &[usize],
+    legs: &[Leg],
+    scale: f64,
+    expected: &[Vec<bool>],
+) -> Figures {
+    let n = track.len();
+    let dt = track.dt;
+    let Planted {
+        moves: planted_moves,
+        root_speed,
+        ground,
+        ..
+    } = planted(track, root, legs, scale, expected);
+    let wraps = track.looping && n > 2;
+    let travel = if wraps { track.travel } else { DVec3::ZERO };
     let sliding = Spread::of(
         planted_moves
             .iter()

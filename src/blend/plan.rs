@@ -2,7 +2,7 @@
 //! warped by contact events, the second clip aligned to the first, poses mixed, feet cleaned up,
 //! and the figures of the report measured on the sources, a naive blend and the result.
 
-use super::align::{self, FloorTransform};
+use super::align::{self, FloorTransform, MatchedTravel};
 use super::analyze::{analyze, Analysis, Character};
 use super::cleanup::{self, LegGoal};
 use super::cycles::CycleMethod;
@@ -12,7 +12,7 @@ use super::mix::mix;
 use super::rig::{flat, Clip, Pose, Rig, UP};
 use super::timewarp::{self, Warp};
 use super::track::{pose_unwrapped, Track};
-use glam::DVec3;
+use glam::{DMat4, DVec3};
 use serde::Serialize;
 
 /// Options of a blend, with their defaults in [`BlendOptions::new`].
@@ -110,6 +110,9 @@ pub struct Report {
     /// Rotation (degrees, about +Y) and floor translation carrying the second clip onto the first.
     pub alignment_degrees: f64,
     pub alignment_translation: [f64; 3],
+    /// How the second clip was made to travel as the first, where one steps in place and the
+    /// other travels (`null` where both travel alike).
+    pub matched_travel: Option<MatchedTravel>,
     /// The same two clips blended at normalised time: no sync, no alignment, no clean-up.
     pub naive: Figures,
     pub result: ResultReport,
@@ -280,11 +283,19 @@ struct Sources {
     poses: [Vec<Pose>; 2],
     world: [Vec<Vec<DVec3>>; 2],
     fit: FloorTransform,
+    /// How B was made to travel as A, where they differ.
+    matched: Option<MatchedTravel>,
     /// The skeleton's joints.
     joints: Vec<usize>,
 }
 
-fn sources(rig: &Rig, clips: [&Clip; 2], an: [&Analysis; 2], phase: &Phase) -> Sources {
+fn sources(
+    rig: &Rig,
+    ch: &Character,
+    clips: [&Clip; 2],
+    an: [&Analysis; 2],
+    phase: &Phase,
+) -> Sources {
     let sample = |k: usize, pick: fn(&(f64, f64, f64)) -> f64| -> Vec<Pose> {
         phase
             .frames
@@ -294,6 +305,16 @@ fn sources(rig: &Rig, clips: [&Clip; 2], an: [&Analysis; 2], phase: &Phase) -> S
     };
     let poses_a = sample(0, |f| f.1);
     let mut poses_b = sample(1, |f| f.2);
+    // B made to travel as A does (moved along, or held on the spot) over its own time.
+    let [travel_a, travel_b] =
+        an.map(|an| measure::travel(&an.track, rig.root, &ch.legs, ch.scale));
+    let matched = MatchedTravel::of(&travel_a, &travel_b, ch.scale);
+    if let (Some(m), Some(first)) = (matched, phase.frames.first()) {
+        for (pose, f) in poses_b.iter_mut().zip(&phase.frames) {
+            let moved = DMat4::from_translation(m.velocity() * (f.2 - first.2));
+            align::move_skeleton(rig, pose, &moved);
+        }
+    }
     let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.skeleton[j]).collect();
     let first_cycle = phase
         .frames
@@ -316,6 +337,7 @@ fn sources(rig: &Rig, clips: [&Clip; 2], an: [&Analysis; 2], phase: &Phase) -> S
         poses: [poses_a, poses_b],
         world: [world_a, world_b],
         fit,
+        matched,
         joints,
     }
 }
@@ -569,7 +591,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     }
     let spans = [cycles_used(a, an_a), cycles_used(b, an_b)];
     let phase = phase(a, b, [an_a, an_b], [&spans[0], &spans[1]], w);
-    let mut src = sources(rig, [a, b], [an_a, an_b], &phase);
+    let mut src = sources(rig, &ch, [a, b], [an_a, an_b], &phase);
     // The sources' poses are mixed, then let go (the clean-up and the figures read their
     // positions): two copies of every frame fewer held through the clean-up.
     let [poses_a, poses_b] = std::mem::take(&mut src.poses);
@@ -665,6 +687,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
         ],
         alignment_degrees: src.fit.angle.to_degrees(),
         alignment_translation: src.fit.translation.to_array(),
+        matched_travel: src.matched,
         naive,
         result,
     };
