@@ -1664,6 +1664,83 @@ fn a_clip_in_place_blends_with_one_that_travels_as_its_kind() {
     );
 }
 
+/// Fox with its Run travelling: the hip's translation keys (b_Hip_01, below the root joints
+/// _rootJoint and b_Root_00, which stay put) carried on at `speed` scene units a second along
+/// the hip's parent's -Y (the floor's +Z, the way Fox runs), as a clip exported with root
+/// motion on the hips has it.
+fn fox_with_travelling_run(fox: &Path, out: &Path, speed: f32) {
+    let (json, mut bin) = glb_parts(fox);
+    let hip = (json["nodes"].as_array().unwrap().iter())
+        .position(|n| n["name"] == "b_Hip_01")
+        .unwrap();
+    let run = (json["animations"].as_array().unwrap().iter())
+        .find(|a| a["name"] == "Run")
+        .unwrap();
+    let channel = (run["channels"].as_array().unwrap().iter())
+        .find(|c| c["target"]["node"] == hip && c["target"]["path"] == "translation")
+        .unwrap();
+    let sampler = &run["samplers"][channel["sampler"].as_u64().unwrap() as usize];
+    let at = |acc: &Value| {
+        let a = &json["accessors"][acc.as_u64().unwrap() as usize];
+        let v = &json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+        let start = v["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0);
+        (start as usize, a["count"].as_u64().unwrap() as usize)
+    };
+    let ((times, n), (values, _)) = (at(&sampler["input"]), at(&sampler["output"]));
+    let f32_at = |bin: &[u8], i: usize| f32::from_le_bytes(bin[i..i + 4].try_into().unwrap());
+    let t0 = f32_at(&bin, times);
+    for k in 0..n {
+        let t = f32_at(&bin, times + 4 * k);
+        let y = values + 12 * k + 4;
+        let moved = f32_at(&bin, y) - speed * (t - t0);
+        bin[y..y + 4].copy_from_slice(&moved.to_le_bytes());
+    }
+    write_glb(out, &json, &bin);
+}
+
+/// Travel keyed on a joint below a root that stays put (Fox's Run carried on along the floor
+/// on its hip, b_Hip_01, as a clip exported with root motion on the hips): the clip was taken
+/// as no loop and refused ("its feet do not repeat a stride"). Now the hip is the body the
+/// positions are taken from; the travelling run, held on the spot beside the Walk in place,
+/// blends as the original (before clean-up 0.0583 leg/frame at 0.5, as the original), and
+/// blended with itself it travels as it does.
+#[test]
+fn travel_keyed_below_a_root_that_stays_put_is_the_body_s() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let fox = fx.join("skinned/Fox.glb");
+    let travelling = dir.path().join("fox_travelling.glb");
+    let speed = 200.0;
+    fox_with_travelling_run(&fox, &travelling, speed);
+    let inspect = run_ok(&["inspect", travelling.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&inspect.stdout);
+    assert!(text.contains("clip \"Run\": feet"), "{text}");
+    let out = |n: &str| dir.path().join(n);
+    for w in [0.25, 0.5, 0.75] {
+        let original = blend_report(&fox, "Walk", "Run", w, &out("o.glb"), &[]);
+        let held = blend_report(&travelling, "Walk", "Run", w, &out("h.glb"), &[]);
+        let (a, b) = (report_figures(&original), report_figures(&held));
+        assert!(
+            (a.0 - b.0).abs() < 1e-3,
+            "w {w}: before clean-up {} against {}",
+            b.0,
+            a.0
+        );
+        assert!(b.1 <= 1e-6 && b.3 <= 1.15, "w {w}: {b:?}");
+        let taken: Vec<f64> =
+            serde_json::from_value(held["matched_travel"]["on_the_spot"].clone()).unwrap();
+        let taken = taken.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!((taken / speed as f64 - 1.0).abs() < 0.01, "w {w}: {taken}");
+    }
+    let itself = blend_report(&travelling, "Run", "Run", 0.5, &out("rr.glb"), &[]);
+    let root = itself["result"]["after_cleanup"]["root_speed"]
+        .as_f64()
+        .unwrap();
+    let leg = itself["leg_scale"].as_f64().unwrap();
+    assert!((root * leg / speed as f64 - 1.0).abs() < 0.05, "{root}");
+    assert!(itself["matched_travel"].is_null());
+}
+
 /// Two CMU captures (walk and run, 120 fps, joint names differing) blended into BVH (issue 17):
 /// the output has the first capture's hierarchy text and channel order, its frame time, one
 /// frame per frame time of the blend, and read back it is the blend itself: every joint

@@ -69,13 +69,13 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
                     let along = track
                         .pos
                         .iter()
-                        .map(|p| (p[l.end()] - p[rig.root]).dot(forward) / scale);
+                        .map(|p| (p[l.end()] - p[rig.body]).dot(forward) / scale);
                     let (lo, hi) =
                         along.fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
                     (hi - lo).max(0.0)
                 })
                 .fold(0.0, f64::max);
-            let cycles = cycles::detect(method, &track, rig.root, &legs, forward, scale)
+            let cycles = cycles::detect(method, &track, rig.body, &legs, forward, scale)
                 .filter(|_| stride >= cycles::MIN_STRIDE);
             Analysis {
                 track,

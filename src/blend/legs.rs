@@ -174,7 +174,7 @@ fn forward(rig: &Rig, legs: &[Leg], tracks: &[&Track]) -> DVec3 {
             let hi = hs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             for (i, &h) in hs.iter().enumerate() {
                 if h <= lo + 0.3 * (hi - lo) {
-                    sum -= flat(t.velocity(i, e) - t.velocity(i, rig.root));
+                    sum -= flat(t.velocity(i, e) - t.velocity(i, rig.body));
                 }
             }
         }
@@ -184,7 +184,7 @@ fn forward(rig: &Rig, legs: &[Leg], tracks: &[&Track]) -> DVec3 {
     }
     let travel: DVec3 = tracks
         .iter()
-        .map(|t| flat(t.pos[t.len() - 1][rig.root] - t.pos[0][rig.root]))
+        .map(|t| flat(t.pos[t.len() - 1][rig.body] - t.pos[0][rig.body]))
         .sum();
     if travel.length() > NO_DIRECTION {
         travel.normalize()

@@ -193,7 +193,7 @@ fn positions_track(rig: &Rig, poses: &[Pose], dt: f64, looping: bool) -> Track {
         poses.iter().map(|p| rig.positions(p)).collect(),
         dt,
         looping,
-        rig.root,
+        rig.body,
     )
 }
 
@@ -285,7 +285,7 @@ struct Sources {
     fit: FloorTransform,
     /// How B was made to travel as A, where they differ.
     matched: Option<MatchedTravel>,
-    /// The skeleton's joints.
+    /// The skeleton's joints the body carries (all of them but root joints that stay put).
     joints: Vec<usize>,
 }
 
@@ -307,7 +307,7 @@ fn sources(
     let mut poses_b = sample(1, |f| f.2);
     // B made to travel as A does (moved along, or held on the spot) over its own time.
     let [travel_a, travel_b] =
-        an.map(|an| measure::travel(&an.track, rig.root, &ch.legs, ch.scale));
+        an.map(|an| measure::travel(&an.track, rig.body, &ch.legs, ch.scale));
     let matched = MatchedTravel::of(&travel_a, &travel_b, ch.scale);
     if let (Some(m), Some(first)) = (matched, phase.frames.first()) {
         for (pose, f) in poses_b.iter_mut().zip(&phase.frames) {
@@ -315,7 +315,7 @@ fn sources(
             align::move_skeleton(rig, pose, &moved);
         }
     }
-    let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.skeleton[j]).collect();
+    let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.carries(j)).collect();
     let first_cycle = phase
         .frames
         .iter()
@@ -367,7 +367,7 @@ impl Cleanup<'_> {
         );
         let times: Vec<f64> = plan.iter().map(|f| f.0).collect();
         let before = self.before;
-        let shift = before.pos[before.len() - 1][rig.root] - before.pos[0][rig.root];
+        let shift = before.pos[before.len() - 1][rig.body] - before.pos[0][rig.body];
         let span = times[times.len() - 1] - times[0];
         let root_speed = flat(shift).length() / span.max(MIN_DURATION);
         // Planted: where the sources plant the foot by vote, or the contact test finds it in
@@ -560,6 +560,7 @@ pub struct Gait {
 /// method), alone.
 pub fn gait(rig: &Rig, clip: &Clip) -> Gait {
     let size = super::track::size(rig, &rig.rest);
+    let rig = &rig.carried_by(&[clip], size);
     let closed = super::track::close_open_loop(rig, clip, size);
     let clip = closed.as_ref().unwrap_or(clip);
     let (ch, an) = analyze(rig, &[clip], CycleMethod::Legs);
@@ -577,6 +578,7 @@ pub fn gait(rig: &Rig, clip: &Clip) -> Gait {
 pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Result<Blended> {
     let w = opts.weight;
     let size = super::track::size(rig, &rig.rest);
+    let rig = &rig.carried_by(&[a, b], size);
     let closed = [a, b].map(|c| super::track::close_open_loop(rig, c, size));
     let (a, b) = (
         closed[0].as_ref().unwrap_or(a),
@@ -601,7 +603,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     drop((poses_a, poses_b));
     let dt = 1.0 / phase.fps;
     let before = positions_track(rig, &frames, dt, false);
-    let before_loop = track_of(before.pos.clone(), dt, phase.looping, rig.root);
+    let before_loop = track_of(before.pos.clone(), dt, phase.looping, rig.body);
     let vote = |l: usize, t: [f64; 2], half: [f64; 2]| planted_by_vote([an_a, an_b], w, l, t, half);
     let voted: Vec<Vec<bool>> = (0..ch.legs.len())
         .map(|l| match w == 0.5 {
@@ -712,7 +714,7 @@ impl Measured<'_> {
         let ch = self.ch;
         measure::figures(
             track,
-            self.rig.root,
+            self.rig.body,
             self.joints,
             &ch.legs,
             ch.scale,

@@ -114,12 +114,88 @@ pub struct Rig {
     pub skeleton: Vec<bool>,
     /// The skeleton's topmost joint (where alignment moves the character).
     pub root: usize,
+    /// The joint whose position is the body's (root speed, travel, feet relative to the body):
+    /// the root, or the joint below it that carries the clips over the floor ([`Rig::carried_by`]).
+    pub body: usize,
     /// How many of the nodes are the file's: the chain ends [`use_skin`] adds come after them
     /// and are never written.
     pub file_nodes: usize,
 }
 
+/// A joint ends a clip this far from where it began (horizontally, a fraction of the
+/// character's size) to carry the character over the floor: a walk travels about 0.7 of its
+/// size a second; a clip in place comes back to within [`super::track::LOOP_TOLERANCE`].
+pub const CARRIES: f64 = 0.1;
+
 impl Rig {
+    /// This rig with [`Rig::body`] the joint that carries `clips` over the floor: the root, or,
+    /// where the root ends every clip where it began while a joint below it ends one at least
+    /// [`CARRIES`] of `size` away (root motion keyed on the hips under a root bone that stays
+    /// put: Fox's hip, b_Hip_01, under _rootJoint; a capture retargeted onto a game skeleton
+    /// whose pelvis travels), the topmost such joint. Positions relative to the body then
+    /// repeat over a cycle however far the clip travels.
+    pub fn carried_by(&self, clips: &[&Clip], size: f64) -> Rig {
+        let mut rig = self.clone();
+        // Per clip, each joint's horizontal displacement from the clip's start to its end.
+        let moves: Vec<(&Clip, Vec<DVec3>)> = clips
+            .iter()
+            .filter(|c| c.duration() > 0.0)
+            .map(|c| {
+                let [a, b] = [c.start, c.end].map(|t| self.positions(&c.pose(self, t)));
+                (*c, a.iter().zip(&b).map(|(a, b)| flat(*b - *a)).collect())
+            })
+            .collect();
+        if moves
+            .iter()
+            .any(|(_, d)| d[self.root].length() > CARRIES * size)
+        {
+            return rig;
+        }
+        // A joint carries a clip when the clip translates it that far and the skeleton below it
+        // moves along, feet too (nine joints in ten within half of that of it: not a paw that
+        // a clip ending short of its loop leaves away from where it began, nor hips that sit
+        // down or fall over the feet, as RobotExpressive's Sitting and Death do).
+        let carries = |j: usize| {
+            moves.iter().any(|(clip, d)| {
+                let translated = clip
+                    .channels
+                    .iter()
+                    .any(|c| c.node == j && c.path == Path::Translation);
+                let mut off: Vec<f64> = (0..self.len())
+                    .filter(|&k| self.skeleton[k] && self.descends(k, j))
+                    .map(|k| (d[k] - d[j]).length())
+                    .collect();
+                off.sort_by(f64::total_cmp);
+                translated
+                    && d[j].length() > CARRIES * size
+                    && off[(off.len() - 1) * 9 / 10] <= 0.5 * d[j].length()
+            })
+        };
+        let body = (self.order.iter().copied()).find(|&j| self.skeleton[j] && carries(j));
+        if let Some(body) = body {
+            rig.body = body;
+        }
+        rig
+    }
+
+    /// Whether joint `j` is one of the skeleton's joints the body carries: at or below
+    /// [`Rig::body`] (every one where the body is the root).
+    pub fn carries(&self, j: usize) -> bool {
+        self.skeleton[j] && (self.body == self.root || self.descends(j, self.body))
+    }
+
+    /// Whether joint `j` is `top` or below it.
+    fn descends(&self, j: usize, top: usize) -> bool {
+        let mut at = Some(j);
+        while let Some(k) = at {
+            if k == top {
+                return true;
+            }
+            at = self.parent[k];
+        }
+        false
+    }
+
     /// A rig from a parent list and a rest pose (nodes in any order).
     pub fn new(names: Vec<String>, parent: Vec<Option<usize>>, rest: Pose) -> Result<Rig> {
         let n = names.len();
@@ -145,6 +221,7 @@ impl Rig {
             rest,
             skeleton: vec![true; n],
             root: 0,
+            body: 0,
             file_nodes: n,
         })
     }
@@ -373,6 +450,7 @@ pub fn use_skin(doc: &Document, rig: &mut Rig, skin: usize) {
                 && !joints.is_empty());
     }
     rig.root = rig.order.iter().copied().find(|&i| member[i]).unwrap_or(0);
+    rig.body = rig.root;
     rig.skeleton = member;
     add_ends(doc, rig, &joints);
 }

@@ -62,7 +62,7 @@ impl Track {
         let pos = (0..=intervals)
             .map(|i| rig.positions(&clip.pose(rig, clip.start + i as f64 * dt)))
             .collect();
-        Track::closed(clip.start, dt, looping, pos, rig.root)
+        Track::closed(clip.start, dt, looping, pos, rig.body)
     }
 
     /// The track of frames `pos` of joint positions, `dt` apart from `start`, the last frame
@@ -138,9 +138,9 @@ pub fn loops(rig: &Rig, clip: &Clip, size: f64) -> bool {
     }
     let a = rig.positions(&clip.pose(rig, clip.start));
     let b = rig.positions(&clip.pose(rig, clip.end));
-    let (ra, rb) = (a[rig.root], b[rig.root]);
+    let (ra, rb) = (a[rig.body], b[rig.body]);
     let worst = (0..rig.len())
-        .filter(|&j| rig.skeleton[j])
+        .filter(|&j| rig.carries(j))
         .map(|j| ((a[j] - ra) - (b[j] - rb)).length())
         .fold(0.0, f64::max);
     worst <= LOOP_TOLERANCE * size
@@ -178,11 +178,11 @@ pub fn close_open_loop(rig: &Rig, clip: &Clip, size: f64) -> Option<Clip> {
     let at = |t: f64| rig.positions(&clip.pose(rig, t));
     let (first, second) = (at(start), at(start + step));
     let (last, before) = (at(end), at(end - step));
-    let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.skeleton[j]).collect();
+    let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.carries(j)).collect();
     // Per joint: the seam (last to first), the mean of the ends' key steps, the larger step.
     let parts: Vec<(DVec3, DVec3, f64)> = (joints.iter())
         .map(|&j| {
-            let rel = |p: &[DVec3]| p[j] - p[rig.root];
+            let rel = |p: &[DVec3]| p[j] - p[rig.body];
             let (out, back) = (rel(&last) - rel(&before), rel(&second) - rel(&first));
             let seam = rel(&first) - rel(&last);
             (seam, 0.5 * (out + back), out.length().max(back.length()))
