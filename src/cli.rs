@@ -35,9 +35,10 @@ inbetween tween flag.gltf -o flag_30fps.glb --fps 30\n  inbetween tween in.glb -
     )]
     Tween(TweenArgs),
     /// Blend two skeletal clips of a character into a new clip (walk + run = jog): cycles found
-    /// and synchronised on foot contacts, the second clip aligned to the first, joints slerped,
-    /// planted feet cleaned up with two-bone IK. A glTF output is the input plus one animation
-    /// per weight; two BVH captures give a BVH file.
+    /// and synchronised on foot contacts, the second clip aligned to the first (and made to
+    /// travel as it does where one steps in place and the other has root motion), joints
+    /// slerped, planted feet cleaned up with two-bone IK. A glTF output is the input plus one
+    /// animation per weight; two BVH captures give a BVH file.
     #[command(
         after_help = "Examples:\n  inbetween blend Fox.glb -o fox_trot.glb --clips Walk Run\n  \
 inbetween blend robot.glb -o jog.glb --clips Walking Running --weight 0.3 --name Jog --report jog.json\n  \
