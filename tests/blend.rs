@@ -1662,6 +1662,19 @@ fn a_clip_in_place_blends_with_one_that_travels_as_its_kind() {
         line.contains("\"kevinxie4c_walk\" held on the spot"),
         "{line}"
     );
+    // A clip whose root and feet stay put (an idle) is of neither kind: RobotExpressive's Idle
+    // beside its Walking in place, either first, is blended as it was (the walk was moved
+    // along as if the idle travelled, sliding 0.0405 leg/frame after clean-up).
+    let robot = fx.join("skinned/RobotExpressive.glb");
+    for (a, b) in [("Idle", "Walking"), ("Walking", "Idle")] {
+        let r = blend_report(&robot, a, b, 0.5, &out("idle.glb"), &["--cycles", "none"]);
+        assert!(
+            r["matched_travel"].is_null(),
+            "{a}+{b}: {}",
+            r["matched_travel"]
+        );
+        assert!(sliding(&r["result"]["after_cleanup"]) <= 1e-3, "{a}+{b}");
+    }
 }
 
 /// Fox with its Run travelling: the hip's translation keys (b_Hip_01, below the root joints

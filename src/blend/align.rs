@@ -31,11 +31,16 @@ impl MatchedTravel {
     /// stretching the legs. The second clip is made the first's kind (`a`, `b` their travels,
     /// `scale` the leg length); `None` where both are of one kind.
     pub fn of(a: &Travel, b: &Travel, scale: f64) -> Option<MatchedTravel> {
+        // A clip whose root and feet both stay put (an idle) is of neither kind.
         let moving = |v: DVec3| v.length() > STILL * scale;
-        match (a.in_place(), b.in_place()) {
-            (false, true) if moving(b.ground) => Some(MatchedTravel::Along((-b.ground).to_array())),
-            (true, false) if moving(b.root) => Some(MatchedTravel::OnTheSpot((-b.root).to_array())),
-            _ => None,
+        let travels = |t: &Travel| !t.in_place() && moving(t.root);
+        let steps = |t: &Travel| t.in_place() && moving(t.ground);
+        if travels(a) && steps(b) {
+            Some(MatchedTravel::Along((-b.ground).to_array()))
+        } else if steps(a) && travels(b) {
+            Some(MatchedTravel::OnTheSpot((-b.root).to_array()))
+        } else {
+            None
         }
     }
 
