@@ -1474,6 +1474,13 @@ fn inspect_tells_a_capture_s_skeleton_motion_and_gait() {
 
 /// The BVH capture at `path` without its first `skip` frames.
 fn bvh_from_frame(path: &Path, skip: usize) -> String {
+    let (head, time, frames) = bvh_parts(path);
+    bvh_text(&head, &time, &frames[skip..])
+}
+
+/// A BVH capture's hierarchy (up to MOTION), its frame time line and its frame lines (as many
+/// as its Frames line says).
+fn bvh_parts(path: &Path) -> (String, String, Vec<String>) {
     let text = std::fs::read_to_string(path).unwrap().replace("\r\n", "\n");
     let (head, motion) = text.split_once("MOTION\n").unwrap();
     let mut lines = motion.lines();
@@ -1481,13 +1488,20 @@ fn bvh_from_frame(path: &Path, skip: usize) -> String {
         .trim()
         .parse()
         .unwrap();
-    let frame_time = lines.next().unwrap();
-    let frames: Vec<&str> = lines.filter(|l| !l.trim().is_empty()).collect();
+    let time = lines.next().unwrap().to_owned();
+    let frames: Vec<String> = (lines.filter(|l| !l.trim().is_empty()))
+        .map(str::to_owned)
+        .collect();
     assert_eq!(frames.len(), count);
+    (head.to_owned(), time, frames)
+}
+
+/// A BVH capture's text from its hierarchy `head`, frame time line and frame lines.
+fn bvh_text(head: &str, time: &str, frames: &[String]) -> String {
     format!(
-        "{head}MOTION\nFrames: {}\n{frame_time}\n{}\n",
-        count - skip,
-        frames[skip..].join("\n")
+        "{head}MOTION\nFrames: {}\n{time}\n{}\n",
+        frames.len(),
+        frames.join("\n")
     )
 }
 
@@ -1563,24 +1577,17 @@ fn cmu_start_walk_stop_blends_with_itself_half_a_cycle_later() {
 /// third of the CMU files' root) held at their first frame's values, as a capture exported "in
 /// place" has them.
 fn bvh_in_place(path: &Path) -> String {
-    let text = std::fs::read_to_string(path).unwrap().replace("\r\n", "\n");
-    let (head, motion) = text.split_once("MOTION\n").unwrap();
+    let (head, time, frames) = bvh_parts(path);
     assert!(head.contains("CHANNELS 6 Xposition Yposition Zposition"));
-    let mut lines = motion.lines();
-    let (count, time) = (lines.next().unwrap(), lines.next().unwrap());
-    let frames: Vec<Vec<String>> = lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| l.split_whitespace().map(str::to_owned).collect())
-        .collect();
-    let (x, z) = (frames[0][0].clone(), frames[0][2].clone());
-    let held: Vec<String> = frames
-        .into_iter()
-        .map(|mut f| {
-            (f[0], f[2]) = (x.clone(), z.clone());
-            f.join(" ")
+    let first: Vec<&str> = frames[0].split_whitespace().collect();
+    let held: Vec<String> = (frames.iter())
+        .map(|f| {
+            let mut v: Vec<&str> = f.split_whitespace().collect();
+            (v[0], v[2]) = (first[0], first[2]);
+            v.join(" ")
         })
         .collect();
-    format!("{head}MOTION\n{count}\n{time}\n{}\n", held.join("\n"))
+    bvh_text(&head, &time, &held)
 }
 
 /// A clip stepping in place blended with one that travels: the in-place one is made the first
@@ -1715,21 +1722,16 @@ fn fox_with_travelling_run(fox: &Path, out: &Path, speed: f32) {
 /// hip a joint with six channels below it, as a capture retargeted onto a game skeleton whose
 /// root bone stays at the origin has it.
 fn bvh_under_a_still_root(path: &Path) -> String {
-    let text = std::fs::read_to_string(path).unwrap().replace("\r\n", "\n");
-    let (head, motion) = text.split_once("MOTION\n").unwrap();
+    let (head, time, frames) = bvh_parts(path);
     let mut lines = head.lines().skip(1);
     let hip = lines.next().unwrap().replacen("ROOT", "JOINT", 1);
     let rest: Vec<String> = lines.map(|l| format!("\t{l}")).collect();
-    let mut frames = motion.lines();
-    let (count, time) = (frames.next().unwrap(), frames.next().unwrap());
-    let moved: Vec<String> = (frames.filter(|l| !l.trim().is_empty()))
-        .map(|l| format!("0 0 0 0 0 0 {l}"))
-        .collect();
-    format!(
-        "HIERARCHY\nROOT still\n{{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n\t{hip}\n{}\n}}\nMOTION\n{count}\n{time}\n{}\n",
-        rest.join("\n"),
-        moved.join("\n")
-    )
+    let head = format!(
+        "HIERARCHY\nROOT still\n{{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n\t{hip}\n{}\n}}\n",
+        rest.join("\n")
+    );
+    let moved: Vec<String> = frames.iter().map(|l| format!("0 0 0 0 0 0 {l}")).collect();
+    bvh_text(&head, &time, &moved)
 }
 
 /// Travel keyed on a joint below a root that stays put (Fox's Run carried on along the floor

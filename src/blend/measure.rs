@@ -133,13 +133,14 @@ fn planted(
     let duration = (n.max(2) - 1) as f64 * dt;
     let shift = flat(track.pos[n - 1][root] - track.pos[0][root]);
     let root_speed = shift.length() / duration;
+    let ground = ground_under(root_speed * dt, ground_step);
     Planted {
         moves,
         root_speed,
-        ground: ground_under(root_speed * dt, ground_step),
+        ground,
         travel: Travel {
             root: shift / duration,
-            ground: ground_under(root_speed * dt, ground_step) / dt,
+            ground: ground / dt,
         },
     }
 }

@@ -54,7 +54,6 @@ pub fn typed_rate(rate: f64) -> f64 {
     RATES
         .iter()
         .map(|&(num, den)| num / den)
-        .filter(|_| rate.is_finite())
         .find(|r| r.fract() != 0.0 && (rate - r).abs() <= NTSC_TYPED * r)
         .unwrap_or(rate)
 }
