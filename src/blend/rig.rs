@@ -127,10 +127,15 @@ pub struct Rig {
 /// size a second; a clip in place comes back to within [`super::track::LOOP_TOLERANCE`].
 pub const CARRIES: f64 = 0.1;
 
+/// The joint that carries the body holds at least this share of the skeleton's joints (itself
+/// and those below it): the hips hold all but the root bones above them; a paw, a hand with its
+/// fingers, a tail or a ponytail hold a few.
+pub const BODY_SHARE: f64 = 0.5;
+
 impl Rig {
     /// This rig with [`Rig::body`] the joint that carries `clips` over the floor: the root, or,
-    /// where the root ends every clip where it began while a joint below it ends one at least
-    /// [`CARRIES`] of `size` away (root motion keyed on the hips under a root bone that stays
+    /// where the root ends every clip where it began while a joint below it holding
+    /// [`BODY_SHARE`] of the skeleton ends one at least [`CARRIES`] of `size` away (root motion keyed on the hips under a root bone that stays
     /// put: Fox's hip, b_Hip_01, under _rootJoint; a capture retargeted onto a game skeleton
     /// whose pelvis travels), the topmost such joint. Positions relative to the body then
     /// repeat over a cycle however far the clip travels.
@@ -151,10 +156,13 @@ impl Rig {
         {
             return rig;
         }
-        // A joint carries a clip when the clip translates it that far and the skeleton below it
-        // moves along, feet too (nine joints in ten within half of that of it: not a paw that
-        // a clip ending short of its loop leaves away from where it began, nor hips that sit
-        // down or fall over the feet, as RobotExpressive's Sitting and Death do).
+        // A joint carries a clip when it holds most of the skeleton ([`BODY_SHARE`]: not a
+        // paw, nor a hand with its fingers, that a loop exported one key short of closing
+        // leaves a key step away from where it began, as Blender bakes every bone of Fox's
+        // walk or of Mixamo's run), the clip translates it that far and the skeleton below it
+        // moves along, feet too (nine joints in ten within half of that of it: not hips that
+        // sit down or fall over the feet, as RobotExpressive's Sitting and Death do).
+        let skeleton = self.skeleton.iter().filter(|&&s| s).count();
         let carries = |j: usize| {
             moves.iter().any(|(clip, d)| {
                 let translated = clip
@@ -166,7 +174,8 @@ impl Rig {
                     .map(|k| (d[k] - d[j]).length())
                     .collect();
                 off.sort_by(f64::total_cmp);
-                translated
+                off.len() as f64 >= BODY_SHARE * skeleton as f64
+                    && translated
                     && d[j].length() > CARRIES * size
                     && off[(off.len() - 1) * 9 / 10] <= 0.5 * d[j].length()
             })
