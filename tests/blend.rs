@@ -2107,8 +2107,8 @@ fn one_clip_file(input: &Path, out: &Path, keep: &str, bare: bool) {
 /// Each clip in a file of its own, as character packs come (walk.glb, run.glb; the second
 /// without its mesh and skin, its nodes in another order): `blend walk.glb run.glb` matches
 /// the run's nodes by name (RobotExpressive names each limb's mesh node after its bone) and
-/// writes the walk's file plus the very blend of the one-file run, report and keys alike.
-/// A second file of another character, or of this one placed differently, is refused.
+/// writes the walk's file plus the very blend of the one-file run, report and keys alike, its
+/// names in another Mixamo namespace or numbered by Blender too. A second file of another character, or of this one placed differently, is refused.
 #[test]
 fn clips_in_files_of_their_own_blend_as_in_one_file() {
     let Some(fx) = fixtures() else { return };
@@ -2225,6 +2225,16 @@ fn clips_in_files_of_their_own_blend_as_in_one_file() {
     assert!(told.contains(hint), "{told}");
     let plain = blend_pair(&walk, &run, d);
     assert_eq!(blend_pair(&walk, &spaced, d), plain);
+    // Blender numbers a name the scene already holds: the run imported beside the walk and
+    // exported on its own has its armature (the node above the skeleton, which the clip does
+    // not key) called "root.001". The same blend.
+    let numbered = d.join("numbered_run.glb");
+    edited_glb(&run, &numbered, |j| {
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        let root = nodes.iter_mut().find(|n| n["name"] == "root").unwrap();
+        root["name"] = "root.001".into();
+    });
+    assert_eq!(blend_pair(&walk, &numbered, d), plain);
 }
 
 /// The report of `blend a b --weight 0.25` (a clip each).

@@ -39,6 +39,21 @@ fn base(name: &str) -> &str {
     name.rsplit(':').next().unwrap_or(name)
 }
 
+/// [`base`] without the number Blender appends to a name the scene already holds
+/// (`Armature.001`: the second character imported into one scene, exported with its clip):
+/// a name found neither whole nor by its base is looked for by this part.
+fn stem(name: &str) -> &str {
+    let name = base(name);
+    match name.rsplit_once('.') {
+        Some((stem, n))
+            if !stem.is_empty() && n.len() >= 3 && n.bytes().all(|b| b.is_ascii_digit()) =>
+        {
+            stem
+        }
+        _ => name,
+    }
+}
+
 /// How a node is called in a message: its name quoted, else its index.
 fn called(names: &[Option<&str>], i: usize) -> String {
     names[i].map_or_else(|| format!("node {i}"), |n| format!("{n:?}"))
@@ -75,10 +90,11 @@ fn rest_differs(a: &Trs, b: &Trs, keyed: impl Fn(Path) -> bool, size: f64) -> Op
 
 /// `clip` of `doc_b` (read into `rig_b`) carried onto `rig_a`, the character of `doc_a`:
 /// every node it moves, and every node above one, matched by name (else by name without its
-/// namespace, [`base`]; where nodes of `doc_a` share a name, the one under the parent's
-/// match), with the same parent and, where the clip does not key
-/// it, the same rest transform; its morph weights channels kept where `doc_a` has a node of
-/// that name with as many weights, dropped otherwise. Errors name `doc_b` and what differs.
+/// namespace, [`base`], or without Blender's number too, [`stem`]; where nodes of `doc_a`
+/// share a name, the one under the parent's match), with the same parent and, where the clip
+/// does not key it, the same rest transform; its morph weights channels kept where `doc_a`
+/// has a node of that name with as many weights, dropped otherwise. Errors name `doc_b` and
+/// what differs.
 pub fn carry(
     doc_a: &Document,
     rig_a: &Rig,
@@ -87,14 +103,19 @@ pub fn carry(
     clip: &Clip,
 ) -> Result<Clip> {
     let (names_a, names_b) = (names(doc_a), names(doc_b));
-    let (mut by_name, mut by_base) = (HashMap::new(), HashMap::new());
+    let (mut by_name, mut by_base, mut by_stem) = (HashMap::new(), HashMap::new(), HashMap::new());
     for (i, name) in names_a.iter().enumerate() {
         if let Some(name) = name {
             by_name.entry(*name).or_insert_with(Vec::new).push(i);
             by_base.entry(base(name)).or_insert_with(Vec::new).push(i);
+            by_stem.entry(stem(name)).or_insert_with(Vec::new).push(i);
         }
     }
-    let named = |n: &str| by_name.get(n).or_else(|| by_base.get(base(n)));
+    let named = |n: &str| {
+        (by_name.get(n))
+            .or_else(|| by_base.get(base(n)))
+            .or_else(|| by_stem.get(stem(n)))
+    };
     // Parents first: of the nodes of the same name (Blender names a bone's mesh after it), the
     // one under the node matched to the parent, else the only one.
     let mut map: Vec<Option<usize>> = vec![None; rig_b.len()];
@@ -179,4 +200,22 @@ pub fn carry(
         channels,
         ..clip.clone()
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_match_without_namespace_and_blender_s_number() {
+        assert_eq!(base("mixamorig1:Hips"), "Hips");
+        assert_eq!(stem("mixamorig1:Hips"), "Hips");
+        assert_eq!(stem("Armature.001"), "Armature");
+        assert_eq!(stem("Armature.1000"), "Armature");
+        // Not Blender's number: kept whole.
+        assert_eq!(stem("Finger.01"), "Finger.01");
+        assert_eq!(stem("Bone.L"), "Bone.L");
+        assert_eq!(stem(".001"), ".001");
+        assert_eq!(stem("v.00a"), "v.00a");
+    }
 }
