@@ -1046,8 +1046,27 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     bytes[bin_start + off..bin_start + off + 4].copy_from_slice(&f32::NAN.to_le_bytes());
     std::fs::write(p("nan.glb"), &bytes).unwrap();
 
+    // Files that stand in for a pipeline's assets, named as what they are.
+    std::fs::write(
+        p("pointer.glb"),
+        "version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 182232\n",
+    )
+    .unwrap();
+    std::fs::write(
+        p("page.glb"),
+        "\n\n<!DOCTYPE html>\n<html lang=\"en\">\n<head><title>facecap.glb</title></head>",
+    )
+    .unwrap();
+    std::fs::write(
+        p("fbx.gltf"),
+        b"Kaydara FBX Binary  \x00\x1a\x00\xe8\x1c\x00\x00",
+    )
+    .unwrap();
     let cases = [
         ("not.glb", "not a glTF"),
+        ("pointer.glb", "a Git LFS pointer, not the file itself"),
+        ("page.glb", "a web page (HTML), not the file itself"),
+        ("fbx.gltf", "an FBX file (inbetween reads glTF and BVH"),
         (
             "walk.bvh",
             "a BVH motion capture, not a glTF file (`inbetween blend`",

@@ -82,7 +82,13 @@ pub fn read(path: &FsPath) -> Result<(Rig, Clip)> {
 
 /// Read a BVH file with its layout (see [`Bvh`]).
 pub fn load(path: &FsPath) -> Result<Bvh> {
-    let text = std::fs::read_to_string(path).map_err(|e| at(path, format!("cannot read: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| at(path, format!("cannot read: {e}")))?;
+    if !crate::gltf::starts_like_bvh(&bytes) {
+        if let Some(what) = crate::gltf::other_kind(&bytes) {
+            return Err(at(path, what));
+        }
+    }
+    let text = String::from_utf8(bytes).map_err(|e| at(path, format!("cannot read: {e}")))?;
     parse_layout(&text).map_err(|e| at(path, e))
 }
 

@@ -47,8 +47,8 @@ pub use encode::{
 pub use instancing::{instances, Instances};
 pub use mend::shadowed;
 pub use read::{
-    arr, at, listed, listed_or_none, mesh_nodes, node_target, quoted_name, starts_like_bvh,
-    target_names, weights_target, Document, WeightsTarget,
+    arr, at, listed, listed_or_none, mesh_nodes, node_target, other_kind, quoted_name,
+    starts_like_bvh, target_names, weights_target, Document, WeightsTarget,
 };
 pub use reorder::reorder;
 pub use skin::{Skeleton, Skinning};

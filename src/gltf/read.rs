@@ -115,14 +115,70 @@ pub fn starts_like_bvh(bytes: &[u8]) -> bool {
         .starts_with("HIERARCHY")
 }
 
+/// What a file that is neither glTF nor BVH is instead, from its first bytes, where it is one
+/// of the files that stand in for a pipeline's assets: a Git LFS pointer (a clone made
+/// without fetching the LFS objects), a web page saved in place of the file, an FBX, a USD
+/// stage or package, a ZIP or gzip archive, an image.
+pub fn other_kind(bytes: &[u8]) -> Option<&'static str> {
+    let head = &bytes[..bytes.len().min(256)];
+    let text = String::from_utf8_lossy(head);
+    let text = text.trim_start_matches('\u{feff}').trim_start();
+    let lower = text.to_ascii_lowercase();
+    let is_usd = |name: &[u8]| name.ends_with(b".usda") || name.ends_with(b".usdc");
+    let kinds: [(bool, &str); 8] = [
+        (
+            text.starts_with("version https://git-lfs.github.com/spec/"),
+            "a Git LFS pointer, not the file itself (its repository was cloned without its LFS objects: git lfs pull)",
+        ),
+        (
+            lower.starts_with("<!doctype html") || lower.starts_with("<html"),
+            "a web page (HTML), not the file itself (saved from a browser in its place? download the raw file)",
+        ),
+        (
+            head.starts_with(b"Kaydara FBX Binary") || text.starts_with("; FBX"),
+            "an FBX file (inbetween reads glTF and BVH: convert it first, with Blender or FBX2glTF)",
+        ),
+        (
+            head.starts_with(b"PXR-USDC") || text.starts_with("#usda"),
+            "a USD file (inbetween reads glTF and BVH, and writes USD)",
+        ),
+        (
+            head.starts_with(b"PK\x03\x04") && zip_first_name(head).is_some_and(is_usd),
+            "a USDZ package (inbetween reads glTF and BVH, and writes USD)",
+        ),
+        (
+            head.starts_with(b"PK\x03\x04"),
+            "a ZIP archive (unpack it first)",
+        ),
+        (
+            head.starts_with(&[0x1f, 0x8b]),
+            "a gzip archive (unpack it first)",
+        ),
+        (
+            head.starts_with(b"\x89PNG") || head.starts_with(&[0xff, 0xd8, 0xff]),
+            "an image, not a glTF file",
+        ),
+    ];
+    kinds.iter().find(|(is, _)| *is).map(|(_, what)| *what)
+}
+
+/// The name of a ZIP archive's first entry (its local header's), where `head` holds it.
+fn zip_first_name(head: &[u8]) -> Option<&[u8]> {
+    let len = u16::from_le_bytes(head.get(26..28)?.try_into().ok()?) as usize;
+    head.get(30..30 + len)
+}
+
 /// The error for a file whose JSON does not parse; a motion capture handed to a glTF command
-/// is named as one, with what reads it.
+/// is named as one, with what reads it, and the files that stand in for assets
+/// ([`other_kind`]) as what they are.
 fn not_gltf(path: &Path, bytes: &[u8], e: serde_json::Error) -> anyhow::Error {
     if starts_like_bvh(bytes) {
         at(
             path,
             "a BVH motion capture, not a glTF file (`inbetween blend`, `preview` and `inspect` read captures)",
         )
+    } else if let Some(what) = other_kind(bytes) {
+        at(path, what)
     } else {
         at(
             path,
@@ -507,8 +563,47 @@ pub fn mesh_nodes(json: &Value) -> Vec<Vec<usize>> {
 
 #[cfg(test)]
 mod tests {
-    use super::{mesh_nodes, weights_target, WeightsTarget};
+    use super::{mesh_nodes, other_kind, weights_target, WeightsTarget};
     use serde_json::json;
+
+    /// Files that stand in for assets are told by their first bytes; a glTF's are none.
+    #[test]
+    fn files_that_stand_in_for_assets_are_named() {
+        let starts = |b: &[u8], want: Option<&str>| match (other_kind(b), want) {
+            (Some(k), Some(w)) => k.starts_with(w),
+            (k, w) => k.is_none() && w.is_none(),
+        };
+        let mut usdz = b"PK\x03\x04".to_vec();
+        usdz.extend_from_slice(&[0; 22]);
+        usdz.extend_from_slice(&10u16.to_le_bytes());
+        usdz.extend_from_slice(&[0, 0]);
+        usdz.extend_from_slice(b"blend.usdc");
+        let mut zip = usdz.clone();
+        zip.truncate(30);
+        zip.extend_from_slice(b"walk.glb");
+        for (bytes, want) in [
+            (
+                &b"version https://git-lfs.github.com/spec/v1\noid sha256:00"[..],
+                Some("a Git LFS"),
+            ),
+            (b"\xef\xbb\xbf  <!doctype HTML><html>", Some("a web page")),
+            (b"<html><body>", Some("a web page")),
+            (b"Kaydara FBX Binary  \x00", Some("an FBX file")),
+            (b"; FBX 7.4.0 project file", Some("an FBX file")),
+            (b"#usda 1.0\n(", Some("a USD file")),
+            (b"PXR-USDC\x00", Some("a USD file")),
+            (&usdz, Some("a USDZ package")),
+            (&zip, Some("a ZIP archive")),
+            (b"\x1f\x8b\x08\x00", Some("a gzip archive")),
+            (b"\x89PNG\r\n\x1a\n", Some("an image")),
+            (b"{\"asset\":{\"version\":\"2.0\"}}", None),
+            (b"", None),
+        ] {
+            let what = other_kind(bytes);
+            let text = String::from_utf8_lossy(bytes);
+            assert!(starts(bytes, want), "{text:?}: {what:?}");
+        }
+    }
 
     /// Each mesh's nodes in node order; a node naming a mesh the file lacks, or none, is passed.
     #[test]
