@@ -1000,6 +1000,17 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
         r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"missing.bin","byteLength":12}]}"#,
     )
     .unwrap();
+    // .gltf whose buffer file is a Git LFS pointer (the repository cloned without its objects).
+    std::fs::write(
+        p("lfsbuf.gltf"),
+        r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"lfsbuf.bin","byteLength":69532}]}"#,
+    )
+    .unwrap();
+    std::fs::write(
+        p("lfsbuf.bin"),
+        "version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 69532\n",
+    )
+    .unwrap();
     std::fs::write(
         p("nomorph.gltf"),
         r#"{"asset":{"version":"2.0"},"meshes":[]}"#,
@@ -1073,6 +1084,10 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
         ),
         ("short.glb", "GLB header says"),
         ("nobuf.gltf", "missing.bin"),
+        (
+            "lfsbuf.gltf",
+            "uri \"lfsbuf.bin\" is a Git LFS pointer, not the file itself",
+        ),
         ("nomorph.gltf", "no mesh with morph targets"),
         ("count.glb", "deltas but the base has"),
         ("lines.glb", "not made of triangles"),
@@ -2613,6 +2628,27 @@ fn a_texture_missing_beside_a_gltf_is_left_the_reference_it_was() {
             assert_eq!(errors, ["IO_ERROR"], "{name}: {line}");
         }
     }
+    // The texture there, but a Git LFS pointer (a clone without `git lfs pull`): the same,
+    // the line saying what the file is.
+    std::fs::write(
+        dir.path().join("fox_texture.png"),
+        "version https://git-lfs.github.com/spec/v1\noid sha256:5c2d1e0f7e4b1f2a9f4f7b3c1d1e5f6a7b8c9d0e1f2a3b4c5d6e7f8a9b0c1d2e\nsize 1048576\n",
+    )
+    .unwrap();
+    let written = out.path().join("f.glb");
+    let told = run_ok(&[
+        "blend",
+        s(&gltf),
+        "--clips",
+        "Walk",
+        "Run",
+        "-o",
+        s(&written),
+    ]);
+    let err = String::from_utf8_lossy(&told.stderr);
+    let said = "\"fox_texture.png\" is a Git LFS pointer, not the file itself";
+    assert!(err.contains(said), "{err}");
+    assert_eq!(glb_parts(&written).0["images"][0]["uri"], "fox_texture.png");
 }
 
 /// Keys that stand for no pose (a NaN or infinite time or value, as exporters that divide a

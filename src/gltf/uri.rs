@@ -174,7 +174,13 @@ pub fn read_prefix(path: &Path, len: u64) -> Result<Vec<u8>, String> {
         .map_err(|e| format!("cannot be read: {e}"))?
         .len();
     if size < len {
-        return Err(format!("holds {size} bytes, fewer than the {len} declared"));
+        // A pointer or a page in the file's place is named as one.
+        let mut head = Vec::new();
+        let _ = (&file).take(256).read_to_end(&mut head);
+        return Err(match super::read::other_kind(&head) {
+            Some(what) => format!("is {what}"),
+            None => format!("holds {size} bytes, fewer than the {len} declared"),
+        });
     }
     let mut data = Vec::with_capacity(len as usize);
     file.take(len)
@@ -221,8 +227,10 @@ pub fn read_image(path: &Path) -> Result<(Vec<u8>, &'static str), String> {
     if data.len() as u64 > MAX_IMAGE_BYTES {
         return Err(format!("is larger than {} MiB", MAX_IMAGE_BYTES >> 20));
     }
-    let mime = image_mime(&data)
-        .ok_or_else(|| "is not a PNG, JPEG, KTX2, WebP or AVIF image".to_string())?;
+    let mime = image_mime(&data).ok_or_else(|| match super::read::other_kind(&data) {
+        Some(what) => format!("is {what}"),
+        None => "is not a PNG, JPEG, KTX2, WebP or AVIF image".to_string(),
+    })?;
     Ok((data, mime))
 }
 
