@@ -208,6 +208,17 @@ fn upright(rig: &Rig, clip: &Clip) -> DQuat {
         let hi = pos.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
         (lo, hi)
     };
+    // The body: the first joint that branches (the hips), below any root bones that hang it
+    // (Bandai Namco's captures keep a joint_Root at the floor above the Hips, which carry the
+    // travel): those stay behind while the body walks away, so they mark neither where the
+    // root stands nor how tall the posed skeleton is.
+    let children = rig.children();
+    let mut body = root;
+    let mut above = vec![false; n];
+    while let [only] = children[body][..] {
+        above[body] = true;
+        body = only;
+    }
     let pos = rig.positions(&rig.rest);
     let (lo, hi) = bounds(&pos);
     let size = (hi - lo).max_element();
@@ -235,10 +246,10 @@ fn upright(rig: &Rig, clip: &Clip) -> DQuat {
     if errors[u] < UP_ASYMMETRY * errors[axes[1]] {
         return DQuat::IDENTITY;
     }
-    let (below, above) = (pos[root][u] - lo[u], hi[u] - pos[root][u]);
-    let sign = if below > ROOT_LOW * above {
+    let (below, over) = (pos[body][u] - lo[u], hi[u] - pos[body][u]);
+    let sign = if below > ROOT_LOW * over {
         1.0
-    } else if above > ROOT_LOW * below {
+    } else if over > ROOT_LOW * below {
         -1.0
     } else {
         return DQuat::IDENTITY;
@@ -252,7 +263,9 @@ fn upright(rig: &Rig, clip: &Clip) -> DQuat {
     let posed = [clip.start, 0.5 * (clip.start + clip.end), clip.end]
         .iter()
         .map(|&t| {
-            let (lo, hi) = bounds(&rig.positions(&clip.pose(rig, t)));
+            let pos = rig.positions(&clip.pose(rig, t));
+            let carried: Vec<DVec3> = (0..n).filter(|&j| !above[j]).map(|j| pos[j]).collect();
+            let (lo, hi) = bounds(&carried);
             hi - lo
         })
         .sum::<DVec3>();
@@ -472,6 +485,27 @@ mod tests {
         // A Z-up rest pose that its root's rotation stands up in the motion is left as read.
         let stood = parse_layout(&figure(|v| DVec3::new(v.x, -v.z, v.y), -90.0)).unwrap();
         assert_eq!(stood.turn, DQuat::IDENTITY);
+    }
+
+    /// A capture whose root bone stays at the floor while the hips below it carry the travel
+    /// (Bandai Namco's joint_Root), its rest pose lying along Z (bones along their joints' own
+    /// axes) and the hips' rotation standing it up in Y: up is Y. The posed skeleton's height
+    /// was measured with the root bone left behind, so a walk along Z was taken as Z-up and
+    /// turned over (the legs then not found).
+    #[test]
+    fn a_root_bone_left_behind_does_not_turn_a_capture_over() {
+        let text = figure(|v| DVec3::new(v.x, -v.z, v.y), 0.0);
+        let (head, _) = text.split_once("MOTION").unwrap();
+        let body = head.replacen("ROOT Hips", "JOINT Hips", 1);
+        let body = body.trim_start_matches("HIERARCHY\n");
+        let walked: String = (0..3)
+            .map(|k| format!("0 0 0 0 0 0 0 0.95 {} -90 0 0\n", 4.0 * k as f64))
+            .collect();
+        let text = format!(
+            "HIERARCHY\nROOT joint_Root {{ OFFSET 0 0 0 CHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\n{body} }}\nMOTION\nFrames: 3\nFrame Time: 0.0333\n{walked}"
+        );
+        let read = parse_layout(&text).unwrap();
+        assert_eq!(read.turn, DQuat::IDENTITY, "up {}", read.up_axis());
     }
 
     /// A capture cut short (the recording stopped, its header kept) is refused saying how many
