@@ -496,8 +496,8 @@ fn a_mesh_on_two_nodes_is_drawn_at_both() {
 /// A BVH capture (no mesh) is drawn as bones, an octahedron a bone, posed at each frame; a
 /// capture that walks across the room is followed by the camera, so every cell holds the whole
 /// figure at the cell's height (over its 2.5 s the CMU walk travels twice its size: seen from
-/// one spot the figure would be a third as tall); a blend of two captures written as BVH is
-/// drawn the same way.
+/// one spot the figure would be a third as tall), under a root bone left at the floor too; a
+/// blend of two captures written as BVH is drawn the same way.
 #[test]
 fn a_capture_is_drawn_as_bones_and_followed_across_the_floor() {
     let Some(fx) = fixtures() else { return };
@@ -553,6 +553,22 @@ fn a_capture_is_drawn_as_bones_and_followed_across_the_floor() {
         frames += 1;
     }
     assert!(frames > 60, "{frames} frames");
+    // Under a root bone that stays at the floor while the hips walk away (Bandai Namco's
+    // joint_Root; a capture retargeted onto a game skeleton): the link from it to the hips
+    // changes length as the walk goes on, so it is no bone; it stretched across the sheet
+    // (24 bones drawn, the figure a fifth of a cell's height).
+    let rooted = dir.path().join("rooted.bvh");
+    std::fs::write(&rooted, bvh_under_a_still_root(&walk)).unwrap();
+    let r = run_ok(&["preview", s(&rooted), "-o", s(&sheet), "--frames", "8"]);
+    let l = String::from_utf8_lossy(&r.stderr);
+    assert!(l.contains("x 8 frames of 184 triangles"), "{l}");
+    let (w, h, rgb) = decode_png(&sheet);
+    for c in 0..8 {
+        let rows = (0..h)
+            .filter(|&y| (0..160).any(|x| rgb[3 * (y * w + 160 * c + x)..][..3] != BACKGROUND))
+            .count();
+        assert!(rows > 110, "rooted cell {c}: the figure spans {rows} rows");
+    }
     let jog = dir.path().join("jog.bvh");
     run_ok(&["blend", s(&walk), s(&run), "-o", s(&jog), "-q"]);
     let r = run_ok(&["preview", s(&jog), "-o", s(&sheet)]);

@@ -20,11 +20,25 @@ pub const WIDTH: f64 = 0.1;
 /// Where along the bone (from the parent) it is widest.
 pub const WAIST: f64 = 0.2;
 
-/// The (parent, joint) pairs drawn: every joint with a parent, the two apart.
-fn bones(rig: &Rig, world: &[DVec3]) -> Vec<(usize, usize)> {
+/// How much a bone's length may change over the frames drawn (a share of its longest): a
+/// capture's links keep theirs to its solver's rounding; a root bone left at the floor while
+/// the hips below it walk away (Bandai Namco's joint_Root) is no bone.
+pub const STRETCH: f64 = 0.25;
+
+/// The (parent, joint) pairs drawn: every joint with a parent, the two apart in the rest pose
+/// (`frames[0]`) and as far apart on every frame, within [`STRETCH`].
+fn bones(rig: &Rig, frames: &[Vec<DVec3>]) -> Vec<(usize, usize)> {
+    let length = |(p, j): (usize, usize), at: &[DVec3]| at[p].distance(at[j]);
     (0..rig.len())
         .filter_map(|j| rig.parent[j].map(|p| (p, j)))
-        .filter(|&(p, j)| world[p].distance(world[j]) > 0.0)
+        .filter(|&bone| length(bone, &frames[0]) > 0.0)
+        .filter(|&bone| {
+            let (lo, hi) = (frames.iter().map(|at| length(bone, at)))
+                .fold((f64::INFINITY, 0.0f64), |(lo, hi), l| {
+                    (lo.min(l), hi.max(l))
+                });
+            hi - lo <= STRETCH * hi
+        })
         .collect()
 }
 
@@ -65,8 +79,10 @@ pub fn scene(path: &Path, count: usize, animate: bool) -> Result<Scene> {
         let world = rig.world(&clip.pose(&rig, t));
         world.iter().map(|m| m.w_axis.truncate()).collect()
     };
-    // The bones of the rest pose (a joint on its parent there has none).
-    let drawn = bones(&rig, &joints(a));
+    // The bones of the first frame (a joint on its parent there has none) that keep their
+    // length over the frames drawn.
+    let frames: Vec<Vec<DVec3>> = times.iter().map(|&t| joints(t)).collect();
+    let drawn = bones(&rig, &frames);
     if drawn.is_empty() {
         bail!(crate::gltf::at(
             path,
@@ -76,8 +92,8 @@ pub fn scene(path: &Path, count: usize, animate: bool) -> Result<Scene> {
     let triangles: Vec<[u32; 3]> = (0..drawn.len() as u32).flat_map(|k| faces(6 * k)).collect();
     let columns = times
         .iter()
-        .map(|&time| {
-            let at = joints(time);
+        .zip(&frames)
+        .map(|(&time, at)| {
             let points = drawn.iter().flat_map(|&(p, j)| octahedron(at[p], at[j]));
             Column {
                 meshes: vec![points.collect()],

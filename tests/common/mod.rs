@@ -832,3 +832,46 @@ pub fn summary_peak_mib(summary: &str) -> f64 {
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no peak memory in {summary}"))
 }
+
+/// `path`'s capture under a root joint of its own that stays put (six channels, all zero), its
+/// hip a joint with six channels below it, as a capture retargeted onto a game skeleton whose
+/// root bone stays at the origin has it.
+pub fn bvh_under_a_still_root(path: &Path) -> String {
+    let (head, time, frames) = bvh_parts(path);
+    let mut lines = head.lines().skip(1);
+    let hip = lines.next().unwrap().replacen("ROOT", "JOINT", 1);
+    let rest: Vec<String> = lines.map(|l| format!("\t{l}")).collect();
+    let head = format!(
+        "HIERARCHY\nROOT still\n{{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n\t{hip}\n{}\n}}\n",
+        rest.join("\n")
+    );
+    let moved: Vec<String> = frames.iter().map(|l| format!("0 0 0 0 0 0 {l}")).collect();
+    bvh_text(&head, &time, &moved)
+}
+
+/// A BVH capture's hierarchy (up to MOTION), its frame time line and its frame lines (as many
+/// as its Frames line says).
+pub fn bvh_parts(path: &Path) -> (String, String, Vec<String>) {
+    let text = std::fs::read_to_string(path).unwrap().replace("\r\n", "\n");
+    let (head, motion) = text.split_once("MOTION\n").unwrap();
+    let mut lines = motion.lines();
+    let count: usize = lines.next().unwrap()["Frames:".len()..]
+        .trim()
+        .parse()
+        .unwrap();
+    let time = lines.next().unwrap().to_owned();
+    let frames: Vec<String> = (lines.filter(|l| !l.trim().is_empty()))
+        .map(str::to_owned)
+        .collect();
+    assert_eq!(frames.len(), count);
+    (head.to_owned(), time, frames)
+}
+
+/// A BVH capture's text from its hierarchy `head`, frame time line and frame lines.
+pub fn bvh_text(head: &str, time: &str, frames: &[String]) -> String {
+    format!(
+        "{head}MOTION\nFrames: {}\n{time}\n{}\n",
+        frames.len(),
+        frames.join("\n")
+    )
+}
