@@ -44,7 +44,7 @@ impl Analysis {
 }
 
 pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, Vec<Analysis>) {
-    let size = track::size(rig, &rig.rest);
+    let size = track::character_size(rig, clips);
     let tracks: Vec<Track> = clips
         .iter()
         .map(|c| Track::new(rig, c, track::loops(rig, c, size)))

@@ -508,6 +508,34 @@ mod tests {
         assert_eq!(read.turn, DQuat::IDENTITY, "up {}", read.up_axis());
     }
 
+    /// Offsets laid along each joint's own axis (Bandai Namco's captures: the rest pose a line
+    /// 2.2 across here, 457 cm there) say nothing of the character's size; its first frame,
+    /// where the joints' rotations stand it up 1.7 tall, does.
+    #[test]
+    fn a_rest_pose_laid_along_the_joints_axes_is_sized_as_it_stands() {
+        let rot = "CHANNELS 3 Zrotation Xrotation Yrotation";
+        let chain = |name: &str, sign: f64, lengths: &[f64]| {
+            let mut text = String::new();
+            for (k, l) in lengths.iter().enumerate() {
+                let channels = if k == 0 { rot } else { "" };
+                text += &format!("JOINT {name}{k} {{ OFFSET {} 0 0 {channels} ", sign * l);
+            }
+            text += &format!("End Site {{ OFFSET {} 0 0 }} ", sign * 0.1);
+            text + &"} ".repeat(lengths.len())
+        };
+        let text = format!(
+            "HIERARCHY\nROOT Hips {{ OFFSET 0 0 0 CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation {} {} {} }}\nMOTION\nFrames: 1\nFrame Time: 0.0333\n0 1 0 0 0 0 -90 0 0 90 0 0 90 0 0\n",
+            chain("L", 1.0, &[0.1, 0.45, 0.45]),
+            chain("R", -1.0, &[0.1, 0.45, 0.45]),
+            chain("C", 1.0, &[0.05, 0.45, 0.15]),
+        );
+        let read = parse_layout(&text).unwrap();
+        let rest = super::super::track::size(&read.rig, &read.rig.rest);
+        let size = super::super::track::character_size(&read.rig, &[&read.clip]);
+        assert!((rest - 2.2).abs() < 1e-9, "rest {rest}");
+        assert!((size - 1.7).abs() < 1e-9, "size {size}");
+    }
+
     /// A capture cut short (the recording stopped, its header kept) is refused saying how many
     /// frames it declares, how many it holds and how much of the next.
     #[test]

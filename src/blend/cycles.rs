@@ -115,7 +115,10 @@ pub fn detect(
         at(lo) * (1.0 - f) + if f > 0.0 { at(lo + 1) * f } else { 0.0 }
     };
     if track.looping {
-        let k = (1..=4)
+        // As many strides as the loop repeats at a stride period (a capture of six strides
+        // that ends as it began is six cycles, not three of two strides).
+        let most = ((n as f64 * track.dt / MIN_PERIOD).floor() as usize).max(1);
+        let k = (1..=most)
             .rev()
             .find(|&k| n / k >= 2 && corr(n as f64 / k as f64) >= LOOP_REPEAT)
             .unwrap_or(1);

@@ -559,7 +559,7 @@ pub struct Gait {
 /// [`Gait`] of `clip`, analysed as `blend` analyses a clip (with the legs' default cycle
 /// method), alone.
 pub fn gait(rig: &Rig, clip: &Clip) -> Gait {
-    let size = super::track::size(rig, &rig.rest);
+    let size = super::track::character_size(rig, &[clip]);
     let rig = &rig.carried_by(&[clip], size);
     let closed = super::track::close_open_loop(rig, clip, size);
     let clip = closed.as_ref().unwrap_or(clip);
@@ -577,7 +577,7 @@ pub fn gait(rig: &Rig, clip: &Clip) -> Gait {
 /// Refused (unless `--cycles none`) when either clip has no stride cycle.
 pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Result<Blended> {
     let w = opts.weight;
-    let size = super::track::size(rig, &rig.rest);
+    let size = super::track::character_size(rig, &[a, b]);
     let rig = &rig.carried_by(&[a, b], size);
     let closed = [a, b].map(|c| super::track::close_open_loop(rig, c, size));
     let (a, b) = (

@@ -221,9 +221,11 @@ pub fn close_open_loop(rig: &Rig, clip: &Clip, size: f64) -> Option<Clip> {
     Some(closed)
 }
 
-/// The character's size: the height span of its skeleton in the rest pose, or its largest
-/// extent when it lies flat.
-pub fn size(rig: &Rig, pose: &Pose) -> f64 {
+/// A skeleton stands when its height span is more than this share of its largest extent.
+const STANDS: f64 = 0.25;
+
+/// The extent of the skeleton's joints in `pose` (per axis).
+fn extent(rig: &Rig, pose: &Pose) -> DVec3 {
     let p = rig.positions(pose);
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -231,12 +233,35 @@ pub fn size(rig: &Rig, pose: &Pose) -> f64 {
         lo = lo.min(p[j]);
         hi = hi.max(p[j]);
     }
-    let ext = (hi - lo).max(DVec3::ZERO);
-    if ext.y > 0.25 * ext.max_element() {
+    (hi - lo).max(DVec3::ZERO)
+}
+
+/// The size of the skeleton in `pose`: its height span where it stands ([`STANDS`]), else its
+/// largest extent.
+pub fn size(rig: &Rig, pose: &Pose) -> f64 {
+    let ext = extent(rig, pose);
+    if ext.y > STANDS * ext.max_element() {
         ext.y
     } else {
         ext.max_element().max(MIN_SIZE)
     }
+}
+
+/// The character's size: its height span in the rest pose; where the rest pose does not stand
+/// (a capture's offsets laid along each joint's own axis, as Bandai Namco's are: 457 cm
+/// across, against 170 standing), the tallest the clips stand at their first frames; where
+/// none does, the rest pose's largest extent.
+pub fn character_size(rig: &Rig, clips: &[&Clip]) -> f64 {
+    let rest = extent(rig, &rig.rest);
+    if rest.y > STANDS * rest.max_element() {
+        return rest.y;
+    }
+    (clips.iter())
+        .map(|c| extent(rig, &c.pose(rig, c.start)))
+        .filter(|e| e.y > STANDS * e.max_element())
+        .map(|e| e.y)
+        .fold(None, |m: Option<f64>, y| Some(m.map_or(y, |m| m.max(y))))
+        .unwrap_or_else(|| size(rig, &rig.rest))
 }
 
 /// The pose at `t` on an endless timeline: a looping clip repeats, its translations carried on
