@@ -2229,18 +2229,31 @@ fn blend_pair(a: &Path, b: &Path, dir: &Path) -> Value {
 /// the last multiple of 1/rate within it, as Blender bakes a clip on its scene's frames: a
 /// loop whose period is no multiple of 1/rate then ends short of its first pose.
 fn with_resampled_clip(file: &Path, name: &str, rate: f64, dir: &Path) -> (PathBuf, String) {
+    let (doc, clip, times, poses) = clip_sampled(file, name, |dur| {
+        let keys = (dur * rate + 1e-9).floor() as usize;
+        (0..=keys).map(|k| k as f64 / rate).collect()
+    });
+    let resampled = format!("{name}_{rate}");
+    let out_path = dir.join("resampled.glb");
+    with_clip(&doc, &out_path, &resampled, &times, &poses, &clip);
+    (out_path, resampled)
+}
+
+/// `file`, its clip `name` and that clip's poses at the times (from its start) `times_of` its
+/// duration gives.
+fn clip_sampled(
+    file: &Path,
+    name: &str,
+    times_of: impl Fn(f64) -> Vec<f64>,
+) -> (Document, blend::Clip, Vec<f64>, Vec<blend::Pose>) {
     let doc = Document::open(file).unwrap();
     let (rig, clips) = blend::load_gltf(&doc).unwrap();
-    let clip = clips.iter().find(|c| c.name == name).unwrap();
-    let keys = (clip.duration() * rate + 1e-9).floor() as usize;
-    let times: Vec<f64> = (0..=keys).map(|k| k as f64 / rate).collect();
+    let clip = clips.into_iter().find(|c| c.name == name).unwrap();
+    let times = times_of(clip.duration());
     let poses: Vec<blend::Pose> = (times.iter())
         .map(|t| clip.pose(&rig, clip.start + t))
         .collect();
-    let resampled = format!("{name}_{rate}");
-    let out_path = dir.join("resampled.glb");
-    with_clip(&doc, &out_path, &resampled, &times, &poses, clip);
-    (out_path, resampled)
+    (doc, clip, times, poses)
 }
 
 /// A loop baked on a grid that its period does not fit ends short of its first pose: Fox's
@@ -2686,14 +2699,10 @@ fn robot_walk_and_run(input: &Path, out: &Path) -> String {
 /// from the clip's start up to one key short of its loop (the engine convention: the key that
 /// repeats the first pose left out).
 fn with_clip_baked_open(file: &Path, name: &str, rate: f64, dir: &Path) -> (PathBuf, String) {
-    let doc = Document::open(file).unwrap();
-    let (rig, clips) = blend::load_gltf(&doc).unwrap();
-    let clip = clips.iter().find(|c| c.name == name).unwrap();
-    let keys = (clip.duration() * rate - 1e-9).ceil() as usize;
-    let times: Vec<f64> = (0..keys).map(|k| k as f64 / rate).collect();
-    let poses: Vec<blend::Pose> = (times.iter())
-        .map(|t| clip.pose(&rig, clip.start + t))
-        .collect();
+    let (doc, _, times, poses) = clip_sampled(file, name, |dur| {
+        let keys = (dur * rate - 1e-9).ceil() as usize;
+        (0..keys).map(|k| k as f64 / rate).collect()
+    });
     let joints = doc.json["skins"][0]["joints"].as_array().unwrap();
     let channels = (joints.iter())
         .map(|j| j.as_u64().unwrap() as usize)

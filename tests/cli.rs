@@ -2591,12 +2591,7 @@ fn a_texture_missing_beside_a_gltf_is_left_the_reference_it_was() {
     let gltf = dir.path().join("fox.gltf");
     std::fs::write(&gltf, serde_json::to_vec(&j).unwrap()).unwrap();
     let out = tempfile::tempdir().unwrap();
-    for (name, said) in [
-        ("f.glb", "left as a reference to it, not embedded"),
-        ("f.gltf", "left as a reference to it, not copied"),
-        ("f.usda", "image 0 \"fox_texture.png\" cannot be read"),
-    ] {
-        let written = out.path().join(name);
+    let blend = |written: &Path| {
         let told = run_ok(&[
             "blend",
             s(&gltf),
@@ -2604,9 +2599,17 @@ fn a_texture_missing_beside_a_gltf_is_left_the_reference_it_was() {
             "Walk",
             "Run",
             "-o",
-            s(&written),
+            s(written),
         ]);
-        let err = String::from_utf8_lossy(&told.stderr);
+        String::from_utf8_lossy(&told.stderr).into_owned()
+    };
+    for (name, said) in [
+        ("f.glb", "left as a reference to it, not embedded"),
+        ("f.gltf", "left as a reference to it, not copied"),
+        ("f.usda", "image 0 \"fox_texture.png\" cannot be read"),
+    ] {
+        let written = out.path().join(name);
+        let err = blend(&written);
         assert!(
             err.contains(said) && err.contains("cannot be read"),
             "{name}: {err}"
@@ -2636,16 +2639,7 @@ fn a_texture_missing_beside_a_gltf_is_left_the_reference_it_was() {
     )
     .unwrap();
     let written = out.path().join("f.glb");
-    let told = run_ok(&[
-        "blend",
-        s(&gltf),
-        "--clips",
-        "Walk",
-        "Run",
-        "-o",
-        s(&written),
-    ]);
-    let err = String::from_utf8_lossy(&told.stderr);
+    let err = blend(&written);
     let said = "\"fox_texture.png\" is a Git LFS pointer, not the file itself";
     assert!(err.contains(said), "{err}");
     assert_eq!(glb_parts(&written).0["images"][0]["uri"], "fox_texture.png");
