@@ -219,6 +219,10 @@ fn upright(rig: &Rig, clip: &Clip) -> DQuat {
         above[body] = true;
         body = only;
     }
+    if children[body].is_empty() {
+        // One chain (a tail, a rope): no body below root bones; every joint counts.
+        (body, above) = (root, vec![false; n]);
+    }
     let pos = rig.positions(&rig.rest);
     let (lo, hi) = bounds(&pos);
     let size = (hi - lo).max_element();

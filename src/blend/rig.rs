@@ -135,9 +135,10 @@ pub const BODY_SHARE: f64 = 0.5;
 impl Rig {
     /// This rig with [`Rig::body`] the joint that carries `clips` over the floor: the root, or,
     /// where the root ends every clip where it began while a joint below it holding
-    /// [`BODY_SHARE`] of the skeleton ends one at least [`CARRIES`] of `size` away (root motion keyed on the hips under a root bone that stays
-    /// put: Fox's hip, b_Hip_01, under _rootJoint; a capture retargeted onto a game skeleton
-    /// whose pelvis travels), the topmost such joint. Positions relative to the body then
+    /// [`BODY_SHARE`] of the skeleton ends one at least [`CARRIES`] of `size` away (root motion
+    /// keyed on the hips under a root bone that stays put: Fox's hip, b_Hip_01, under
+    /// _rootJoint; a capture retargeted onto a game skeleton whose pelvis travels), the topmost
+    /// such joint. Positions relative to the body then
     /// repeat over a cycle however far the clip travels.
     pub fn carried_by(&self, clips: &[&Clip], size: f64) -> Rig {
         let mut rig = self.clone();

@@ -249,8 +249,8 @@ pub fn size(rig: &Rig, pose: &Pose) -> f64 {
 
 /// The character's size: its height span in the rest pose; where the rest pose does not stand
 /// (a capture's offsets laid along each joint's own axis, as Bandai Namco's are: 457 cm
-/// across, against 170 standing), the tallest the clips stand at their first frames; where
-/// none does, the rest pose's largest extent.
+/// across, the figure 131 cm tall as it runs), the tallest the clips stand at their first
+/// frames; where none does, the rest pose's largest extent.
 pub fn character_size(rig: &Rig, clips: &[&Clip]) -> f64 {
     let rest = extent(rig, &rig.rest);
     if rest.y > STANDS * rest.max_element() {
@@ -260,7 +260,7 @@ pub fn character_size(rig: &Rig, clips: &[&Clip]) -> f64 {
         .map(|c| extent(rig, &c.pose(rig, c.start)))
         .filter(|e| e.y > STANDS * e.max_element())
         .map(|e| e.y)
-        .fold(None, |m: Option<f64>, y| Some(m.map_or(y, |m| m.max(y))))
+        .reduce(f64::max)
         .unwrap_or_else(|| size(rig, &rig.rest))
 }
 
