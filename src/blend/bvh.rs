@@ -185,6 +185,12 @@ const UP_ASYMMETRY: f64 = 2.0;
 /// (legs longer than the trunk and head above the hips): 1.34-1.75 on the CMU captures.
 const ROOT_LOW: f64 = 1.15;
 
+/// Where the rest pose shows no up axis, the motion's must be clear: the posed skeleton at
+/// least this many times as tall along it as along any other (summed over three frames, the
+/// root bones left out, Bandai Namco's runs and dash stand 1.9-2.3 times as tall as they are
+/// wide or long, the walks 2.7-3.5 times).
+const POSED_TALL: f64 = 1.5;
+
 /// Skeletons of more joints than this are taken as read (Y-up): the judgement compares every
 /// joint with every other (a hostile file of a million joints would take hours); motion
 /// captures have tens to a few hundred.
@@ -244,36 +250,53 @@ fn upright(rig: &Rig, clip: &Clip) -> DQuat {
         moved / (n as f64 * size)
     };
     let errors = [mirror_error(0), mirror_error(1), mirror_error(2)];
+    // The posed skeleton (root bones left out) at the first, middle and last frames: its
+    // extent per axis, summed, and how far the body stands above its lowest joints and below
+    // its highest, per axis, summed.
+    let (mut posed, mut below, mut over) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+    for t in [clip.start, 0.5 * (clip.start + clip.end), clip.end] {
+        let pos = rig.positions(&clip.pose(rig, t));
+        let carried: Vec<DVec3> = (0..n).filter(|&j| !above[j]).map(|j| pos[j]).collect();
+        let (lo, hi) = bounds(&carried);
+        posed += hi - lo;
+        below += pos[body] - lo;
+        over += hi - pos[body];
+    }
+    let side = |below: f64, over: f64| {
+        if below > ROOT_LOW * over {
+            Some(1.0)
+        } else if over > ROOT_LOW * below {
+            Some(-1.0)
+        } else {
+            None
+        }
+    };
+    let turned = |u: usize, sign: f64| {
+        let mut up = DVec3::ZERO;
+        up[u] = sign;
+        DQuat::from_rotation_arc(up, DVec3::Y)
+    };
     let mut axes = [0, 1, 2];
     axes.sort_by(|&a, &b| errors[b].total_cmp(&errors[a]));
     let u = axes[0];
-    if errors[u] < UP_ASYMMETRY * errors[axes[1]] {
-        return DQuat::IDENTITY;
-    }
-    let (below, over) = (pos[body][u] - lo[u], hi[u] - pos[body][u]);
-    let sign = if below > ROOT_LOW * over {
-        1.0
-    } else if over > ROOT_LOW * below {
-        -1.0
-    } else {
-        return DQuat::IDENTITY;
+    let rest = (errors[u] >= UP_ASYMMETRY * errors[axes[1]])
+        .then(|| side(pos[body][u] - lo[u], hi[u] - pos[body][u]))
+        .flatten();
+    let Some(sign) = rest else {
+        // The rest pose shows no up (offsets laid along each joint's own axis, as Bandai
+        // Namco's are, and Blender's Z-up export of them): up is the axis the motion stands
+        // tallest along, by [`POSED_TALL`] over the next, the body low on it.
+        let mut tall = [0, 1, 2];
+        tall.sort_by(|&a, &b| posed[b].total_cmp(&posed[a]));
+        let u = tall[0];
+        if posed[u] < POSED_TALL * posed[tall[1]] {
+            return DQuat::IDENTITY;
+        }
+        return side(below[u], over[u]).map_or(DQuat::IDENTITY, |sign| turned(u, sign));
     };
-    let mut up = DVec3::ZERO;
-    up[u] = sign;
-    let turn = DQuat::from_rotation_arc(up, DVec3::Y);
-    if turn == DQuat::IDENTITY {
-        return turn;
-    }
-    let posed = [clip.start, 0.5 * (clip.start + clip.end), clip.end]
-        .iter()
-        .map(|&t| {
-            let pos = rig.positions(&clip.pose(rig, t));
-            let carried: Vec<DVec3> = (0..n).filter(|&j| !above[j]).map(|j| pos[j]).collect();
-            let (lo, hi) = bounds(&carried);
-            hi - lo
-        })
-        .sum::<DVec3>();
-    match (0..3).all(|a| a == u || posed[a] < posed[u]) {
+    let turn = turned(u, sign);
+    // Kept only where the motion stands along it too.
+    match turn == DQuat::IDENTITY || (0..3).all(|a| a == u || posed[a] < posed[u]) {
         true => turn,
         false => DQuat::IDENTITY,
     }
@@ -513,8 +536,8 @@ mod tests {
     }
 
     /// Offsets laid along each joint's own axis (Bandai Namco's captures: the rest pose a line
-    /// 2.2 across here, 457 cm there) say nothing of the character's size; its first frame,
-    /// where the joints' rotations stand it up 1.7 tall, does.
+    /// 2.2 across here, 457 cm there) say nothing of the character's size nor of its up axis;
+    /// its first frame, where the joints' rotations stand it up 1.7 tall, does.
     #[test]
     fn a_rest_pose_laid_along_the_joints_axes_is_sized_as_it_stands() {
         let rot = "CHANNELS 3 Zrotation Xrotation Yrotation";
@@ -537,6 +560,17 @@ mod tests {
         let rest = super::super::track::size(&read.rig, &read.rig.rest);
         let size = super::super::track::character_size(&read.rig, &[&read.clip]);
         assert!((rest - 2.2).abs() < 1e-9, "rest {rest}");
+        assert!((size - 1.7).abs() < 1e-9, "size {size}");
+        assert_eq!(read.up_axis(), "Y");
+        // The same figure standing along Z in its motion (Blender's Z-up export of such a
+        // capture): the rest pose shows no up, the motion does; it was read as Y-up.
+        let z_up = text.replace(
+            "0 1 0 0 0 0 -90 0 0 90 0 0 90 0 0",
+            "0 0 1 0 0 0 0 0 90 0 0 -90 0 0 -90",
+        );
+        let read = parse_layout(&z_up).unwrap();
+        assert_eq!(read.up_axis(), "Z");
+        let size = super::super::track::character_size(&read.rig, &[&read.clip]);
         assert!((size - 1.7).abs() < 1e-9, "size {size}");
     }
 
