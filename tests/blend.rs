@@ -1884,11 +1884,7 @@ fn bvh_captures_blend_into_bvh() {
     );
     // A capture in a repository cloned without its LFS objects is a pointer file.
     let pointer = dir.path().join("pointer.bvh");
-    std::fs::write(
-        &pointer,
-        "version https://git-lfs.github.com/spec/v1\noid sha256:0c3b1e0f7e4b1f2a9f4f7b3c1d1e5f6a7b8c9d0e1f2a3b4c5d6e7f8a9b0c1d2e\nsize 2153017\n",
-    )
-    .unwrap();
+    std::fs::write(&pointer, lfs_pointer(2153017)).unwrap();
     assert_refused(
         &["blend", &walk_s, &s(&pointer), "-o", &s(&bad)],
         "pointer.bvh",

@@ -1006,11 +1006,7 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
         r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"lfsbuf.bin","byteLength":69532}]}"#,
     )
     .unwrap();
-    std::fs::write(
-        p("lfsbuf.bin"),
-        "version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 69532\n",
-    )
-    .unwrap();
+    std::fs::write(p("lfsbuf.bin"), lfs_pointer(69532)).unwrap();
     std::fs::write(
         p("nomorph.gltf"),
         r#"{"asset":{"version":"2.0"},"meshes":[]}"#,
@@ -1058,11 +1054,7 @@ fn bad_input_fails_with_one_line_exit_2_and_no_file() {
     std::fs::write(p("nan.glb"), &bytes).unwrap();
 
     // Files that stand in for a pipeline's assets, named as what they are.
-    std::fs::write(
-        p("pointer.glb"),
-        "version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 182232\n",
-    )
-    .unwrap();
+    std::fs::write(p("pointer.glb"), lfs_pointer(182232)).unwrap();
     std::fs::write(
         p("page.glb"),
         "\n\n<!DOCTYPE html>\n<html lang=\"en\">\n<head><title>facecap.glb</title></head>",
@@ -2633,11 +2625,7 @@ fn a_texture_missing_beside_a_gltf_is_left_the_reference_it_was() {
     }
     // The texture there, but a Git LFS pointer (a clone without `git lfs pull`): the same,
     // the line saying what the file is.
-    std::fs::write(
-        dir.path().join("fox_texture.png"),
-        "version https://git-lfs.github.com/spec/v1\noid sha256:5c2d1e0f7e4b1f2a9f4f7b3c1d1e5f6a7b8c9d0e1f2a3b4c5d6e7f8a9b0c1d2e\nsize 1048576\n",
-    )
-    .unwrap();
+    std::fs::write(dir.path().join("fox_texture.png"), lfs_pointer(1048576)).unwrap();
     let written = out.path().join("f.glb");
     let err = blend(&written);
     let said = "\"fox_texture.png\" is a Git LFS pointer, not the file itself";

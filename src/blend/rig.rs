@@ -138,8 +138,8 @@ impl Rig {
     /// [`BODY_SHARE`] of the skeleton ends one at least [`CARRIES`] of `size` away (root motion
     /// keyed on the hips under a root bone that stays put: Fox's hip, b_Hip_01, under
     /// _rootJoint; a capture retargeted onto a game skeleton whose pelvis travels), the topmost
-    /// such joint. Positions relative to the body then
-    /// repeat over a cycle however far the clip travels.
+    /// such joint. Positions relative to the body then repeat over a cycle however far the
+    /// clip travels.
     pub fn carried_by(&self, clips: &[&Clip], size: f64) -> Rig {
         let mut rig = self.clone();
         // Per clip, each joint's horizontal displacement from the clip's start to its end.
@@ -165,21 +165,23 @@ impl Rig {
         // sit down or fall over the feet, as RobotExpressive's Sitting and Death do).
         let skeleton = self.skeleton.iter().filter(|&&s| s).count();
         let carries = |j: usize| {
-            moves.iter().any(|(clip, d)| {
-                let translated = clip
-                    .channels
-                    .iter()
-                    .any(|c| c.node == j && c.path == Path::Translation);
-                let mut off: Vec<f64> = (0..self.len())
-                    .filter(|&k| self.skeleton[k] && self.descends(k, j))
-                    .map(|k| (d[k] - d[j]).length())
-                    .collect();
-                off.sort_by(f64::total_cmp);
-                off.len() as f64 >= BODY_SHARE * skeleton as f64
-                    && translated
-                    && d[j].length() > CARRIES * size
-                    && off[(off.len() - 1) * 9 / 10] <= 0.5 * d[j].length()
-            })
+            // The skeleton at and below `j` is the same for every clip: found once, and a
+            // joint that holds too little of it is passed before any clip is looked at.
+            let below: Vec<usize> = (0..self.len())
+                .filter(|&k| self.skeleton[k] && self.descends(k, j))
+                .collect();
+            below.len() as f64 >= BODY_SHARE * skeleton as f64
+                && moves.iter().any(|(clip, d)| {
+                    let translated = clip
+                        .channels
+                        .iter()
+                        .any(|c| c.node == j && c.path == Path::Translation);
+                    let mut off: Vec<f64> = below.iter().map(|&k| (d[k] - d[j]).length()).collect();
+                    off.sort_by(f64::total_cmp);
+                    translated
+                        && d[j].length() > CARRIES * size
+                        && off[(off.len() - 1) * 9 / 10] <= 0.5 * d[j].length()
+                })
         };
         let body = (self.order.iter().copied()).find(|&j| self.skeleton[j] && carries(j));
         if let Some(body) = body {

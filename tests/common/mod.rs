@@ -875,3 +875,11 @@ pub fn bvh_text(head: &str, time: &str, frames: &[String]) -> String {
         frames.join("\n")
     )
 }
+
+/// What Git LFS leaves in a file's place when a repository is cloned without its LFS objects:
+/// the pointer to an object of `size` bytes.
+pub fn lfs_pointer(size: u64) -> String {
+    format!(
+        "version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize {size}\n"
+    )
+}
