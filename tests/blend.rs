@@ -1784,6 +1784,18 @@ fn bvh_captures_blend_into_bvh() {
     assert_eq!(head(&text), head(&original));
     assert_eq!(back.rig.names, a.rig.names);
     assert_eq!(back.frame_time, a.frame_time);
+    // The captures' "Frame Time: 0.008333" (six places: 120.0048 a second as written) is read
+    // as the 120 a second it stands for, and written so.
+    assert!(
+        original.contains("Frame Time: 0.008333\n")
+            || original.contains("Frame Time: 0.008333\r\n")
+    );
+    assert_eq!(a.frame_time, 1.0 / 120.0);
+    assert!(
+        text.contains("Frame Time: 0.00833333"),
+        "{}",
+        &text[text.find("MOTION").unwrap()..][..40]
+    );
     let blended = blend::blend(&a.rig, &a.clip, &b.clip, &blend::BlendOptions::new(0.5)).unwrap();
     let duration = *blended.times.last().unwrap();
     assert!((duration - report["result"]["duration"].as_f64().unwrap()).abs() < 1e-9);

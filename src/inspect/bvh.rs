@@ -57,6 +57,17 @@ pub fn inspect(path: &Path) -> Result<BvhInspection> {
 }
 
 /// The inspection as text for a person.
+/// The rate of frames `frame_time` apart as inspect shows it: a whole or NTSC rate exactly
+/// ("120", "30000/1001"), another to two places.
+fn rate_shown(frame_time: f64) -> String {
+    let rate = crate::tween::typed_rate(1.0 / frame_time);
+    match crate::tween::rate_text(rate) {
+        ntsc if ntsc.contains('/') => ntsc,
+        _ if (rate - rate.round()).abs() < 1e-9 => format!("{}", rate.round()),
+        _ => format!("{rate:.2}"),
+    }
+}
+
 pub fn text(i: &BvhInspection) -> String {
     let mut s = format!("{}: {} bytes, a BVH motion capture\n", i.file, i.bytes);
     s += &format!(
@@ -68,10 +79,10 @@ pub fn text(i: &BvhInspection) -> String {
         i.rotation_orders.join(", ")
     );
     s += &format!(
-        "motion: {} frames every {:.6} s ({:.2} a second), {:.3} s\n",
+        "motion: {} frames every {:.6} s ({} a second), {:.3} s\n",
         i.frames,
         i.frame_time,
-        1.0 / i.frame_time,
+        rate_shown(i.frame_time),
         i.duration
     );
     s += &match i.up.as_str() {

@@ -43,7 +43,7 @@ pub use keys::{
 pub use options::{Layout, Method, Timing, TweenOptions, DEFAULT_RATE};
 pub use schedule::{close_loop, plan, schedule, FrameAt};
 pub use target_normals::{derive as derive_target_normals, wanted as targets_given_normals};
-pub use timegrid::{grid_of, rate_text, typed_rate, Grid};
+pub use timegrid::{grid_of, rate_text, typed_rate, written_frame_time, Grid};
 pub use weld::bbox_diagonal;
 
 pub(crate) use segment::{KeyTrack, Segment};

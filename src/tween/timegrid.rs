@@ -58,6 +58,40 @@ pub fn typed_rate(rate: f64) -> f64 {
         .unwrap_or(rate)
 }
 
+/// How far (relative) a frame time written as a decimal may lie from the frame time of a rate
+/// of [`RATES`] and still be read as it, besides lying within half a unit of its last written
+/// place: "0.0333" (4 places) lies 1.0e-3 of itself from 1/30, "0.03" 0.1 (read as written).
+pub const WRITTEN_CLOSE: f64 = 2e-3;
+
+/// The frame time (seconds) that `text`, a decimal as BVH's "Frame Time:" line writes it,
+/// stands for: the frame time of the rate of [`RATES`] that rounds to it at the places written
+/// (within half a unit of the last place other than a trailing zero, and [`WRITTEN_CLOSE`] of
+/// itself; the nearest where several do), else the number itself. "0.008333" is 1/120 s (120.0048 a second as written),
+/// ".0333333" 1/30, "0.033367" 1001/30000. `None` where `text` is no number.
+///
+/// ```
+/// assert_eq!(inbetween::tween::written_frame_time("0.008333"), Some(1.0 / 120.0));
+/// ```
+pub fn written_frame_time(text: &str) -> Option<f64> {
+    let value: f64 = text.parse().ok().filter(|v: &f64| v.is_finite())?;
+    let places = match text.split_once('.') {
+        // Trailing zeros are padding (Blender writes 1/30 as "0.03333330").
+        Some((_, fraction)) if fraction.bytes().all(|b| b.is_ascii_digit()) => {
+            fraction.trim_end_matches('0').len()
+        }
+        _ => return Some(value),
+    };
+    let half_unit = 0.5 * 10f64.powi(-(places as i32));
+    let off = |&(num, den): &(f64, f64)| (den / num - value).abs();
+    Some(
+        RATES
+            .iter()
+            .filter(|r| off(r) <= half_unit * (1.0 + 1e-9) && off(r) <= WRITTEN_CLOSE * value)
+            .min_by(|a, b| off(a).total_cmp(&off(b)))
+            .map_or(value, |&(num, den)| den / num),
+    )
+}
+
 /// A rate as the summary shows it: an NTSC rate of [`RATES`] as its fraction (30000/1001),
 /// any other as its number.
 pub fn rate_text(rate: f64) -> String {
@@ -221,6 +255,31 @@ pub fn timeline(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn written_frame_times_stand_for_their_rates() {
+        for (text, seconds) in [
+            ("0.008333", 1.0 / 120.0),
+            (".0083333", 1.0 / 120.0),
+            ("0.0333333", 1.0 / 30.0),
+            ("0.03333330", 1.0 / 30.0),
+            ("0.0333", 1.0 / 30.0),
+            ("0.041667", 1.0 / 24.0),
+            ("0.033367", 1001.0 / 30000.0),
+            ("0.016667", 1.0 / 60.0),
+            ("0.04", 0.04),
+        ] {
+            assert_eq!(written_frame_time(text), Some(seconds), "{text}");
+        }
+        // Read as written: too few places to tell, a rate off the table, an exponent.
+        for (text, seconds) in [("0.03", 0.03), ("0.0125", 0.0125), ("0.02", 0.02)] {
+            assert_eq!(written_frame_time(text), Some(seconds), "{text}");
+        }
+        assert_eq!(written_frame_time("0.0333"), Some(1.0 / 30.0));
+        assert_eq!(written_frame_time("8.333e-3"), Some(8.333e-3));
+        assert_eq!(written_frame_time("0.0083"), Some(0.0083));
+        assert_eq!(written_frame_time("x"), None);
+    }
 
     #[test]
     fn float32_key_times_snap_to_their_grid() {
