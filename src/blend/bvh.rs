@@ -382,9 +382,9 @@ fn motion(words: &mut Words, h: &Hierarchy) -> Result<(Vec<Channel>, f64), Strin
         return Err("no \"Frame Time:\" line".into());
     }
     let written = words.next("a frame time")?;
-    num(written)?;
     // As written to six places, 1/120 s is 120.0048 a second: read as the rate it stands for.
-    let dt = crate::tween::written_frame_time(written).ok_or("no frame time")?;
+    let dt = crate::tween::written_frame_time(written)
+        .ok_or_else(|| format!("{written:?} is not a number"))?;
     if dt <= 0.0 || frames == 0 {
         return Err("no frames".into());
     }

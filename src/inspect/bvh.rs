@@ -56,7 +56,6 @@ pub fn inspect(path: &Path) -> Result<BvhInspection> {
     })
 }
 
-/// The inspection as text for a person.
 /// The rate of frames `frame_time` apart as inspect shows it: a whole or NTSC rate exactly
 /// ("120", "30000/1001"), another to two places.
 fn rate_shown(frame_time: f64) -> String {
@@ -68,6 +67,7 @@ fn rate_shown(frame_time: f64) -> String {
     }
 }
 
+/// The inspection as text for a person.
 pub fn text(i: &BvhInspection) -> String {
     let mut s = format!("{}: {} bytes, a BVH motion capture\n", i.file, i.bytes);
     s += &format!(

@@ -66,8 +66,9 @@ pub const WRITTEN_CLOSE: f64 = 2e-3;
 /// The frame time (seconds) that `text`, a decimal as BVH's "Frame Time:" line writes it,
 /// stands for: the frame time of the rate of [`RATES`] that rounds to it at the places written
 /// (within half a unit of the last place other than a trailing zero, and [`WRITTEN_CLOSE`] of
-/// itself; the nearest where several do), else the number itself. "0.008333" is 1/120 s (120.0048 a second as written),
-/// ".0333333" 1/30, "0.033367" 1001/30000. `None` where `text` is no number.
+/// itself; the nearest where several do), else the number itself. "0.008333" is 1/120 s
+/// (120.0048 a second as written), ".0333333" 1/30, "0.033367" 1001/30000. `None` where
+/// `text` is no number.
 ///
 /// ```
 /// assert_eq!(inbetween::tween::written_frame_time("0.008333"), Some(1.0 / 120.0));
@@ -267,17 +268,22 @@ mod tests {
             ("0.041667", 1.0 / 24.0),
             ("0.033367", 1001.0 / 30000.0),
             ("0.016667", 1.0 / 60.0),
-            ("0.04", 0.04),
+            ("0.04", 1.0 / 25.0),
+            ("0.0200", 1.0 / 50.0),
         ] {
             assert_eq!(written_frame_time(text), Some(seconds), "{text}");
         }
-        // Read as written: too few places to tell, a rate off the table, an exponent.
-        for (text, seconds) in [("0.03", 0.03), ("0.0125", 0.0125), ("0.02", 0.02)] {
+        // Read as written: too far from 1/30 or 1/120 for the places written, a rate off the
+        // table (80), an exponent.
+        for (text, seconds) in [
+            ("0.03", 0.03),
+            ("0.0330", 0.033),
+            ("0.0083", 0.0083),
+            ("0.0125", 0.0125),
+            ("8.333e-3", 8.333e-3),
+        ] {
             assert_eq!(written_frame_time(text), Some(seconds), "{text}");
         }
-        assert_eq!(written_frame_time("0.0333"), Some(1.0 / 30.0));
-        assert_eq!(written_frame_time("8.333e-3"), Some(8.333e-3));
-        assert_eq!(written_frame_time("0.0083"), Some(0.0083));
         assert_eq!(written_frame_time("x"), None);
     }
 
