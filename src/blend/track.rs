@@ -236,15 +236,20 @@ fn extent(rig: &Rig, pose: &Pose) -> DVec3 {
     (hi - lo).max(DVec3::ZERO)
 }
 
+/// The height span of a skeleton of extent `ext` (per axis) where it stands ([`STANDS`]).
+fn standing(ext: DVec3) -> Option<f64> {
+    (ext.y > STANDS * ext.max_element()).then_some(ext.y)
+}
+
 /// The size of the skeleton in `pose`: its height span where it stands ([`STANDS`]), else its
 /// largest extent.
 pub fn size(rig: &Rig, pose: &Pose) -> f64 {
-    let ext = extent(rig, pose);
-    if ext.y > STANDS * ext.max_element() {
-        ext.y
-    } else {
-        ext.max_element().max(MIN_SIZE)
-    }
+    size_of(extent(rig, pose))
+}
+
+/// [`size`] of a skeleton of extent `ext`.
+fn size_of(ext: DVec3) -> f64 {
+    standing(ext).unwrap_or_else(|| ext.max_element().max(MIN_SIZE))
 }
 
 /// The character's size: its height span in the rest pose; where the rest pose does not stand
@@ -253,15 +258,13 @@ pub fn size(rig: &Rig, pose: &Pose) -> f64 {
 /// frames; where none does, the rest pose's largest extent.
 pub fn character_size(rig: &Rig, clips: &[&Clip]) -> f64 {
     let rest = extent(rig, &rig.rest);
-    if rest.y > STANDS * rest.max_element() {
-        return rest.y;
-    }
-    (clips.iter())
-        .map(|c| extent(rig, &c.pose(rig, c.start)))
-        .filter(|e| e.y > STANDS * e.max_element())
-        .map(|e| e.y)
-        .reduce(f64::max)
-        .unwrap_or_else(|| size(rig, &rig.rest))
+    standing(rest)
+        .or_else(|| {
+            (clips.iter())
+                .filter_map(|c| standing(extent(rig, &c.pose(rig, c.start))))
+                .reduce(f64::max)
+        })
+        .unwrap_or_else(|| size_of(rest))
 }
 
 /// The pose at `t` on an endless timeline: a looping clip repeats, its translations carried on
