@@ -911,8 +911,9 @@ fn fox_run_with_itself_does_not_dip() {
     );
     assert!(drop <= 0.12, "the root dips {drop} leg");
     assert!(jerk <= 1.15, "jerk ratio {jerk}");
+    // 5e-4 while a straight front leg was left short of its pin at a touchdown (PIN_MISS).
     assert!(
-        after <= 1e-3,
+        after <= 1e-4,
         "after clean-up {after} (the clip's own {own})"
     );
 }

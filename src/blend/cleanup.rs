@@ -4,8 +4,9 @@
 //! IK on the leg, the knee bending to the side it bends to over the clip; the spot moved, where
 //! the leg cannot reach it on every frame of the contact, to the nearest one it can ([`pin`]).
 //! Around each contact the correction (pin minus the foot's own position) is carried on at the
-//! rate it was changing, rate and weight faded out over [`EASE_SECONDS`] (a swing shorter than
-//! two eases gets one cubic from one contact's correction to the next), so the foot keeps its
+//! rate it was changing, the rate faded out over [`EASE_SECONDS`] and the weight over that
+//! before a touchdown and over [`RELEASE_SECONDS`] after a lift-off (a swing shorter than two
+//! eases gets one cubic from one contact's correction to the next), so the foot keeps its
 //! position and velocity where a pin starts or ends: no pop. Before the IK the root takes up
 //! what the legs share, as smooth curves over the clip: a horizontal shift toward the planted
 //! feet's corrections ([`root_shift`]) and a rise or fall that keeps each stance leg as long as
@@ -280,10 +281,19 @@ pub fn pin(
 /// fixtures' other blends ask for at most 0.06.
 pub const MAX_DROP: f64 = 0.1;
 
-/// How long (seconds) a contact's correction takes to fade out into the swing before and after
-/// it; a swing shorter than two of these gets one cubic from one contact's correction to the
-/// next instead.
+/// How long (seconds) a contact's correction takes to fade out into the swing before it, and
+/// its rate, carried on, after it; a swing shorter than two of these gets one cubic from one
+/// contact's correction to the next instead.
 pub const EASE_SECONDS: f64 = 0.125;
+
+/// How long (seconds) a contact's correction takes to fade out into the swing after its
+/// lift-off (its weight; the rate carried on fades over [`EASE_SECONDS`]). The jerk of a fade
+/// goes with the correction over the fade's length cubed, and 0.125 s is under four frames of a
+/// capture at 30 a second: Bandai Namco's walk_normal + walk_tired at 0.25 / 0.5 / 0.75 had jerk
+/// ratios 1.23 / 1.31 / 1.36 with it, 1.14 / 1.20 / 1.26 with this. Longer fades turn nearly
+/// straight knees for longer: CesiumMan's walk with itself half a cycle later goes from 1.13
+/// to 1.14 at 0.25, and to 1.16 with 0.2 s before touchdowns too or with 0.25 s after.
+pub const RELEASE_SECONDS: f64 = 0.2;
 
 /// The root's drop at each frame: each frame's `need` spread over `ease` frames either side
 /// with the same smoothstep (the largest share reaching a frame), so the root sinks and rises
@@ -359,8 +369,9 @@ impl Correction {
 
 /// The correction (target minus the foot's own position `ends`) per frame: in contact, what
 /// moves the foot onto its target; in the swing around it, the contact's first or last correction
-/// carried on at the rate it was changing, that rate fading linearly and the weight with a
-/// smoothstep over the ease window, so the foot's path keeps its position and velocity where a
+/// carried on at the rate it was changing, that rate fading linearly over the ease window and
+/// the weight with a smoothstep over it before a touchdown and over the release window after a
+/// lift-off ([`RELEASE_SECONDS`]), so the foot's path keeps its position and velocity where a
 /// pin starts or ends (no pop); between two contacts nearer than two ease windows, one cubic at
 /// full weight.
 /// `None` where no correction applies. On a looping clip (last frame = first) gaps wrap.
@@ -384,6 +395,7 @@ pub fn corrections(
         })
     };
     let ease = ease_frames(dt);
+    let release = (RELEASE_SECONDS / dt).max(ease);
     // The rate (per frame, going away from the contact) at which a contact's correction was
     // changing at its end frame `i`, one-sided (zero for a contact of one frame).
     let rate = |i: usize, inward: i64| {
@@ -412,19 +424,24 @@ pub fn corrections(
                     ));
                 }
             }
-            // A long swing: the neighbouring contact's correction, carried on at its rate, its
-            // weight fading out over the ease window (only one contact is that near).
+            // A long swing: the neighbouring contact's correction, carried on at its rate over
+            // the ease window, its weight fading out over that window before a touchdown and
+            // over the release window after a lift-off.
             let fading: Vec<Correction> = [(back, -1i64), (ahead, 1)]
                 .into_iter()
                 .filter_map(|(found, inward)| {
                     let (i, d) = found?;
-                    let x = d as f64 / ease;
-                    // The rate fades with the weight: the foot keeps its position and
+                    let x = d as f64 / if inward < 0 { release } else { ease };
+                    // The rate fades over the ease window: the foot keeps its position and
                     // velocity where the pin ends, but a source whose planted foot slides fast
                     // is not carried far off (Fox's run, its front feet sliding a quarter leg
-                    // a frame, was carried 0.7 leg).
+                    // a frame, was carried 0.7 leg), nor a foot held low and slow after its
+                    // lift-off, where the contact test finds it planted (a weight and rate
+                    // fading over 0.3 s after lift-offs slid 3e-3 leg a frame after clean-up
+                    // on Bandai Namco's walk_normal + run_normal).
+                    let carried = (1.0 - d as f64 / ease).max(0.0);
                     (x < 1.0).then(|| Correction {
-                        offset: off(i) + rate(i, inward) * d as f64 * (1.0 - x),
+                        offset: off(i) + rate(i, inward) * d as f64 * carried,
                         weight: 1.0 - smoothstep(x),
                     })
                 })
@@ -894,29 +911,44 @@ mod tests {
     #[test]
     fn corrections_carry_on_and_fade_without_a_jump() {
         // A long swing after frames 0-4: the correction goes on rising at 1 a frame, that rate
-        // fading linearly and the weight by a smoothstep over 3 frames (0.125 s at 24 fps),
-        // and is gone after it.
-        let mut planted = vec![false; 12];
+        // fading linearly over 3 frames (0.125 s at 24 fps) and the weight by a smoothstep
+        // over 4.8 (the release, 0.2 s), and is gone after it.
+        let mut planted = vec![false; 16];
         planted[..5].fill(true);
         let c: Vec<f64> = ramp(&planted)
             .iter()
             .map(|c| c.map_or(0.0, |v| v.x))
             .collect();
         assert_eq!(&c[..5], &[0.0, 1.0, 2.0, 3.0, 4.0]);
+        for d in 1..5 {
+            let carried = (1.0 - d as f64 / 3.0).max(0.0);
+            let fade = 1.0 - smoothstep(d as f64 / 4.8);
+            assert!((c[4 + d] - (4.0 + d as f64 * carried) * fade).abs() < 1e-12);
+        }
+        assert!(c[9..].iter().all(|&x| x == 0.0));
+        // Before a touchdown at frame 11 (contact 11-15) weight and rate fade over 3 frames.
+        let mut planted = vec![false; 16];
+        planted[11..].fill(true);
+        let c: Vec<f64> = ramp(&planted)
+            .iter()
+            .map(|c| c.map_or(0.0, |v| v.x))
+            .collect();
         for d in 1..3 {
             let x = d as f64 / 3.0;
             let fade = 1.0 - smoothstep(x);
-            assert!((c[4 + d] - (4.0 + d as f64 * (1.0 - x)) * fade).abs() < 1e-12);
+            assert!((c[11 - d] - (11.0 - d as f64 * (1.0 - x)) * fade).abs() < 1e-12);
         }
-        assert!(c[7..].iter().all(|&x| x == 0.0));
+        assert!(c[..9].iter().all(|&x| x == 0.0));
         // The fade is in the weight (applied to the leg's joint rotations); the offset is the
         // carried-on correction in full.
+        let mut planted = vec![false; 12];
+        planted[..5].fill(true);
         let target: Vec<DVec3> = (0..12).map(|j| DVec3::X * j as f64).collect();
         let full = corrections(&planted, &target, &[DVec3::ZERO; 12], 1.0 / 24.0, false);
         assert_eq!(full[4].unwrap().weight, 1.0);
         let c5 = full[5].unwrap();
         assert!((c5.offset.x - (4.0 + 2.0 / 3.0)).abs() < 1e-12);
-        assert!((c5.weight - (1.0 - smoothstep(1.0 / 3.0))).abs() < 1e-12);
+        assert!((c5.weight - (1.0 - smoothstep(1.0 / 4.8))).abs() < 1e-12);
         // A swing of one frame between two contacts: the cubic through both, matching rates.
         let planted = [true, true, true, false, true, true];
         let c = ramp(&planted);

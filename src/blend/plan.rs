@@ -127,6 +127,15 @@ pub const CLEANUP_FADE: f64 = 0.1;
 /// at most this many times.
 pub const CLEANUP_PASSES: usize = 4;
 
+/// A planted foot the clean-up leaves farther than this from its pin (fraction of the leg
+/// scale) has a leg that could not reach it once the root moved: its pins are found again
+/// from the cleaned poses' reach, and the clean-up repeated (within [`CLEANUP_PASSES`]). The
+/// pins' reach is judged on the blend before clean-up, whose hips the root's shift, rise and
+/// drop then move: Fox's run with itself left a straight front leg 0.07 leg short of its pin
+/// at a touchdown (0.0005 leg a frame of sliding after clean-up; 1.1e-5 with this, the
+/// slower fade after lift-offs of [`cleanup::RELEASE_SECONDS`] included).
+pub const PIN_MISS: f64 = 1e-3;
+
 /// Strength of the clean-up at weight `w`: 1 inside [`CLEANUP_FADE`], 1 - w, smoothly to 0.
 pub fn cleanup_strength(w: f64) -> f64 {
     cleanup::smoothstep((w.min(1.0 - w) / CLEANUP_FADE).clamp(0.0, 1.0))
@@ -396,12 +405,13 @@ impl Cleanup<'_> {
             })
             .collect();
         // Where each leg can put its foot on each frame of the blend, at its target's height.
-        let reach: Vec<Vec<Option<cleanup::Reach>>> = (ch.legs.iter().zip(&raw))
-            .map(|(leg, t)| {
-                (before.pos.iter().zip(t))
-                    .map(|(p, t)| cleanup::Reach::of(leg, p, t.dot(UP)))
-                    .collect()
-            })
+        let reach_on = |pos: &[Vec<DVec3>], l: usize| -> Vec<Option<cleanup::Reach>> {
+            (pos.iter().zip(&raw[l]))
+                .map(|(p, t)| cleanup::Reach::of(&ch.legs[l], p, t.dot(UP)))
+                .collect()
+        };
+        let mut reach: Vec<Vec<Option<cleanup::Reach>>> = (0..ch.legs.len())
+            .map(|l| reach_on(&before.pos, l))
             .collect();
         let unclean = frames.clone();
         let mut max_drop: f64 = 0.0;
@@ -434,6 +444,20 @@ impl Cleanup<'_> {
             max_drop = drop.iter().copied().fold(0.0, f64::max);
             let after = positions_track(rig, frames, dt, looping);
             let mut grew = false;
+            for (l, leg) in ch.legs.iter().enumerate() {
+                let e = leg.end();
+                let short = (0..after.pos.len()).any(|i| {
+                    planted[l][i]
+                        && after.pos[i][e].distance(goals[l].target[i]) > PIN_MISS * ch.scale
+                });
+                if short {
+                    let again = reach_on(&after.pos, l);
+                    for (r, a) in reach[l].iter_mut().zip(again) {
+                        *r = a.or(*r);
+                    }
+                    grew = true;
+                }
+            }
             for (l, p) in planted.iter_mut().enumerate() {
                 let found = contact_flags(&after, plan.len(), &ch.legs[l], ch.scale);
                 for (x, f) in p.iter_mut().zip(found) {
