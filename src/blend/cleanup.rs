@@ -281,9 +281,10 @@ pub fn pin(
 /// fixtures' other blends ask for at most 0.06.
 pub const MAX_DROP: f64 = 0.1;
 
-/// How long (seconds) a contact's correction takes to fade out into the swing before it, and
-/// its rate, carried on, after it; a swing shorter than two of these gets one cubic from one
-/// contact's correction to the next instead.
+/// How long (seconds) the rate a contact's correction was changing at, carried on into the
+/// swing, takes to fade out on either side of the contact, and the correction's weight before
+/// it (after it: [`RELEASE_SECONDS`]); a swing shorter than two of these gets one cubic from
+/// one contact's correction to the next instead.
 pub const EASE_SECONDS: f64 = 0.125;
 
 /// How long (seconds) a contact's correction takes to fade out into the swing after its
@@ -913,12 +914,15 @@ mod tests {
         // A long swing after frames 0-4: the correction goes on rising at 1 a frame, that rate
         // fading linearly over 3 frames (0.125 s at 24 fps) and the weight by a smoothstep
         // over 4.8 (the release, 0.2 s), and is gone after it.
+        let along = |planted: &[bool]| -> Vec<f64> {
+            ramp(planted)
+                .iter()
+                .map(|c| c.map_or(0.0, |v| v.x))
+                .collect()
+        };
         let mut planted = vec![false; 16];
         planted[..5].fill(true);
-        let c: Vec<f64> = ramp(&planted)
-            .iter()
-            .map(|c| c.map_or(0.0, |v| v.x))
-            .collect();
+        let c = along(&planted);
         assert_eq!(&c[..5], &[0.0, 1.0, 2.0, 3.0, 4.0]);
         for d in 1..5 {
             let carried = (1.0 - d as f64 / 3.0).max(0.0);
@@ -929,10 +933,7 @@ mod tests {
         // Before a touchdown at frame 11 (contact 11-15) weight and rate fade over 3 frames.
         let mut planted = vec![false; 16];
         planted[11..].fill(true);
-        let c: Vec<f64> = ramp(&planted)
-            .iter()
-            .map(|c| c.map_or(0.0, |v| v.x))
-            .collect();
+        let c = along(&planted);
         for d in 1..3 {
             let x = d as f64 / 3.0;
             let fade = 1.0 - smoothstep(x);
