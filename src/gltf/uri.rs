@@ -177,10 +177,9 @@ pub fn read_prefix(path: &Path, len: u64) -> Result<Vec<u8>, String> {
         // A pointer or a page in the file's place is named as one.
         let mut head = Vec::new();
         let _ = (&file).take(256).read_to_end(&mut head);
-        return Err(match super::read::other_kind(&head) {
-            Some(what) => format!("is {what}"),
-            None => format!("holds {size} bytes, fewer than the {len} declared"),
-        });
+        return Err(stand_in_or(&head, || {
+            format!("holds {size} bytes, fewer than the {len} declared")
+        }));
     }
     let mut data = Vec::with_capacity(len as usize);
     file.take(len)
@@ -193,6 +192,16 @@ pub fn read_prefix(path: &Path, len: u64) -> Result<Vec<u8>, String> {
         ));
     }
     Ok(data)
+}
+
+/// What is wrong with a referenced file whose first bytes are `head`: "is" the file that stands
+/// in for it where it is one ([`super::read::other_kind`]: an LFS pointer, a web page), else
+/// `otherwise`.
+fn stand_in_or(head: &[u8], otherwise: impl FnOnce() -> String) -> String {
+    match super::read::other_kind(head) {
+        Some(what) => format!("is {what}"),
+        None => otherwise(),
+    }
 }
 
 /// The image types glTF allows (core PNG and JPEG; KTX2, WebP and AVIF by extension), told by
@@ -227,9 +236,10 @@ pub fn read_image(path: &Path) -> Result<(Vec<u8>, &'static str), String> {
     if data.len() as u64 > MAX_IMAGE_BYTES {
         return Err(format!("is larger than {} MiB", MAX_IMAGE_BYTES >> 20));
     }
-    let mime = image_mime(&data).ok_or_else(|| match super::read::other_kind(&data) {
-        Some(what) => format!("is {what}"),
-        None => "is not a PNG, JPEG, KTX2, WebP or AVIF image".to_string(),
+    let mime = image_mime(&data).ok_or_else(|| {
+        stand_in_or(&data, || {
+            "is not a PNG, JPEG, KTX2, WebP or AVIF image".to_string()
+        })
     })?;
     Ok((data, mime))
 }
