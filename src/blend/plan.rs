@@ -442,6 +442,11 @@ impl Cleanup<'_> {
             *frames = unclean.clone();
             let drop = cleanup::clean(rig, &ch.legs, &goals, frames, ch.forward, dt, looping);
             max_drop = drop.iter().copied().fold(0.0, f64::max);
+            // What a next pass would take (pins found again, contacts newly found) is left
+            // unmeasured on the last.
+            if pass + 1 == CLEANUP_PASSES {
+                break;
+            }
             let after = positions_track(rig, frames, dt, looping);
             let mut grew = false;
             for (l, leg) in ch.legs.iter().enumerate() {
@@ -465,7 +470,7 @@ impl Cleanup<'_> {
                     *x |= f;
                 }
             }
-            if !grew || pass + 1 == CLEANUP_PASSES {
+            if !grew {
                 break;
             }
         }
