@@ -751,14 +751,15 @@ impl Measured<'_> {
         )
     }
 
-    /// A source clip resampled at the output rate over the part the blend takes.
+    /// A source clip resampled at the output rate over the part the blend takes, a looping
+    /// clip from where the blend's cycle starts on it ([`Taken::synced`]).
     fn source(&self, t: &Taken) -> Track {
         let length = t.length();
         let n = ((length * self.fps).round() as usize).max(1);
         let poses: Vec<Pose> = (0..=n)
             .map(|i| {
-                t.clip
-                    .pose(self.rig, t.start + i as f64 * length / n as f64)
+                let at = t.synced + i as f64 * length / n as f64;
+                pose_unwrapped(self.rig, t.clip, t.looping, at)
             })
             .collect();
         positions_track(
@@ -817,6 +818,14 @@ struct Taken<'c> {
     start: f64,
     end: f64,
     looping: bool,
+    /// Where the blend's first cycle starts on the clip's timeline (a touchdown), from which
+    /// a looping clip's own figures are measured: sampled where the blend samples it, so that
+    /// the blend at weight 0 or 1 measures as its source. Sampled from the clip's start
+    /// instead (on its keys, where the blend falls between them and resampling smooths it),
+    /// the sources' jerk was up to a fifth higher than the same motion's in the blend:
+    /// RobotExpressive's blend at weight 0 had a jerk ratio of 0.71, Fox's run with itself
+    /// measured 1.11 where it is 1.20.
+    synced: f64,
 }
 
 impl<'c> Taken<'c> {
@@ -829,11 +838,16 @@ impl<'c> Taken<'c> {
             }
             _ => (clip.start, end),
         };
+        let synced = match (looping, spans.first()) {
+            (true, Some(&(first, _))) => first,
+            _ => start,
+        };
         Taken {
             clip,
             start,
             end,
             looping,
+            synced,
         }
     }
 
