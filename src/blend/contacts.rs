@@ -12,8 +12,13 @@ use serde::Serialize;
 pub const HEIGHT_TOLERANCE: f64 = 0.06;
 /// Vertical speed, in leg scales per second.
 pub const SPEED_TOLERANCE: f64 = 1.5;
-/// Shortest contact kept, in seconds; shorter gaps between contacts are closed.
-pub const MIN_CONTACT: f64 = 0.03;
+/// Shortest contact kept, in seconds; shorter gaps between contacts are closed (in samples of
+/// the analysis rate, 120 a second at least: runs of up to `ceil(MIN_CONTACT / dt)` samples, 3 at
+/// 120 a second). RobotExpressive's run touches the floor for 0.03-0.06 s a step; with its shins'
+/// end nodes dropped (glTF-Transform's `prune`, gltfpack), the shins end where their meshes end,
+/// off the ankle, and its right foot's contact was four samples long: at 0.03 s it was dropped,
+/// the run had one planted foot, and the blend at 0.75 pinned none of that foot's steps.
+pub const MIN_CONTACT: f64 = 0.02;
 /// Half the span (seconds) over which a foot's floor is taken: a capture whose ground drifts
 /// or slopes (CMU walks rise 0.05 leg over 2.5 s) has a floor that follows it. A clip no longer
 /// than the whole span has one floor, as before.
