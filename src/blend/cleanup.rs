@@ -646,7 +646,7 @@ impl Stance<'_> {
 }
 
 /// Frames of a clip of `n` that are distinct (a loop's last frame repeats its first).
-fn distinct(n: usize, looping: bool) -> usize {
+pub fn distinct(n: usize, looping: bool) -> usize {
     if looping && n > 1 {
         n - 1
     } else {

@@ -485,11 +485,7 @@ impl Cleanup<'_> {
 /// Returns whether any frame joined.
 fn grow_planted(planted: &mut [bool], found: &[bool], looping: bool) -> bool {
     let joined: Vec<bool> = planted.iter().zip(found).map(|(p, f)| *p || *f).collect();
-    let distinct = if looping && planted.len() > 1 {
-        planted.len() - 1
-    } else {
-        planted.len()
-    };
+    let distinct = cleanup::distinct(planted.len(), looping);
     if looping && joined[..distinct].iter().all(|&x| x) {
         return false;
     }
