@@ -322,8 +322,8 @@ fn end_nodes_written_on_their_joints_mark_no_end() {
             // Before clean-up below the naive blend at 0.5; not asserted where the run leads
             // (0.75: its contacts rest on two or three frame steps, a miss as on the original
             // rig, above) nor at 0.25, where these shins' ends slide 0.0452 against the naive
-            // 0.0451 (issue 17's misses, in README's "Packed characters"; with the run's right foot unplanted
-            // they measured 0.0428 and, at 0.75, 0 on one step).
+            // 0.0451 (issue 17's misses, in README's "Packed characters"; with the run's right
+            // foot unplanted they measured 0.0428 and, at 0.75, 0 on one step).
             if w == 0.5 {
                 assert!(before < naive, "{case}: {before} against naive {naive}");
             } else {
