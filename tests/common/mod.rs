@@ -849,6 +849,36 @@ pub fn bvh_under_a_still_root(path: &Path) -> String {
     bvh_text(&head, &time, &moved)
 }
 
+/// A BVH capture turned half round about +Y through its root joint's own channels (the root's
+/// rotation is pre-multiplied by a half turn: X and Z rotations before its Y rotation change
+/// sign, the Y rotation gains 180 degrees; its X and Z positions change sign), so that it heads
+/// the other way with the same hierarchy.
+pub fn bvh_turned_half_round(path: &Path) -> String {
+    let (head, time, frames) = bvh_parts(path);
+    let channels: Vec<&str> = (head.lines())
+        .find(|l| l.trim_start().starts_with("CHANNELS"))
+        .unwrap()
+        .split_whitespace()
+        .skip(2)
+        .collect();
+    let y_turn = channels.iter().position(|c| *c == "Yrotation").unwrap();
+    let turned: Vec<String> = (frames.iter())
+        .map(|line| {
+            let values = line.split_whitespace().enumerate().map(|(i, v)| {
+                let v: f64 = v.parse().unwrap();
+                match channels.get(i) {
+                    Some(&"Xposition" | &"Zposition") => -v,
+                    Some(&"Xrotation" | &"Zrotation") if i < y_turn => -v,
+                    Some(&"Yrotation") => v + 180.0,
+                    _ => v,
+                }
+            });
+            values.map(|v| v.to_string()).collect::<Vec<_>>().join(" ")
+        })
+        .collect();
+    bvh_text(&head, &time, &turned)
+}
+
 /// A BVH capture's hierarchy (up to MOTION), its frame time line and its frame lines (as many
 /// as its Frames line says).
 pub fn bvh_parts(path: &Path) -> (String, String, Vec<String>) {
