@@ -110,7 +110,7 @@ pub fn fit(p: &[DVec3], q: &[DVec3]) -> FloorTransform {
 /// way, and the two clips' hips were slerped between opposite headings: Bandai Namco's
 /// dataset-2 walk_active (heading +Z) and run_active (heading -Z), their travel on the hips
 /// under a still joint_Root, blended with jerk ratios 8.5 / 13.7 / 8.4 at 0.25 / 0.5 / 0.75.
-pub fn move_skeleton(rig: &Rig, pose: &mut Pose, m: &DMat4) {
+pub fn move_body(rig: &Rig, pose: &mut Pose, m: &DMat4) {
     let world = rig.world(pose);
     let parent = rig.parent_world(&world, rig.body);
     let local = pose.local[rig.body].matrix();

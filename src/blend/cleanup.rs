@@ -560,11 +560,11 @@ pub fn clean(
         .collect()
 }
 
-/// Move each frame's skeleton by its `offset` (world units).
+/// Move each frame's body ([`super::align::move_body`]) by its `offset` (world units).
 fn move_roots(rig: &Rig, frames: &mut [Pose], offset: &[DVec3]) {
     for (pose, o) in frames.iter_mut().zip(offset) {
         if *o != DVec3::ZERO {
-            super::align::move_skeleton(rig, pose, &DMat4::from_translation(*o));
+            super::align::move_body(rig, pose, &DMat4::from_translation(*o));
         }
     }
 }

@@ -321,7 +321,7 @@ fn sources(
     if let (Some(m), Some(first)) = (matched, phase.frames.first()) {
         for (pose, f) in poses_b.iter_mut().zip(&phase.frames) {
             let moved = DMat4::from_translation(m.velocity() * (f.2 - first.2));
-            align::move_skeleton(rig, pose, &moved);
+            align::move_body(rig, pose, &moved);
         }
     }
     let joints: Vec<usize> = (0..rig.len()).filter(|&j| rig.carries(j)).collect();
@@ -339,7 +339,7 @@ fn sources(
     }
     let fit = align::fit(&p, &q);
     for pose in &mut poses_b {
-        align::move_skeleton(rig, pose, &fit.matrix());
+        align::move_body(rig, pose, &fit.matrix());
     }
     let world_b: Vec<Vec<DVec3>> = poses_b.iter().map(|p| rig.positions(p)).collect();
     Sources {
@@ -677,7 +677,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     if src.fit != FloorTransform::IDENTITY {
         let back = src.fit.scaled(w).matrix().inverse();
         for pose in &mut frames {
-            align::move_skeleton(rig, pose, &back);
+            align::move_body(rig, pose, &back);
         }
     }
     let figures = Measured {
