@@ -41,8 +41,9 @@ pub const SHIFT_SECONDS: f64 = 0.1;
 /// Time scale (seconds) of the root's rise or fall that keeps the stance legs' lengths. At
 /// 0.05 s (1.5 frames of a capture at 30 a second) the root's height followed each frame's
 /// need, and that jitter moves every joint: Bandai Namco's walk_normal + walk_tired at 0.5 /
-/// 0.75 had jerk ratios 1.17 / 1.23 with it, 1.15 / 1.21 with this (CesiumMan's nearly
-/// straight knees, with itself half a cycle later, 1.05-1.07 -> 1.06-1.08).
+/// 0.75 had jerk ratios 1.17 / 1.23 with it, 1.15 / 1.21 with this (1.16 / 1.21 since the body,
+/// not the root, is turned: [`super::align::move_body`]; CesiumMan's nearly straight knees,
+/// with itself half a cycle later, 1.05-1.07 -> 1.06-1.08).
 pub const RISE_SECONDS: f64 = 0.1;
 
 /// A stance leg asks the root to rise or fall by at most this fraction of its length; a leg
@@ -676,7 +677,8 @@ fn wrap(i: i64, m: usize, looping: bool) -> Option<usize> {
 /// keeps half of a wave of `2 pi frames` frames and less of faster ones). The system is banded
 /// (on a loop too, once its frames are taken in the order 0, m-1, 1, m-2, ...) and solved by a
 /// banded Cholesky factorization in O(m), with a ridge of 1e-12 of the mean weight so that too
-/// few weighted frames to fix a parabola still give the curve nearest zero. Zero where no frame has a weight. On a loop the last frame repeats the first.
+/// few weighted frames to fix a parabola still give the curve nearest zero. Zero where no frame
+/// has a weight. On a loop the last frame repeats the first.
 /// With second differences (stop 64's) Bandai Namco's captures had jerk ratios up to 0.03
 /// higher (walk_tired + run_tired at 0.25 1.19 against 1.16).
 fn smooth(weight: &[f64], sum: &[DVec3], frames: f64, looping: bool) -> Vec<DVec3> {
