@@ -314,6 +314,9 @@ fn sources(
     };
     let poses_a = sample(0, |f| f.1);
     let mut poses_b = sample(1, |f| f.2);
+    for (pose, under) in poses_b.iter_mut().zip(&poses_a) {
+        align::under_joints_above_body(rig, pose, under);
+    }
     // B made to travel as A does (moved along, or held on the spot) over its own time.
     let [travel_a, travel_b] =
         an.map(|an| measure::travel(&an.track, rig.body, &ch.legs, ch.scale));
