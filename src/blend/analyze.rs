@@ -4,13 +4,25 @@
 use super::contacts::{self, Contact};
 use super::cycles::{self, CycleMethod, Cycles};
 use super::legs::{self, Leg};
+use super::measure;
 use super::rig::{Clip, Rig};
 use super::track::{self, Track};
 use glam::DVec3;
 
+/// A clip travelling over the ground more than this many leg lengths a second heads the way it
+/// travels (its root's travel, or against the ground its feet push back in place); one slower
+/// (an idle, a T-pose) heads as the clips' feet do together ([`legs::forward`]). Walks and runs
+/// travel 1-3 leg lengths a second. Each clip heading its own way, its gait analysis is the
+/// same however it is turned; with one direction found from both clips' feet, a pair heading
+/// apart cancelled: the CMU run turned half round (through a still root above its hips)
+/// blended with the walk to jerk ratios 0.76 / 0.63 / 0.63 against 0.51 / 0.51 / 0.55 as
+/// captured.
+pub const HEADS: f64 = 0.05;
+
 /// The character as the clips show it.
 pub struct Character {
     pub legs: Vec<Leg>,
+    /// The first clip's forward direction: the blend's, turned onto it.
     pub forward: DVec3,
     /// Height span of the skeleton in the rest pose.
     pub size: f64,
@@ -26,6 +38,8 @@ pub struct Analysis {
     pub cycles: Option<Cycles>,
     /// Largest forward-and-back travel of a foot relative to the root, in leg lengths.
     pub stride: f64,
+    /// The clip's own horizontal forward direction (see [`legs::find`]).
+    pub forward: DVec3,
 }
 
 impl Analysis {
@@ -50,15 +64,30 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
         .map(|c| Track::new(rig, c, track::loops(rig, c, size)))
         .collect();
     let refs: Vec<&Track> = tracks.iter().collect();
-    let (legs, forward) = legs::find(rig, &refs, size);
+    let legs = legs::find(rig, &refs, size);
     let scale = legs
         .iter()
         .map(|l| l.length)
         .fold(0.0, f64::max)
         .max(0.05 * size);
+    let together = legs::forward(rig, &legs, &refs);
+    let forwards: Vec<DVec3> = tracks
+        .iter()
+        .map(|t| {
+            let travel = measure::travel(t, rig.body, &legs, scale);
+            let over_ground = travel.root - travel.ground;
+            if over_ground.length() > HEADS * scale {
+                over_ground.normalize()
+            } else {
+                together
+            }
+        })
+        .collect();
+    let legs = legs::sided(legs, &tracks[0].pos[0], forwards[0], size);
     let analyses = tracks
         .into_iter()
-        .map(|track| {
+        .zip(&forwards)
+        .map(|(track, &forward)| {
             let contacts = legs
                 .iter()
                 .map(|l| contacts::intervals(&track, &contacts::flags(&track, l, scale)))
@@ -82,13 +111,14 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
                 contacts,
                 cycles,
                 stride,
+                forward,
             }
         })
         .collect();
     (
         Character {
             legs,
-            forward,
+            forward: forwards[0],
             size,
             scale,
         },

@@ -9,7 +9,7 @@
 //!   signed by which knee is ahead; a cycle starts at the widest stride with the left leg ahead.
 
 use super::legs::{Leg, Side};
-use super::rig::flat;
+use super::rig::{flat, UP};
 use super::track::Track;
 use glam::DVec3;
 use serde::Serialize;
@@ -134,10 +134,10 @@ pub fn detect(
         });
     }
     if method == CycleMethod::Legs {
-        let ground = ground_velocity(track, legs);
+        let ground = ground_velocity(track, legs, forward);
         let downs: Vec<Vec<f64>> = legs
             .iter()
-            .map(|l| touchdowns(track, l.end(), ground, scale))
+            .map(|l| touchdowns(track, l.end(), ground, forward, scale))
             .collect();
         let spans: Vec<(f64, f64)> = downs[0]
             .windows(2)
@@ -183,18 +183,19 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Horizontal median of `points` (not empty), per axis.
-fn flat_median(points: &[DVec3]) -> DVec3 {
-    DVec3::new(
-        median(points.iter().map(|v| v.x).collect()),
-        0.0,
-        median(points.iter().map(|v| v.z).collect()),
-    )
+/// Horizontal median of `points` (not empty), per axis of the clip's own frame (`forward` and
+/// the horizontal across it), so that a clip turned about the up axis gives its median turned.
+/// Per axis of the world, the CMU run turned by 1-270 degrees had one cycle of 0.783-0.842 s,
+/// 0.800 s as captured.
+fn flat_median(points: &[DVec3], forward: DVec3) -> DVec3 {
+    let across = UP.cross(forward);
+    forward * median(points.iter().map(|v| v.dot(forward)).collect())
+        + across * median(points.iter().map(|v| v.dot(across)).collect())
 }
 
 /// Velocity of the ground under the feet: the median horizontal velocity of the lowest foot of
 /// `legs`; zero for a clip with root motion, the treadmill's for one in place.
-fn ground_velocity(track: &Track, legs: &[Leg]) -> DVec3 {
+fn ground_velocity(track: &Track, legs: &[Leg], forward: DVec3) -> DVec3 {
     let lowest: Vec<DVec3> = (0..track.len())
         .filter_map(|i| {
             let foot = legs
@@ -207,7 +208,7 @@ fn ground_velocity(track: &Track, legs: &[Leg]) -> DVec3 {
     if lowest.is_empty() {
         DVec3::ZERO
     } else {
-        flat_median(&lowest)
+        flat_median(&lowest, forward)
     }
 }
 
@@ -217,8 +218,14 @@ fn ground_velocity(track: &Track, legs: &[Leg]) -> DVec3 {
 /// a stance's touchdown is the first moment from which the foot stays within [`LANDING`] of the
 /// stance's spot (median position): from positions, so a capture's jitter in speed does not
 /// move it. A foot already on its spot at the clip's first frame began that stance before the
-/// clip: no touchdown. `scale` is the leg scale.
-pub fn touchdowns(track: &Track, end: usize, ground: DVec3, scale: f64) -> Vec<f64> {
+/// clip: no touchdown. `forward` is the clip's forward direction, `scale` the leg scale.
+pub fn touchdowns(
+    track: &Track,
+    end: usize,
+    ground: DVec3,
+    forward: DVec3,
+    scale: f64,
+) -> Vec<f64> {
     let n = track.len();
     let at = |i: usize| flat(track.pos[i][end]) - ground * track.time(i);
     let speed: Vec<f64> = (0..n)
@@ -248,7 +255,7 @@ pub fn touchdowns(track: &Track, end: usize, ground: DVec3, scale: f64) -> Vec<f
     runs.retain(|&(f, e)| e - f >= min_run);
     let mut downs = Vec::new();
     for &(first, last) in &runs {
-        let spot = flat_median(&(first..last).map(at).collect::<Vec<_>>());
+        let spot = flat_median(&(first..last).map(at).collect::<Vec<_>>(), forward);
         let mut k = first;
         while k > 0 && (at(k - 1) - spot).length() < LANDING * scale {
             k -= 1;

@@ -63,9 +63,9 @@ impl Leg {
     }
 }
 
-/// The legs of the rig's skeleton, judged on the frames of `tracks`, ordered left before right
-/// and longer before shorter; with the horizontal forward direction of the motion.
-pub fn find(rig: &Rig, tracks: &[&Track], size: f64) -> (Vec<Leg>, DVec3) {
+/// The legs of the rig's skeleton, judged on the frames of `tracks`, their sides not yet known
+/// (see [`sided`]).
+pub fn find(rig: &Rig, tracks: &[&Track], size: f64) -> Vec<Leg> {
     let first = &tracks[0].pos[0];
     let mut chains = Vec::new();
     let bones = rig.skeleton_child_counts();
@@ -133,7 +133,12 @@ pub fn find(rig: &Rig, tracks: &[&Track], size: f64) -> (Vec<Leg>, DVec3) {
         .collect();
     let longest = legs.iter().map(|l| l.length).fold(0.0, f64::max);
     legs.retain(|l| l.length >= LENGTH_FRACTION * longest);
-    let forward = forward(rig, &legs, tracks);
+    legs
+}
+
+/// `legs` with their sides, as the body stands in frame `first` heading `forward`, ordered left
+/// before right and longer before shorter.
+pub fn sided(mut legs: Vec<Leg>, first: &[DVec3], forward: DVec3, size: f64) -> Vec<Leg> {
     let left = UP.cross(forward);
     if !legs.is_empty() {
         let mid = legs
@@ -158,13 +163,14 @@ pub fn find(rig: &Rig, tracks: &[&Track], size: f64) -> (Vec<Leg>, DVec3) {
             .partial_cmp(&(b.side, -b.length, b.end()))
             .unwrap()
     });
-    (legs, forward)
+    legs
 }
 
-/// Horizontal forward direction: feet move backwards relative to the body while they are low
-/// (in stance), so forward is against their mean low-phase velocity; failing that, the root's
-/// travel; failing that, glTF's +Z.
-fn forward(rig: &Rig, legs: &[Leg], tracks: &[&Track]) -> DVec3 {
+/// Horizontal forward direction of `tracks` together, where a clip's own travel gives none (an
+/// idle, a T-pose): feet move backwards relative to the body while they are low (in stance), so
+/// forward is against their mean low-phase velocity; failing that, the root's travel; failing
+/// that, glTF's +Z.
+pub fn forward(rig: &Rig, legs: &[Leg], tracks: &[&Track]) -> DVec3 {
     let mut sum = DVec3::ZERO;
     for t in tracks {
         for leg in legs {
