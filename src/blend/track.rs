@@ -221,35 +221,70 @@ pub fn close_open_loop(rig: &Rig, clip: &Clip, size: f64) -> Option<Clip> {
     Some(closed)
 }
 
-/// A skeleton stands when its height span is more than this share of its largest extent.
+/// A skeleton stands when its height span is more than this share of its width (see
+/// [`Extent`]).
 const STANDS: f64 = 0.25;
 
-/// The extent of the skeleton's joints in `pose` (per axis).
-fn extent(rig: &Rig, pose: &Pose) -> DVec3 {
-    let p = rig.positions(pose);
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for j in (0..rig.len()).filter(|&j| rig.skeleton[j]) {
-        lo = lo.min(p[j]);
-        hi = hi.max(p[j]);
-    }
-    (hi - lo).max(DVec3::ZERO)
+/// Share of the skeleton's joints whose horizontal distance from their mean sets its width.
+const WIDTH_SHARE: f64 = 0.9;
+
+/// How far the skeleton's joints spread in one pose, the same however it heads.
+struct Extent {
+    /// Height span.
+    height: f64,
+    /// Twice the horizontal distance from the joints' mean within which [`WIDTH_SHARE`] of them
+    /// lie: a root joint left at the origin far from the body does not widen it. By each
+    /// axis's span, Bandai Namco's dataset-2 walk_active (joint_Root at the origin, the hips
+    /// 504 cm from it) was 541 cm long at its first frame, did not stand, and took its rest
+    /// pose's 432 cm for its size, or 119 cm beside a clip turned by 37 degrees.
+    width: f64,
+    /// Largest horizontal distance between two joints.
+    span: f64,
 }
 
-/// The height span of a skeleton of extent `ext` (per axis) where it stands ([`STANDS`]).
-fn standing(ext: DVec3) -> Option<f64> {
-    (ext.y > STANDS * ext.max_element()).then_some(ext.y)
+/// The [`Extent`] of the skeleton's joints in `pose`.
+fn extent(rig: &Rig, pose: &Pose) -> Extent {
+    let p: Vec<DVec3> = (rig.positions(pose).into_iter().enumerate())
+        .filter(|&(j, _)| rig.skeleton[j])
+        .map(|(_, p)| p)
+        .collect();
+    if p.is_empty() {
+        return Extent {
+            height: 0.0,
+            width: 0.0,
+            span: 0.0,
+        };
+    }
+    let mean = p.iter().map(|&q| flat(q)).sum::<DVec3>() / p.len() as f64;
+    let mut out: Vec<f64> = p.iter().map(|&q| (flat(q) - mean).length()).collect();
+    out.sort_by(f64::total_cmp);
+    let span = (p.iter())
+        .flat_map(|a| p.iter().map(move |b| flat(*a - *b).length()))
+        .fold(0.0, f64::max);
+    let (lo, hi) = (p.iter()).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+        (lo.min(q.y), hi.max(q.y))
+    });
+    Extent {
+        height: (hi - lo).max(0.0),
+        width: 2.0 * out[((out.len() - 1) as f64 * WIDTH_SHARE).round() as usize],
+        span,
+    }
+}
+
+/// The height span of a skeleton of extent `e` where it stands ([`STANDS`]).
+fn standing(e: &Extent) -> Option<f64> {
+    (e.height > STANDS * e.width.max(e.height)).then_some(e.height)
 }
 
 /// The size of the skeleton in `pose`: its height span where it stands ([`STANDS`]), else its
 /// largest extent.
 pub fn size(rig: &Rig, pose: &Pose) -> f64 {
-    size_of(extent(rig, pose))
+    size_of(&extent(rig, pose))
 }
 
-/// [`size`] of a skeleton of extent `ext`.
-fn size_of(ext: DVec3) -> f64 {
-    standing(ext).unwrap_or_else(|| ext.max_element().max(MIN_SIZE))
+/// [`size`] of a skeleton of extent `e`.
+fn size_of(e: &Extent) -> f64 {
+    standing(e).unwrap_or_else(|| e.span.max(e.height).max(MIN_SIZE))
 }
 
 /// The character's size: its height span in the rest pose; where the rest pose does not stand
@@ -258,13 +293,13 @@ fn size_of(ext: DVec3) -> f64 {
 /// frames; where none does, the rest pose's largest extent.
 pub fn character_size(rig: &Rig, clips: &[&Clip]) -> f64 {
     let rest = extent(rig, &rig.rest);
-    standing(rest)
+    standing(&rest)
         .or_else(|| {
             (clips.iter())
-                .filter_map(|c| standing(extent(rig, &c.pose(rig, c.start))))
+                .filter_map(|c| standing(&extent(rig, &c.pose(rig, c.start))))
                 .reduce(f64::max)
         })
-        .unwrap_or_else(|| size_of(rest))
+        .unwrap_or_else(|| size_of(&rest))
 }
 
 /// The pose at `t` on an endless timeline: a looping clip repeats, its translations carried on
@@ -287,4 +322,50 @@ pub fn pose_unwrapped(rig: &Rig, clip: &Clip, looping: bool, t: f64) -> Pose {
         }
     }
     pose
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blend::rig::Trs;
+    use glam::DQuat;
+
+    /// A figure 170 tall (head at 170, feet at 0, hands 80 either side) standing 1000 from a
+    /// root left at the origin (as Bandai Namco's captures stand 500 from their joint_Root; by
+    /// the span of each axis it was 1000 long and did not stand), turned by `degrees` through
+    /// that root.
+    fn far_from_its_root(degrees: f64) -> (Rig, Pose) {
+        let names = [
+            "root", "hips", "head", "foot.L", "foot.R", "hand.L", "hand.R",
+        ];
+        let parent = vec![None, Some(0), Some(1), Some(1), Some(1), Some(1), Some(1)];
+        let at = |t: DVec3| Trs { t, ..Trs::IDENTITY };
+        let local = vec![
+            Trs {
+                r: DQuat::from_rotation_y(degrees.to_radians()),
+                ..Trs::IDENTITY
+            },
+            at(DVec3::new(0.0, 90.0, -1000.0)),
+            at(DVec3::new(0.0, 80.0, 0.0)),
+            at(DVec3::new(10.0, -90.0, 0.0)),
+            at(DVec3::new(-10.0, -90.0, 0.0)),
+            at(DVec3::new(80.0, 50.0, 0.0)),
+            at(DVec3::new(-80.0, 50.0, 0.0)),
+        ];
+        let pose = Pose {
+            weights: vec![Vec::new(); local.len()],
+            local,
+        };
+        let names = names.iter().map(|s| s.to_string()).collect();
+        (Rig::new(names, parent, pose.clone()).unwrap(), pose)
+    }
+
+    #[test]
+    fn a_figure_far_from_its_root_stands_its_height_at_any_heading() {
+        for degrees in [0.0, 37.0, 90.0, 180.0, 250.0] {
+            let (rig, pose) = far_from_its_root(degrees);
+            let s = size(&rig, &pose);
+            assert!((s - 170.0).abs() < 1e-9, "{degrees} degrees: size {s}");
+        }
+    }
 }
