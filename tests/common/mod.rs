@@ -849,6 +849,24 @@ pub fn bvh_under_a_still_root(path: &Path) -> String {
     bvh_text(&head, &time, &moved)
 }
 
+/// `path`'s capture under a root joint that carries its travel: as [`bvh_under_a_still_root`],
+/// the hip's horizontal positions (its first and third channels, X and Z positions in the CMU
+/// captures) moved onto the root, so every joint stays where it was (as Bandai Namco's
+/// dataset-1 run_normal keys its travel on joint_Root, its other clips on their hips).
+pub fn bvh_travelling_on_its_root(path: &Path) -> String {
+    let (head, time, frames) = bvh_parts_of(&bvh_under_a_still_root(path));
+    let moved: Vec<String> = (frames.iter())
+        .map(|l| {
+            let mut v: Vec<String> = l.split_whitespace().map(str::to_owned).collect();
+            for k in [0, 2] {
+                v.swap(k, 6 + k);
+            }
+            v.join(" ")
+        })
+        .collect();
+    bvh_text(&head, &time, &moved)
+}
+
 /// A BVH capture turned half round about +Y through its root joint's own channels (the root's
 /// rotation is pre-multiplied by a half turn: X and Z rotations before its Y rotation change
 /// sign, the Y rotation gains 180 degrees; its X and Z positions change sign), so that it heads
@@ -882,7 +900,12 @@ pub fn bvh_turned_half_round(path: &Path) -> String {
 /// A BVH capture's hierarchy (up to MOTION), its frame time line and its frame lines (as many
 /// as its Frames line says).
 pub fn bvh_parts(path: &Path) -> (String, String, Vec<String>) {
-    let text = std::fs::read_to_string(path).unwrap().replace("\r\n", "\n");
+    bvh_parts_of(&std::fs::read_to_string(path).unwrap())
+}
+
+/// [`bvh_parts`] of a capture's `text`.
+pub fn bvh_parts_of(text: &str) -> (String, String, Vec<String>) {
+    let text = text.replace("\r\n", "\n");
     let (head, motion) = text.split_once("MOTION\n").unwrap();
     let mut lines = motion.lines();
     let count: usize = lines.next().unwrap()["Frames:".len()..]
