@@ -1797,22 +1797,14 @@ fn travel_keyed_below_a_root_that_stays_put_is_the_body_s() {
 #[test]
 fn captures_heading_apart_on_hips_under_a_still_root_blend_without_pops() {
     let Some(fx) = fixtures() else { return };
-    let dir = tempfile::tempdir().unwrap();
-    let out = |n: &str| dir.path().join(n);
-    let (walk, run) = cmu_walk_and_run(&fx);
-    let write = |name: &str, text: String| {
-        std::fs::write(out(name), text).unwrap();
-        out(name)
-    };
-    let walk_r = write("walk.bvh", bvh_under_a_still_root(&walk));
-    let turned = write("run_turned.bvh", bvh_turned_half_round(&run));
-    let run_r = write("run.bvh", bvh_under_a_still_root(&run));
-    let turned_r = write("turned.bvh", bvh_under_a_still_root(&turned));
-    let alike = blend_bvh_report(&walk_r, &run_r, "0.25,0.5,0.75", &out("a.bvh"));
-    let apart = blend_bvh_report(&walk_r, &turned_r, "0.25,0.5,0.75", &out("b.bvh"));
-    for (a, b) in (alike.as_array().unwrap().iter()).zip(apart.as_array().unwrap()) {
+    let blends = cmu_rooted_blends(&fx, |run, _, dir| {
+        let turned = dir.join("run_turned.bvh");
+        std::fs::write(&turned, bvh_turned_half_round(run)).unwrap();
+        bvh_under_a_still_root(&turned)
+    });
+    for (a, b) in blends {
         let turn = b["alignment_degrees"].as_f64().unwrap();
-        let (a, b) = (report_figures(a), report_figures(b));
+        let (a, b) = (report_figures(&a), report_figures(&b));
         eprintln!("heading apart: {b:?}, alike: {a:?}, turned {turn:.1} degrees");
         assert!((turn.abs() - 180.0).abs() < 10.0, "turned {turn}");
         assert!(b.1 <= 1e-6, "after clean-up {}", b.1);
@@ -1833,21 +1825,9 @@ fn captures_heading_apart_on_hips_under_a_still_root_blend_without_pops() {
 #[test]
 fn a_capture_turned_by_its_root_bone_blends_as_unturned() {
     let Some(fx) = fixtures() else { return };
-    let dir = tempfile::tempdir().unwrap();
-    let out = |n: &str| dir.path().join(n);
-    let (walk, run) = cmu_walk_and_run(&fx);
-    let write = |name: &str, text: String| {
-        std::fs::write(out(name), text).unwrap();
-        out(name)
-    };
-    let walk_r = write("walk.bvh", bvh_under_a_still_root(&walk));
-    let run_r = write("run.bvh", bvh_under_a_still_root(&run));
-    let turned = write("turned.bvh", bvh_turned_half_round(&run_r));
-    let plain = blend_bvh_report(&walk_r, &run_r, "0.25,0.5,0.75", &out("a.bvh"));
-    let by_root = blend_bvh_report(&walk_r, &turned, "0.25,0.5,0.75", &out("b.bvh"));
-    for (a, b) in (plain.as_array().unwrap().iter()).zip(by_root.as_array().unwrap()) {
-        let turns = [a, b].map(|r| r["alignment_degrees"].as_f64().unwrap());
-        let (a, b) = (report_figures(a), report_figures(b));
+    for (a, b) in cmu_rooted_blends(&fx, |_, run_r, _| bvh_turned_half_round(run_r)) {
+        let turns = [&a, &b].map(|r| r["alignment_degrees"].as_f64().unwrap());
+        let (a, b) = (report_figures(&a), report_figures(&b));
         eprintln!("turned by its root bone: {b:?}, as captured: {a:?}, turned {turns:?} degrees");
         let half = (turns[1] - turns[0]).rem_euclid(360.0);
         assert!((half - 180.0).abs() < 1e-6, "turned {turns:?}");
@@ -1870,22 +1850,10 @@ fn a_capture_turned_by_its_root_bone_blends_as_unturned() {
 #[test]
 fn where_a_capture_keys_its_travel_does_not_change_its_blend() {
     let Some(fx) = fixtures() else { return };
-    let dir = tempfile::tempdir().unwrap();
-    let out = |n: &str| dir.path().join(n);
-    let (walk, run) = cmu_walk_and_run(&fx);
-    let write = |name: &str, text: String| {
-        std::fs::write(out(name), text).unwrap();
-        out(name)
-    };
-    let walk_r = write("walk.bvh", bvh_under_a_still_root(&walk));
-    let run_r = write("run.bvh", bvh_under_a_still_root(&run));
-    let run_on_root = write("run_on_root.bvh", bvh_travelling_on_its_root(&run));
-    let on_hips = blend_bvh_report(&walk_r, &run_r, "0.25,0.5,0.75", &out("a.bvh"));
-    let on_root = blend_bvh_report(&walk_r, &run_on_root, "0.25,0.5,0.75", &out("b.bvh"));
-    for (a, b) in (on_hips.as_array().unwrap().iter()).zip(on_root.as_array().unwrap()) {
+    for (a, b) in cmu_rooted_blends(&fx, |run, _, _| bvh_travelling_on_its_root(run)) {
         assert!(b["matched_travel"].is_null(), "{}", b["matched_travel"]);
         let speed = b["result"]["after_cleanup"]["root_speed"].as_f64().unwrap();
-        let (a, b) = (report_figures(a), report_figures(b));
+        let (a, b) = (report_figures(&a), report_figures(&b));
         eprintln!("run travelling on its root: {b:?}, on its hips: {a:?}, {speed:.2} leg/s");
         assert!(speed > 1.0, "the blend travels {speed} leg/s");
         for (x, y) in [(a.0, b.0), (a.2, b.2), (a.3, b.3)] {
@@ -1893,6 +1861,30 @@ fn where_a_capture_keys_its_travel_does_not_change_its_blend() {
         }
         assert!(b.1 <= 1e-6, "after clean-up {}", b.1);
     }
+}
+
+/// The CMU walk and run, each under a still root ([`bvh_under_a_still_root`]), blended at 0.25,
+/// 0.5 and 0.75, and the walk so blended with `variant` of the run (the text it makes from the
+/// run's capture, the run under a still root and a folder to write in): their reports, weight
+/// by weight.
+fn cmu_rooted_blends(
+    fx: &Path,
+    variant: impl Fn(&Path, &Path, &Path) -> String,
+) -> Vec<(Value, Value)> {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |n: &str| dir.path().join(n);
+    let (walk, run) = cmu_walk_and_run(fx);
+    let write = |name: &str, text: String| {
+        std::fs::write(out(name), text).unwrap();
+        out(name)
+    };
+    let walk_r = write("walk.bvh", bvh_under_a_still_root(&walk));
+    let run_r = write("run.bvh", bvh_under_a_still_root(&run));
+    let run_v = write("variant.bvh", variant(&run, &run_r, dir.path()));
+    let report = |b: &Path, o: &str| blend_bvh_report(&walk_r, b, "0.25,0.5,0.75", &out(o));
+    let (plain, varied) = (report(&run_r, "a.bvh"), report(&run_v, "b.bvh"));
+    let list = |r: Value| r.as_array().unwrap().clone();
+    list(plain).into_iter().zip(list(varied)).collect()
 }
 
 /// Two CMU captures (walk and run, 120 fps, joint names differing) blended into BVH (issue 17):
