@@ -38,8 +38,6 @@ pub struct Analysis {
     pub cycles: Option<Cycles>,
     /// Largest forward-and-back travel of a foot relative to the root, in leg lengths.
     pub stride: f64,
-    /// The clip's own horizontal forward direction (see [`legs::find`]).
-    pub forward: DVec3,
 }
 
 impl Analysis {
@@ -111,7 +109,6 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
                 contacts,
                 cycles,
                 stride,
-                forward,
             }
         })
         .collect();

@@ -2,10 +2,10 @@
 //!
 //! The pipeline, one module per stage: [`rig`] (read the character and its clips; [`bvh`] for
 //! capture files; [`by_name`] for a clip in a second file) -> [`track`] (sample for analysis)
-//! -> [`legs`] -> [`contacts`] -> [`cycles`] ([`analyze`] runs these) -> [`timewarp`] ->
-//! [`align`] -> [`mix`] -> [`cleanup`] -> [`measure`] -> [`write`] (glTF) | [`write_bvh`]
-//! (BVH) | [`write_usd`] (USD point cache, from the glTF); [`plan`] runs the middle from clips
-//! to frames, [`job`] from file to file.
+//! -> [`legs`] -> [`contacts`] -> [`cycles`] ([`analyze`] runs these, each clip heading the
+//! way [`measure`] finds it travels) -> [`timewarp`] -> [`align`] -> [`mix`] -> [`cleanup`] ->
+//! [`measure`] -> [`write`] (glTF) | [`write_bvh`] (BVH) | [`write_usd`] (USD point cache, from
+//! the glTF); [`plan`] runs the middle from clips to frames, [`job`] from file to file.
 
 mod align;
 mod analyze;

@@ -141,10 +141,9 @@ impl Rig {
     /// _rootJoint; a capture retargeted onto a game skeleton whose pelvis travels). Where one
     /// clip travels on its root and the other on its hips below a still root, the hips carry
     /// both; taken as the root, the clip travelling on its hips was measured against a root
-    /// that stays put and judged to step in place: Bandai Namco's walk_normal (travelling on
-    /// its hips) with run_normal re-keyed to travel on joint_Root, the walk "moved along at
-    /// its treadmill's 0.14 leg/s" (it walks at 1.36) and 2e-5 / 2e-4 / 3e-4 leg/frame after
-    /// clean-up at 0.25 / 0.5 / 0.75. Positions relative to the body then repeat over a cycle
+    /// that stays put and judged to step in place: Bandai Namco's dataset-1 walk_normal
+    /// (travelling on its hips) with its run_normal (travelling on joint_Root), the walk "moved
+    /// along at its treadmill's 0.14 leg/s" (it walks at 1.36), the blend did not travel. Positions relative to the body then repeat over a cycle
     /// however far the clip travels. Where no joint carries all, the topmost that carries one;
     /// the root where no clip travels.
     pub fn carried_by(&self, clips: &[&Clip], size: f64) -> Rig {
@@ -165,28 +164,32 @@ impl Rig {
         // moves along, feet too (nine joints in ten within half of that of it: not hips that
         // sit down or fall over the feet, as RobotExpressive's Sitting and Death do).
         let skeleton = self.skeleton.iter().filter(|&&s| s).count();
-        let below: Vec<Vec<usize>> = (0..self.len())
-            .map(|j| {
-                (0..self.len())
-                    .filter(|&k| self.skeleton[k] && self.descends(k, j))
-                    .collect()
-            })
-            .collect();
+        // Per joint, how many of the skeleton's joints are at or below it.
+        let mut held = vec![0usize; self.len()];
+        for k in (0..self.len()).filter(|&k| self.skeleton[k]) {
+            let mut at = Some(k);
+            while let Some(a) = at {
+                held[a] += 1;
+                at = self.parent[a];
+            }
+        }
         let carries = |j: usize, (clip, d): &(&Clip, Vec<DVec3>)| {
             if j == self.root {
                 return d[j].length() > CARRIES * size;
             }
-            let below = &below[j];
+            if (held[j] as f64) < BODY_SHARE * skeleton as f64 || d[j].length() <= CARRIES * size {
+                return false;
+            }
+            let below: Vec<usize> = (0..self.len())
+                .filter(|&k| self.skeleton[k] && self.descends(k, j))
+                .collect();
             let translated = clip
                 .channels
                 .iter()
                 .any(|c| c.node == j && c.path == Path::Translation);
             let mut off: Vec<f64> = below.iter().map(|&k| (d[k] - d[j]).length()).collect();
             off.sort_by(f64::total_cmp);
-            below.len() as f64 >= BODY_SHARE * skeleton as f64
-                && translated
-                && d[j].length() > CARRIES * size
-                && off[(off.len() - 1) * 9 / 10] <= 0.5 * d[j].length()
+            translated && off[(off.len() - 1) * 9 / 10] <= 0.5 * d[j].length()
         };
         let joints: Vec<usize> = (self.order.iter().copied())
             .filter(|&j| self.skeleton[j] && (j == self.root || self.descends(j, self.root)))
