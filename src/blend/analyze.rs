@@ -4,7 +4,7 @@
 use super::contacts::{self, Contact};
 use super::cycles::{self, CycleMethod, Cycles};
 use super::legs::{self, Leg};
-use super::measure;
+use super::measure::{self, Travel};
 use super::rig::{Clip, Rig};
 use super::track::{self, Track};
 use glam::DVec3;
@@ -38,6 +38,9 @@ pub struct Analysis {
     pub cycles: Option<Cycles>,
     /// Largest forward-and-back travel of a foot relative to the root, in leg lengths.
     pub stride: f64,
+    /// How the clip travels (its heading, [`HEADS`], and how the blend matches the clips'
+    /// travel come from it).
+    pub travel: Travel,
 }
 
 impl Analysis {
@@ -69,10 +72,11 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
         .fold(0.0, f64::max)
         .max(0.05 * size);
     let together = legs::forward(rig, &legs, &refs);
-    let forwards: Vec<DVec3> = tracks
-        .iter()
-        .map(|t| {
-            let travel = measure::travel(t, rig.body, &legs, scale);
+    let travels: Vec<Travel> = (tracks.iter())
+        .map(|t| measure::travel(t, rig.body, &legs, scale))
+        .collect();
+    let forwards: Vec<DVec3> = (travels.iter())
+        .map(|travel| {
             let over_ground = travel.root - travel.ground;
             if over_ground.length() > HEADS * scale {
                 over_ground.normalize()
@@ -84,8 +88,8 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
     let legs = legs::sided(legs, &tracks[0].pos[0], forwards[0], size);
     let analyses = tracks
         .into_iter()
-        .zip(&forwards)
-        .map(|(track, &forward)| {
+        .zip(forwards.iter().zip(travels))
+        .map(|(track, (&forward, travel))| {
             let contacts = legs
                 .iter()
                 .map(|l| contacts::intervals(&track, &contacts::flags(&track, l, scale)))
@@ -109,6 +113,7 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
                 contacts,
                 cycles,
                 stride,
+                travel,
             }
         })
         .collect();

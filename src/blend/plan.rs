@@ -318,9 +318,7 @@ fn sources(
         align::under_joints_above_body(rig, pose, under);
     }
     // B made to travel as A does (moved along, or held on the spot) over its own time.
-    let [travel_a, travel_b] =
-        an.map(|an| measure::travel(&an.track, rig.body, &ch.legs, ch.scale));
-    let matched = MatchedTravel::of(&travel_a, &travel_b, ch.scale);
+    let matched = MatchedTravel::of(&an[0].travel, &an[1].travel, ch.scale);
     if let (Some(m), Some(first)) = (matched, phase.frames.first()) {
         for (pose, f) in poses_b.iter_mut().zip(&phase.frames) {
             let moved = DMat4::from_translation(m.velocity() * (f.2 - first.2));

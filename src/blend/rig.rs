@@ -192,7 +192,7 @@ impl Rig {
             translated && off[(off.len() - 1) * 9 / 10] <= 0.5 * d[j].length()
         };
         let joints: Vec<usize> = (self.order.iter().copied())
-            .filter(|&j| self.skeleton[j] && (j == self.root || self.descends(j, self.root)))
+            .filter(|&j| self.skeleton[j])
             .collect();
         let travelling: Vec<&(&Clip, Vec<DVec3>)> = (moves.iter())
             .filter(|m| joints.iter().any(|&j| carries(j, m)))
