@@ -232,65 +232,55 @@ mod tests {
     use super::*;
     use crate::blend::legs::Side;
 
-    /// A one-second loop on a treadmill, 48 frames, leg length 1: a still hip (joint 0) and a
-    /// foot (joint 1) stepping back on the floor at 2 leg/s for frames 0-23, then dragged
-    /// forward along the floor at `drag` leg/s for frames 24-29, then swinging forward 0.3
-    /// above the floor back to where it touches down.
-    fn dragged_toe(drag: f64) -> Track {
+    /// Frames of a one-second loop on a treadmill: 48 frames, a still hip (joint 0) 1 above the
+    /// floor and a foot (joint 1) at `foot(frame, dt)`.
+    fn treadmill_loop(foot: impl Fn(usize, f64) -> DVec3) -> Track {
         let n = 48;
         let dt = 1.0 / n as f64;
-        let pos = (0..n)
-            .map(|i| {
-                let foot = match i {
-                    0..=23 => DVec3::new(0.0, 0.0, 0.5 - 2.0 * dt * i as f64),
-                    24..=29 => DVec3::new(0.0, 0.0, -0.5 + drag * dt * (i - 23) as f64),
-                    _ => {
-                        let from = -0.5 + drag * dt * 6.0;
-                        let u = (i - 29) as f64 / 19.0;
-                        DVec3::new(0.0, 0.3, from + (0.5 - from) * u)
-                    }
-                };
-                vec![DVec3::new(0.0, 1.0, 0.0), foot]
-            })
-            .collect();
         Track {
             start: 0.0,
             dt,
             looping: true,
-            pos,
+            pos: (0..n)
+                .map(|i| vec![DVec3::new(0.0, 1.0, 0.0), foot(i, dt)])
+                .collect(),
             travel: DVec3::ZERO,
         }
     }
 
-    /// A one-second loop of 48 frames, leg length 1, hip still at 1 above the floor: the foot
-    /// trails back at 1 leg/s for 40 frames, then swings forward at 5 leg/s for 8, only 0.03
-    /// above the floor, low and level enough for the height test throughout; with `heel`, its
-    /// heel lifts 0.2 at frame 20, so the height test misses frames 19-21 of the stance.
+    /// Leg length 1: the foot stepping back on the floor at 2 leg/s for frames 0-23, then
+    /// dragged forward along the floor at `drag` leg/s for frames 24-29, then swinging forward
+    /// 0.3 above the floor back to where it touches down.
+    fn dragged_toe(drag: f64) -> Track {
+        treadmill_loop(|i, dt| match i {
+            0..=23 => DVec3::new(0.0, 0.0, 0.5 - 2.0 * dt * i as f64),
+            24..=29 => DVec3::new(0.0, 0.0, -0.5 + drag * dt * (i - 23) as f64),
+            _ => {
+                let from = -0.5 + drag * dt * 6.0;
+                let u = (i - 29) as f64 / 19.0;
+                DVec3::new(0.0, 0.3, from + (0.5 - from) * u)
+            }
+        })
+    }
+
+    /// Leg length 1: the foot trails back at 1 leg/s for 40 frames, then swings forward at 5
+    /// leg/s for 8, only 0.03 above the floor, low and level enough for the height test
+    /// throughout; with `heel`, its heel lifts 0.2 at frame 20, so the height test misses frames
+    /// 19-21 of the stance.
     fn shuffle(heel: bool) -> Track {
-        let n = 48;
-        let dt = 1.0 / n as f64;
-        let pos = (0..n)
-            .map(|i| {
-                let z = if i <= 40 {
-                    0.4 - dt * i as f64
-                } else {
-                    0.4 - dt * 40.0 + 5.0 * dt * (i - 40) as f64
-                };
-                let y = match i {
-                    20 if heel => 0.2,
-                    41.. => 0.03,
-                    _ => 0.0,
-                };
-                vec![DVec3::new(0.0, 1.0, 0.0), DVec3::new(0.0, y, z)]
-            })
-            .collect();
-        Track {
-            start: 0.0,
-            dt,
-            looping: true,
-            pos,
-            travel: DVec3::ZERO,
-        }
+        treadmill_loop(|i, dt| {
+            let z = if i <= 40 {
+                0.4 - dt * i as f64
+            } else {
+                0.4 - dt * 40.0 + 5.0 * dt * (i - 40) as f64
+            };
+            let y = match i {
+                20 if heel => 0.2,
+                41.. => 0.03,
+                _ => 0.0,
+            };
+            DVec3::new(0.0, y, z)
+        })
     }
 
     fn one_leg() -> Leg {

@@ -531,8 +531,8 @@ impl Cleanup<'_> {
 /// pass) to a leg's `planted` frames (last = first on a loop), so that every contact the test
 /// sees on the result is pinned; but not where that would leave a looping leg planted on
 /// every frame: its one contact round the whole loop would be held by one pin, which has to
-/// jump back by the loop's travel once a loop (Fox resampled at 15 keys a second by gltfpack, `-af 15`, at 0.25: a
-/// front foot's swing of four frames, held low by the clean-up's eases, was found planted and
+/// jump back by the loop's travel once a loop (Fox resampled at 15 keys a second by gltfpack,
+/// `-af 15`, at 0.25: a front foot's swing of four frames, held low by the clean-up's eases, was found planted and
 /// the next pass pinned that foot for the whole loop: 0.49 leg in one frame, jerk ratio 1.33).
 /// Returns whether any frame joined.
 fn grow_planted(planted: &mut [bool], found: &[bool], looping: bool) -> bool {
@@ -559,17 +559,11 @@ fn keep_a_swing(planted: &mut [bool], track: &Track, foot: usize) {
     if distinct < 2 || !planted[..distinct].iter().all(|&x| x) {
         return;
     }
-    let travel = track.pos[n - 1][foot] - track.pos[0][foot];
-    let step = |i: usize| -> f64 {
-        let k = i + 1;
-        let to = if k < distinct {
-            track.pos[k][foot]
-        } else {
-            track.pos[0][foot] + travel
-        };
-        flat(to - track.pos[i][foot]).length()
-    };
-    let moves: Vec<f64> = (0..distinct).map(step).collect();
+    // Step `i` goes from frame `i` to `i + 1`; the last one to the loop's last frame, its
+    // first carried on by the loop's travel.
+    let moves: Vec<f64> = (0..distinct)
+        .map(|i| flat(track.pos[i + 1][foot] - track.pos[i][foot]).length())
+        .collect();
     let mean = moves.iter().sum::<f64>() / distinct as f64;
     let fastest = (0..distinct)
         .max_by(|&a, &b| moves[a].total_cmp(&moves[b]))
@@ -584,13 +578,11 @@ fn keep_a_swing(planted: &mut [bool], track: &Track, foot: usize) {
         hi = (hi + 1) % distinct;
         len += 1;
     }
-    // Both ends of every fast step; a loop of one or two frames keeps a frame planted.
-    for k in 0..=len.min(distinct - 1) {
+    // Both ends of every fast step, but at least one frame kept planted.
+    for k in 0..(len + 1).min(distinct - 1) {
         planted[(lo + k) % distinct] = false;
     }
-    if n > distinct {
-        planted[n - 1] = planted[0];
-    }
+    planted[n - 1] = planted[0];
 }
 
 /// Whether the sources plant leg `l` by weighted vote (the source of more weight decides; at
