@@ -72,9 +72,18 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
         .fold(0.0, f64::max)
         .max(0.05 * size);
     let together = legs::forward(rig, &legs, &refs);
-    let travels: Vec<Travel> = (tracks.iter())
-        .map(|t| measure::travel(t, rig.body, &legs, scale))
+    // Per clip and leg, the contact test's flags: how the clip travels and its contacts.
+    let flags: Vec<Vec<Vec<bool>>> = (tracks.iter())
+        .map(|t| {
+            (legs.iter())
+                .map(|l| contacts::flags(t, l, scale))
+                .collect()
+        })
         .collect();
+    let travels: Vec<Travel> = (tracks.iter().zip(&flags))
+        .map(|(t, f)| measure::travel(t, rig.body, &legs, f))
+        .collect();
+    let ends: Vec<usize> = legs.iter().map(Leg::end).collect();
     let forwards: Vec<DVec3> = (travels.iter())
         .map(|travel| {
             let over_ground = travel.root - travel.ground;
@@ -88,11 +97,15 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
     let legs = legs::sided(legs, &tracks[0].pos[0], forwards[0], size);
     let analyses = tracks
         .into_iter()
-        .zip(forwards.iter().zip(travels))
-        .map(|(track, (&forward, travel))| {
+        .zip(forwards.iter().zip(travels).zip(&flags))
+        .map(|(track, ((&forward, travel), flags))| {
+            // The legs' flags in their sided order.
             let contacts = legs
                 .iter()
-                .map(|l| contacts::intervals(&track, &contacts::flags(&track, l, scale)))
+                .map(|l| {
+                    let k = ends.iter().position(|&e| e == l.end()).expect("a leg");
+                    contacts::intervals(&track, &flags[k])
+                })
                 .collect();
             let stride = legs
                 .iter()

@@ -177,8 +177,9 @@ pub fn detect(
     (!spans.is_empty()).then_some(Cycles { spans })
 }
 
-/// Median of `v` (not empty).
-fn median(mut v: Vec<f64>) -> f64 {
+/// Median of `v` (not empty): its middle value, the upper of the two middle ones for an even
+/// count.
+pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }

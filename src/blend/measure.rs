@@ -77,37 +77,18 @@ impl Travel {
     }
 }
 
-/// How `track` travels, its feet planted where the contact test finds them.
-pub fn travel(track: &Track, root: usize, legs: &[Leg], scale: f64) -> Travel {
-    planted(track, root, legs, scale, &[]).travel
+/// How `track` travels, each leg of `legs` planted where `flags` (per leg, the contact test's
+/// [`contacts::flags`]) say.
+pub fn travel(track: &Track, root: usize, legs: &[Leg], flags: &[Vec<bool>]) -> Travel {
+    planted(track, root, legs, flags).travel
 }
 
 /// The horizontal moves of planted feet from frame to frame (a looping track's step from its
 /// last frame back to the first too, so that the figures do not depend on where the loop
-/// starts) and how the track travels. A foot counts as planted where the contact test finds it
-/// planted or, per leg and frame, `expected` says it should be.
-fn planted(
-    track: &Track,
-    root: usize,
-    legs: &[Leg],
-    scale: f64,
-    expected: &[Vec<bool>],
-) -> Planted {
+/// starts) and how the track travels, each leg planted where `flags` (per leg and frame) say.
+fn planted(track: &Track, root: usize, legs: &[Leg], flags: &[Vec<bool>]) -> Planted {
     let n = track.len();
     let dt = track.dt;
-    let flags: Vec<Vec<bool>> = legs
-        .iter()
-        .enumerate()
-        .map(|(l, leg)| {
-            let mut f = contacts::flags(track, leg, scale);
-            if let Some(e) = expected.get(l) {
-                for (x, &y) in f.iter_mut().zip(e) {
-                    *x |= y;
-                }
-            }
-            f
-        })
-        .collect();
     // Across a loop's seam the feet come back by the loop's travel (the root's, from its first
     // frame to where it comes back to it: was taken as the root's mean step times the frame
     // count, which a clean-up moving the root unevenly made wrong by up to 2.4e-3 leg across
@@ -116,7 +97,7 @@ fn planted(
     let travel = if wraps { track.travel } else { DVec3::ZERO };
     let steps = if wraps { n } else { n.saturating_sub(1) };
     let mut moves = Vec::new();
-    for (leg, f) in legs.iter().zip(&flags) {
+    for (leg, f) in legs.iter().zip(flags) {
         for i in 0..steps {
             let k = (i + 1) % n;
             if f[i] && f[k] {
@@ -167,12 +148,25 @@ pub fn figures(
 ) -> Figures {
     let n = track.len();
     let dt = track.dt;
+    let flags: Vec<Vec<bool>> = legs
+        .iter()
+        .enumerate()
+        .map(|(l, leg)| {
+            let mut f = contacts::flags(track, leg, scale);
+            if let Some(e) = expected.get(l) {
+                for (x, &y) in f.iter_mut().zip(e) {
+                    *x |= y;
+                }
+            }
+            f
+        })
+        .collect();
     let Planted {
         moves: planted_moves,
         root_speed,
         ground,
         ..
-    } = planted(track, root, legs, scale, expected);
+    } = planted(track, root, legs, &flags);
     let wraps = track.looping && n > 2;
     let travel = if wraps { track.travel } else { DVec3::ZERO };
     let sliding = Spread::of(

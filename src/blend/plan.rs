@@ -209,14 +209,12 @@ fn cycles_used(clip: &Clip, an: &Analysis) -> Vec<(f64, f64)> {
 /// by noise (walk_normal + run_normal 1.88 / 1.86 / 1.32 with it, 1.42 / 1.49 / 1.23 with this).
 /// `None` where no stride fits within half a `period` (the loop's mean stride) of it.
 fn typical_stride(contacts: &[Vec<Contact>], dur: f64, period: f64) -> Option<(f64, f64)> {
-    if contacts.is_empty() {
-        return None;
-    }
-    let downs = |l: usize| -> Vec<f64> { contacts[l].iter().map(|c| c.start).collect() };
-    let first = downs(0);
+    let downs: Vec<Vec<f64>> = (contacts.iter())
+        .map(|c| c.iter().map(|c| c.start).collect())
+        .collect();
+    let first = downs.first()?;
     let touches = |l: usize, s: f64, e: f64| {
-        downs(l)
-            .iter()
+        (downs[l].iter())
             .flat_map(|&t| [t - dur, t, t + dur])
             .filter(|&t| t > s && t < e)
             .count()
@@ -231,9 +229,10 @@ fn typical_stride(contacts: &[Vec<Contact>], dur: f64, period: f64) -> Option<(f
                 && (1..contacts.len()).all(|l| touches(l, s, s + p) == 1)
         })
         .collect();
-    let mut periods: Vec<f64> = strides.iter().map(|s| s.1).collect();
-    periods.sort_by(f64::total_cmp);
-    let median = *periods.get(periods.len() / 2)?;
+    if strides.is_empty() {
+        return None;
+    }
+    let median = super::cycles::median(strides.iter().map(|s| s.1).collect());
     strides
         .into_iter()
         .min_by(|a, b| (a.1 - median).abs().total_cmp(&(b.1 - median).abs()))
@@ -532,8 +531,9 @@ impl Cleanup<'_> {
 /// sees on the result is pinned; but not where that would leave a looping leg planted on
 /// every frame: its one contact round the whole loop would be held by one pin, which has to
 /// jump back by the loop's travel once a loop (Fox resampled at 15 keys a second by gltfpack,
-/// `-af 15`, at 0.25: a front foot's swing of four frames, held low by the clean-up's eases, was found planted and
-/// the next pass pinned that foot for the whole loop: 0.49 leg in one frame, jerk ratio 1.33).
+/// `-af 15`, at 0.25: a front foot's swing of four frames, held low by the clean-up's eases,
+/// was found planted and the next pass pinned that foot for the whole loop: 0.49 leg in one
+/// frame, jerk ratio 1.33).
 /// Returns whether any frame joined.
 fn grow_planted(planted: &mut [bool], found: &[bool], looping: bool) -> bool {
     let joined: Vec<bool> = planted.iter().zip(found).map(|(p, f)| *p || *f).collect();

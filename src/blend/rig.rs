@@ -143,9 +143,10 @@ impl Rig {
     /// both; taken as the root, the clip travelling on its hips was measured against a root
     /// that stays put and judged to step in place: Bandai Namco's dataset-1 walk_normal
     /// (travelling on its hips) with its run_normal (travelling on joint_Root), the walk "moved
-    /// along at its treadmill's 0.14 leg/s" (it walks at 1.36), the blend did not travel. Positions relative to the body then repeat over a cycle
-    /// however far the clip travels. Where no joint carries all, the topmost that carries one;
-    /// the root where no clip travels.
+    /// along at its treadmill's 0.14 leg/s" (it walks at 1.36), the blend did not travel.
+    /// Positions relative to the body then repeat over a cycle however far the clip travels.
+    /// Where no joint carries all, the topmost that carries one; the root where no clip
+    /// travels.
     pub fn carried_by(&self, clips: &[&Clip], size: f64) -> Rig {
         let mut rig = self.clone();
         // Per clip, each joint's horizontal displacement from the clip's start to its end.
@@ -194,14 +195,16 @@ impl Rig {
         let joints: Vec<usize> = (self.order.iter().copied())
             .filter(|&j| self.skeleton[j])
             .collect();
-        let travelling: Vec<&(&Clip, Vec<DVec3>)> = (moves.iter())
-            .filter(|m| joints.iter().any(|&j| carries(j, m)))
+        // Per clip that travels (a joint carries it), whether each joint, top down, carries it.
+        let travelling: Vec<Vec<bool>> = (moves.iter())
+            .map(|m| joints.iter().map(|&j| carries(j, m)).collect::<Vec<bool>>())
+            .filter(|c| c.contains(&true))
             .collect();
-        let all = (joints.iter().copied())
-            .find(|&j| !travelling.is_empty() && travelling.iter().all(|m| carries(j, m)));
-        let any = || (joints.iter().copied()).find(|&j| travelling.iter().any(|m| carries(j, m)));
-        if let Some(body) = all.or_else(any) {
-            rig.body = body;
+        let all =
+            (0..joints.len()).find(|&k| !travelling.is_empty() && travelling.iter().all(|c| c[k]));
+        let any = || (0..joints.len()).find(|&k| travelling.iter().any(|c| c[k]));
+        if let Some(k) = all.or_else(any) {
+            rig.body = joints[k];
         }
         rig
     }
