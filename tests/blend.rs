@@ -1807,7 +1807,9 @@ fn captures_heading_apart_on_hips_under_a_still_root_blend_without_pops() {
         let (a, b) = (report_figures(&a), report_figures(&b));
         eprintln!("heading apart: {b:?}, alike: {a:?}, turned {turn:.1} degrees");
         assert!((turn.abs() - 180.0).abs() < 10.0, "turned {turn}");
+        assert!(b.3 <= 1.15, "jerk ratio {}", b.3);
         assert!(b.1 <= 1e-6, "after clean-up {}", b.1);
+        assert!(b.0 < b.2, "before clean-up {} >= naive {}", b.0, b.2);
         for (x, y) in [(a.0, b.0), (a.3, b.3)] {
             assert!((x - y).abs() <= 1e-6 * x.abs(), "{a:?} {b:?}");
         }
