@@ -33,7 +33,11 @@ pub struct Character {
 /// One clip, analysed.
 pub struct Analysis {
     pub track: Track,
-    /// Contacts per leg (same order as `Character::legs`).
+    /// Where each foot touches the floor (same order as `Character::legs`; the contact test's
+    /// [`contacts::flags`]): the events the blend's phase is matched on.
+    pub touches: Vec<Vec<Contact>>,
+    /// Where each foot stands planted: its touches settled ([`contacts::settle`]), where the
+    /// clean-up pins it and the figures measure its sliding.
     pub contacts: Vec<Vec<Contact>>,
     pub cycles: Option<Cycles>,
     /// Largest forward-and-back travel of a foot relative to the root, in leg lengths.
@@ -72,7 +76,8 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
         .fold(0.0, f64::max)
         .max(0.05 * size);
     let together = legs::forward(rig, &legs, &refs);
-    // Per clip and leg, the contact test's flags: how the clip travels and its contacts.
+    // Per clip and leg, the contact test's flags: how the clip travels, its touches and (settled)
+    // its contacts.
     let flags: Vec<Vec<Vec<bool>>> = (tracks.iter())
         .map(|t| {
             (legs.iter())
@@ -100,13 +105,18 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
         .zip(forwards.iter().zip(travels).zip(&flags))
         .map(|(track, ((&forward, travel), flags))| {
             // The legs' flags in their sided order.
-            let contacts = legs
+            let (touches, contacts) = legs
                 .iter()
                 .map(|l| {
                     let k = ends.iter().position(|&e| e == l.end()).expect("a leg");
-                    contacts::intervals(&track, &flags[k])
+                    let mut planted = flags[k].clone();
+                    contacts::settle(&track, l, scale, &mut planted);
+                    (
+                        contacts::intervals(&track, &flags[k]),
+                        contacts::intervals(&track, &planted),
+                    )
                 })
-                .collect();
+                .unzip();
             let stride = legs
                 .iter()
                 .map(|l| {
@@ -123,6 +133,7 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
                 .filter(|_| stride >= cycles::MIN_STRIDE);
             Analysis {
                 track,
+                touches,
                 contacts,
                 cycles,
                 stride,

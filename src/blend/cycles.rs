@@ -8,7 +8,7 @@
 //! * `thigh` (the seed's method): the angle between the two longest opposite legs' thighs,
 //!   signed by which knee is ahead; a cycle starts at the widest stride with the left leg ahead.
 
-use super::legs::{Leg, Side};
+use super::legs::{median, Leg, Side};
 use super::rig::{flat, UP};
 use super::track::Track;
 use glam::DVec3;
@@ -175,13 +175,6 @@ pub fn detect(
         .filter(|&(_, p)| (MIN_PERIOD..=MAX_PERIOD).contains(&p))
         .collect();
     (!spans.is_empty()).then_some(Cycles { spans })
-}
-
-/// Median of `v` (not empty): its middle value, the upper of the two middle ones for an even
-/// count.
-pub fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 /// Horizontal median of `points` (not empty), per axis of the clip's own frame (`forward` and

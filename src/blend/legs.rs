@@ -30,6 +30,13 @@ pub fn floor(mut heights: Vec<f64>) -> f64 {
     heights[((heights.len() - 1) as f64 * FLOOR_PERCENTILE) as usize]
 }
 
+/// Median of `v` (not empty): its middle value, the upper of the two middle ones for an even
+/// count.
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
 /// Hips closer than this fraction of the character's size to the body's mid-plane are centred.
 pub const SIDE_FRACTION: f64 = 0.02;
 

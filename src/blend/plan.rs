@@ -157,13 +157,13 @@ fn cycles_used(clip: &Clip, an: &Analysis) -> Vec<(f64, f64)> {
         .unwrap_or_else(|| vec![(clip.start, clip.duration().max(MIN_CYCLE))]);
     if an.looping() {
         if spans.len() > 1 {
-            if let Some(stride) = typical_stride(&an.contacts, clip.duration(), spans[0].1) {
+            if let Some(stride) = typical_stride(&an.touches, clip.duration(), spans[0].1) {
                 spans = vec![stride];
             }
         }
         spans.truncate(1);
     }
-    if let Some(first) = an.contacts.first() {
+    if let Some(first) = an.touches.first() {
         let dur = clip.duration();
         for (start, period) in &mut spans {
             let candidates = first.iter().flat_map(|c| {
@@ -232,7 +232,7 @@ fn typical_stride(contacts: &[Vec<Contact>], dur: f64, period: f64) -> Option<(f
     if strides.is_empty() {
         return None;
     }
-    let median = super::cycles::median(strides.iter().map(|s| s.1).collect());
+    let median = super::legs::median(strides.iter().map(|s| s.1).collect());
     strides
         .into_iter()
         .min_by(|a, b| (a.1 - median).abs().total_cmp(&(b.1 - median).abs()))
@@ -264,10 +264,10 @@ fn track_of(pos: Vec<Vec<DVec3>>, dt: f64, looping: bool, root: usize) -> Track 
     Track::closed(0.0, dt, looping, pos, root)
 }
 
-/// Contact flags of `leg` per pose of `poses` (see [`positions_track`]; the repeated last pose
+/// Planted flags of `leg` per pose of `poses` (see [`positions_track`]; the repeated last pose
 /// of a loop gets the first one's flag).
 fn contact_flags(track: &Track, count: usize, leg: &super::legs::Leg, scale: f64) -> Vec<bool> {
-    let mut f = super::contacts::flags(track, leg, scale);
+    let mut f = super::contacts::planted_flags(track, leg, scale);
     while f.len() < count {
         f.push(f[0]);
     }
@@ -309,8 +309,8 @@ fn phase(a: &Clip, b: &Clip, an: [&Analysis; 2], spans: [&[(f64, f64)]; 2], w: f
         let (sa, pa) = cycle_at(spans_a, an_a.looping(), k);
         let (sb, pb) = cycle_at(spans_b, an_b.looping(), k);
         let warp = Warp::new(
-            &timewarp::events(&an_a.contacts, sa, pa, an_a.looping()),
-            &timewarp::events(&an_b.contacts, sb, pb, an_b.looping()),
+            &timewarp::events(&an_a.touches, sa, pa, an_a.looping()),
+            &timewarp::events(&an_b.touches, sb, pb, an_b.looping()),
             w,
         );
         if k == 0 {
@@ -564,24 +564,7 @@ fn keep_a_swing(planted: &mut [bool], track: &Track, foot: usize) {
     let moves: Vec<f64> = (0..distinct)
         .map(|i| flat(track.pos[i + 1][foot] - track.pos[i][foot]).length())
         .collect();
-    let mean = moves.iter().sum::<f64>() / distinct as f64;
-    let fastest = (0..distinct)
-        .max_by(|&a, &b| moves[a].total_cmp(&moves[b]))
-        .expect("a frame");
-    let (mut lo, mut hi) = (fastest, fastest);
-    let mut len = 1;
-    while len < distinct && moves[(lo + distinct - 1) % distinct] > mean {
-        lo = (lo + distinct - 1) % distinct;
-        len += 1;
-    }
-    while len < distinct && moves[(hi + 1) % distinct] > mean {
-        hi = (hi + 1) % distinct;
-        len += 1;
-    }
-    // Both ends of every fast step, but at least one frame kept planted.
-    for k in 0..(len + 1).min(distinct - 1) {
-        planted[(lo + k) % distinct] = false;
-    }
+    super::contacts::swing_where_fastest(&mut planted[..distinct], &moves);
     planted[n - 1] = planted[0];
 }
 

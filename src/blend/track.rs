@@ -117,16 +117,22 @@ impl Track {
         }
     }
 
-    /// Velocity of node `j` at frame `i` (central difference).
+    /// Velocity of node `j` at frame `i` (central difference; on a loop, a neighbour across the
+    /// seam carried on by the loop's travel: a clip with root motion looped at its last frame
+    /// had its feet there move back by the whole loop's travel in two frames).
     pub fn velocity(&self, i: usize, j: usize) -> DVec3 {
         let (a, b) = (self.step(i, -1), self.step(i, 1));
-        let span = if self.looping {
-            2.0
-        } else {
-            (b as f64 - a as f64).max(1.0)
-        };
-        let d = self.pos[b][j] - self.pos[a][j];
-        d / (span * self.dt)
+        if self.looping {
+            let across = |k: usize, back: bool| match (back, k) {
+                (true, k) if k > i => -self.travel,
+                (false, k) if k < i => self.travel,
+                _ => DVec3::ZERO,
+            };
+            let d = (self.pos[b][j] + across(b, false)) - (self.pos[a][j] + across(a, true));
+            return d / (2.0 * self.dt);
+        }
+        let span = (b as f64 - a as f64).max(1.0);
+        (self.pos[b][j] - self.pos[a][j]) / (span * self.dt)
     }
 }
 
@@ -366,6 +372,22 @@ mod tests {
             let (rig, pose) = far_from_its_root(degrees);
             let s = size(&rig, &pose);
             assert!((s - 170.0).abs() < 1e-9, "{degrees} degrees: size {s}");
+        }
+    }
+
+    /// A loop with root motion: one joint walking 1 a second along Z for 10 frames, the loop
+    /// travelling 1: its velocity is 1 on every frame, the seam's two included.
+    #[test]
+    fn a_loop_s_velocity_carries_on_across_its_seam() {
+        let dt = 0.1;
+        let pos: Vec<Vec<DVec3>> = (0..=10)
+            .map(|i| vec![DVec3::new(0.0, 0.0, i as f64 * dt)])
+            .collect();
+        let track = Track::closed(0.0, dt, true, pos, 0);
+        assert_eq!(track.len(), 10);
+        for i in 0..10 {
+            let v = track.velocity(i, 0);
+            assert!((v - DVec3::Z).length() < 1e-12, "frame {i}: {v}");
         }
     }
 }
