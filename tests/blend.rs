@@ -1593,6 +1593,50 @@ fn cmu_start_walk_stop_blends_with_itself_half_a_cycle_later() {
     }
 }
 
+/// CMU's start-walk-stop played backwards (a walk backwards, from a real capture): the cycle
+/// test takes three of its strides, at 2.37, 3.52 and 5.76 s, and not the one between the second
+/// and the third; blended with itself, the blend's source time jumped over that stride (1.2 s
+/// of the capture between two frames: jerk ratio 11.0, 12.7 with feet planted where they stand
+/// still). The strides between the cycles are blended too, so the blend is the capture: before
+/// clean-up it slides as the naive blend does, its cycles tile the capture and its jerk ratio
+/// is 1.11.
+#[test]
+fn strides_between_a_capture_s_cycles_are_blended_not_jumped() {
+    let Some(fx) = fixtures() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (head, time, mut frames) = bvh_parts(&fx.join("bvh/bvh11_131_01_start_walk_stop.bvh"));
+    frames.reverse();
+    let back = dir.path().join("back.bvh");
+    std::fs::write(&back, bvh_text(&head, &time, &frames)).unwrap();
+    let r = blend_bvh_report(&back, &back, "0.5", &dir.path().join("out.bvh"));
+    let res = &r["result"];
+    let periods: Vec<f64> = (res["cycle_periods"].as_array().unwrap().iter())
+        .map(|p| p.as_f64().unwrap())
+        .collect();
+    let (naive, before, after) = (
+        sliding(&r["naive"]),
+        sliding(&res["before_cleanup"]),
+        sliding(&res["after_cleanup"]),
+    );
+    let jerk = res["jerk_ratio"].as_f64().unwrap();
+    eprintln!(
+        "start-walk-stop backwards with itself: cycles {periods:?}, naive {naive:.5}, before \
+         clean-up {before:.5}, after {after:.1e}, jerk ratio {jerk:.2}"
+    );
+    assert_eq!(r["clips"][0]["cycles"].as_array().unwrap().len(), 3);
+    assert_eq!(periods.len(), 4, "{periods:?}");
+    assert!(
+        periods.iter().all(|&p| (0.9..1.4).contains(&p)),
+        "{periods:?}"
+    );
+    assert!(
+        (before - naive).abs() <= 1e-9,
+        "{before} against naive {naive}"
+    );
+    assert!(after <= 1e-3, "after clean-up {after}");
+    assert!(jerk <= 1.15, "jerk ratio {jerk}");
+}
+
 /// `path`'s capture stepping in place: its root's X and Z position channels (the first and
 /// third of the CMU files' root) held at their first frame's values, as a capture exported "in
 /// place" has them.
