@@ -1559,13 +1559,7 @@ fn cmu_start_walk_stop_blends_with_itself_half_a_cycle_later() {
     let reports = blend_bvh_report(&capture, &later, "0,0.25,0.5,0.75,1", &out);
     for r in reports.as_array().unwrap() {
         let w = r["weight"].as_f64().unwrap();
-        let res = &r["result"];
-        let (naive, before, after) = (
-            sliding(&r["naive"]),
-            sliding(&res["before_cleanup"]),
-            sliding(&res["after_cleanup"]),
-        );
-        let jerk = res["jerk_ratio"].as_f64().unwrap();
+        let (before, after, naive, jerk) = report_figures(r);
         eprintln!(
             "CMU start-walk-stop + itself later w={w}: naive {naive:.5}, before clean-up \
              {before:.5}, after {after:.1e}, jerk ratio {jerk:.2}"
@@ -1613,12 +1607,7 @@ fn strides_between_a_capture_s_cycles_are_blended_not_jumped() {
     let periods: Vec<f64> = (res["cycle_periods"].as_array().unwrap().iter())
         .map(|p| p.as_f64().unwrap())
         .collect();
-    let (naive, before, after) = (
-        sliding(&r["naive"]),
-        sliding(&res["before_cleanup"]),
-        sliding(&res["after_cleanup"]),
-    );
-    let jerk = res["jerk_ratio"].as_f64().unwrap();
+    let (before, after, naive, jerk) = report_figures(&r);
     eprintln!(
         "start-walk-stop backwards with itself: cycles {periods:?}, naive {naive:.5}, before \
          clean-up {before:.5}, after {after:.1e}, jerk ratio {jerk:.2}"

@@ -452,10 +452,10 @@ impl Cleanup<'_> {
         let shift = before.pos[before.len() - 1][rig.body] - before.pos[0][rig.body];
         let span = times[times.len() - 1] - times[0];
         let root_speed = flat(shift).length() / span.max(MIN_DURATION);
-        // Planted: where the sources plant the foot by vote, or the contact test finds it in
-        // the blend (before, and after a first pass, so that every contact the test sees on the
-        // result is pinned), never so that a looping leg is planted throughout
-        // ([`grow_planted`]).
+        // Planted: where the sources plant the foot by vote, or it is found planted in the
+        // blend ([`contact_flags`]: before, and after a first pass, so that every contact the
+        // figures see on the result is pinned), never so that a looping leg is planted
+        // throughout ([`grow_planted`]).
         let mut planted: Vec<Vec<bool>> = (0..ch.legs.len())
             .map(|l| {
                 let found = contact_flags(self.before_loop, plan.len(), &ch.legs[l], ch.scale);
@@ -1013,6 +1013,9 @@ fn clip_report(
 #[cfg(test)]
 mod tests {
     use super::{grow_planted, keep_a_swing, tile, typical_stride};
+    use crate::blend::contacts::Contact;
+    use crate::blend::track::Track;
+    use glam::DVec3;
 
     /// Cycles a stride apart, two strides apart and overlapping: each lasts to the next one's
     /// start, the two strides' gap cut in two.
@@ -1034,9 +1037,6 @@ mod tests {
             );
         }
     }
-    use crate::blend::contacts::Contact;
-    use crate::blend::track::Track;
-    use glam::DVec3;
 
     fn flags(s: &str) -> Vec<bool> {
         s.chars().map(|c| c == 'P').collect()

@@ -123,12 +123,8 @@ impl Track {
     pub fn velocity(&self, i: usize, j: usize) -> DVec3 {
         let (a, b) = (self.step(i, -1), self.step(i, 1));
         if self.looping {
-            let across = |k: usize, back: bool| match (back, k) {
-                (true, k) if k > i => -self.travel,
-                (false, k) if k < i => self.travel,
-                _ => DVec3::ZERO,
-            };
-            let d = (self.pos[b][j] + across(b, false)) - (self.pos[a][j] + across(a, true));
+            let seam = |wrapped: bool| if wrapped { self.travel } else { DVec3::ZERO };
+            let d = (self.pos[b][j] + seam(b < i)) - (self.pos[a][j] - seam(a > i));
             return d / (2.0 * self.dt);
         }
         let span = (b as f64 - a as f64).max(1.0);
