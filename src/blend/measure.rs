@@ -92,17 +92,14 @@ fn planted(track: &Track, root: usize, legs: &[Leg], flags: &[Vec<bool>]) -> Pla
     // Across a loop's seam the feet come back by the loop's travel (the root's, from its first
     // frame to where it comes back to it: was taken as the root's mean step times the frame
     // count, which a clean-up moving the root unevenly made wrong by up to 2.4e-3 leg across
-    // the seam of Fox's walk).
+    // the seam of Fox's walk): `Track::step_move`.
     let wraps = track.looping && n > 2;
-    let travel = if wraps { track.travel } else { DVec3::ZERO };
     let steps = if wraps { n } else { n.saturating_sub(1) };
     let mut moves = Vec::new();
     for (leg, f) in legs.iter().zip(flags) {
         for i in 0..steps {
-            let k = (i + 1) % n;
-            if f[i] && f[k] {
-                let seam = if k == 0 { travel } else { DVec3::ZERO };
-                moves.push(flat(track.pos[k][leg.end()] - track.pos[i][leg.end()]) + seam);
+            if f[i] && f[(i + 1) % n] {
+                moves.push(track.step_move(i, leg.end()));
             }
         }
     }
@@ -164,11 +161,7 @@ pub fn figures(
             // had that swing measured as sliding (0.005 leg/frame after clean-up).
             if track.looping && n > 2 && f.iter().all(|&x| x) {
                 let moves: Vec<f64> = (0..n)
-                    .map(|i| {
-                        let k = (i + 1) % n;
-                        let seam = if k == 0 { track.travel } else { DVec3::ZERO };
-                        flat(track.pos[k][leg.end()] + seam - track.pos[i][leg.end()]).length()
-                    })
+                    .map(|i| track.step_move(i, leg.end()).length())
                     .collect();
                 contacts::swing_where_fastest(&mut f, &moves);
             }

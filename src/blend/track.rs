@@ -117,6 +117,14 @@ impl Track {
         }
     }
 
+    /// Horizontal move of node `j` from frame `i` to the next (a loop's last frame to its first
+    /// carried on by the loop's travel).
+    pub fn step_move(&self, i: usize, j: usize) -> DVec3 {
+        let k = (i + 1) % self.len();
+        let seam = if k == 0 { self.travel } else { DVec3::ZERO };
+        flat(self.pos[k][j] - self.pos[i][j]) + seam
+    }
+
     /// Velocity of node `j` at frame `i` (central difference; on a loop, a neighbour across the
     /// seam carried on by the loop's travel: a clip with root motion looped at its last frame
     /// had its feet there move back by the whole loop's travel in two frames).
