@@ -1,5 +1,7 @@
 //! Space warp (ALGORITHMS.md B.3, Kovar, Gleicher & Pighin 2002): the rotation about the up axis
-//! and the floor translation that best carry one clip's joint positions onto the other's.
+//! and the floor translation that best carry one clip's joint positions onto the other's
+//! ([`fit`]); then, frame by frame, both clips moved onto the blend's own way ([`register`]), so
+//! that clips that turn apart blend by their turns, not by their positions.
 
 use super::measure::Travel;
 use super::rig::{Pose, Rig};
@@ -143,6 +145,109 @@ pub fn under_joints_above_body(rig: &Rig, pose: &mut Pose, under: &Pose) {
     }
     let parent = rig.parent_world(&rig.world(pose), rig.body);
     pose.local[rig.body] = super::rig::Trs::from_matrix(&(parent.inverse() * body));
+}
+
+/// Where a clip heads at each frame: the body's facing on the floor (`reference`, a direction
+/// in the body joint's own frame, carried to the world), unwrapped over the frames and averaged
+/// over `half` frames either side (a stride's sway taken out: where the clip turns), radians
+/// about +Y from +Z; and the body's floor position.
+fn headings(
+    rig: &Rig,
+    poses: &[Pose],
+    reference: DVec3,
+    half: usize,
+    looping: bool,
+) -> Vec<(f64, DVec3)> {
+    let n = poses.len();
+    let mut raw: Vec<f64> = Vec::with_capacity(n);
+    let mut floor = Vec::with_capacity(n);
+    for pose in poses {
+        let body = rig.world(pose)[rig.body];
+        let dir = body.transform_vector3(reference);
+        let mut yaw = dir.x.atan2(dir.z);
+        if let Some(&last) = raw.last() {
+            yaw = last + (yaw - last + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI;
+        }
+        raw.push(yaw);
+        let t = body.w_axis.truncate();
+        floor.push(DVec3::new(t.x, 0.0, t.z));
+    }
+    // A loop's last frame is its first carried on by the loop: its turn carries on too.
+    let distinct = if looping && n > 2 { n - 1 } else { n };
+    let turn = if distinct < n {
+        raw[n - 1] - raw[0]
+    } else {
+        0.0
+    };
+    let at = |i: i64| -> Option<f64> {
+        if (0..distinct as i64).contains(&i) {
+            return Some(raw[i as usize]);
+        }
+        if distinct == n {
+            return None;
+        }
+        let m = distinct as i64;
+        Some(raw[i.rem_euclid(m) as usize] + turn * i.div_euclid(m) as f64)
+    };
+    let smooth: Vec<f64> = (0..n as i64)
+        .map(|i| {
+            let h = if distinct < n {
+                half as i64
+            } else {
+                (half as i64).min(i).min(n as i64 - 1 - i)
+            };
+            let vals: Vec<f64> = (i - h..=i + h).filter_map(at).collect();
+            vals.iter().sum::<f64>() / vals.len() as f64
+        })
+        .collect();
+    smooth.into_iter().zip(floor).collect()
+}
+
+/// Register two clips' frames (each pair one moment of the blend; `b` already fitted onto `a`)
+/// frame by frame: both are moved onto the blend's own way, which turns and travels each frame
+/// by the weighted mix of the sources' turns and steps, each step taken in its source's heading
+/// ([`headings`]), so that a left turn and a right turn blend into a walk straight ahead. Mixed
+/// as they were (the root's position averaged, its rotation slerped), two clips whose headings
+/// part by more than a half turn were slerped the short way round, and the body flipped by a
+/// half turn in a frame (Bandai Namco's walk-turn-left and walk-turn-right: jerk ratios up to
+/// 6.5); where the two head alike the blend is as before: each step is the same, and each body
+/// moved by the weight's share of their difference, which the slerp would have turned it by.
+/// `forward` is the character's forward on the floor, `half` the frames averaged either side.
+pub fn register(
+    rig: &Rig,
+    [a, b]: [&mut [Pose]; 2],
+    w: f64,
+    forward: DVec3,
+    half: usize,
+    looping: bool,
+) {
+    let n = a.len().min(b.len());
+    if n == 0 {
+        return;
+    }
+    let body0 = rig.world(&a[0])[rig.body];
+    let reference = body0.inverse().transform_vector3(forward);
+    let ha = headings(rig, &a[..n], reference, half, looping);
+    let hb = headings(rig, &b[..n], reference, half, looping);
+    let turn = |yaw: f64| DQuat::from_rotation_y(yaw);
+    let mut pos = ha[0].1.lerp(hb[0].1, w);
+    for i in 0..n {
+        let yaw = (1.0 - w) * ha[i].0 + w * hb[i].0;
+        if i > 0 {
+            let step = |h: &[(f64, DVec3)]| {
+                let mid = 0.5 * (h[i - 1].0 + h[i].0);
+                turn(-mid) * (h[i].1 - h[i - 1].1)
+            };
+            let mid = 0.5 * ((1.0 - w) * (ha[i - 1].0 + ha[i].0) + w * (hb[i - 1].0 + hb[i].0));
+            pos += turn(mid) * step(&ha).lerp(step(&hb), w);
+        }
+        for (pose, h) in [(&mut a[i], ha[i]), (&mut b[i], hb[i])] {
+            let m = DMat4::from_rotation_translation(turn(yaw - h.0), pos)
+                * DMat4::from_translation(-h.1);
+            move_body(rig, pose, &m);
+        }
+    }
 }
 
 #[cfg(test)]

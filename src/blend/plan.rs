@@ -376,6 +376,7 @@ fn sources(
     clips: [&Clip; 2],
     an: [&Analysis; 2],
     phase: &Phase,
+    w: f64,
 ) -> Sources {
     let sample = |k: usize, pick: fn(&(f64, f64, f64)) -> f64| -> Vec<Pose> {
         phase
@@ -384,7 +385,7 @@ fn sources(
             .map(|f| pose_unwrapped(rig, clips[k], an[k].looping(), pick(f)))
             .collect()
     };
-    let poses_a = sample(0, |f| f.1);
+    let mut poses_a = sample(0, |f| f.1);
     let mut poses_b = sample(1, |f| f.2);
     for (pose, under) in poses_b.iter_mut().zip(&poses_a) {
         align::under_joints_above_body(rig, pose, under);
@@ -403,17 +404,28 @@ fn sources(
         .iter()
         .take_while(|f| f.0 <= phase.periods[0] + TIME_EPSILON)
         .count();
-    let world_a: Vec<Vec<DVec3>> = poses_a.iter().map(|p| rig.positions(p)).collect();
     let (mut p, mut q) = (Vec::new(), Vec::new());
     for i in 0..first_cycle {
-        let wb = rig.positions(&poses_b[i]);
-        p.extend(joints.iter().map(|&j| world_a[i][j]));
+        let (wa, wb) = (rig.positions(&poses_a[i]), rig.positions(&poses_b[i]));
+        p.extend(joints.iter().map(|&j| wa[j]));
         q.extend(joints.iter().map(|&j| wb[j]));
     }
     let fit = align::fit(&p, &q);
     for pose in &mut poses_b {
         align::move_body(rig, pose, &fit.matrix());
     }
+    // Headings averaged over a cycle (half the blend's mean cycle either side of a frame).
+    let half = (0.5 * phase.duration / phase.periods.len().max(1) as f64 * phase.fps).round();
+    align::register(
+        rig,
+        [&mut poses_a, &mut poses_b],
+        w,
+        ch.forward,
+        half as usize,
+        phase.looping,
+    );
+    // Where the sources' joints are in the blend (the clean-up's targets): registered.
+    let world_a: Vec<Vec<DVec3>> = poses_a.iter().map(|p| rig.positions(p)).collect();
     let world_b: Vec<Vec<DVec3>> = poses_b.iter().map(|p| rig.positions(p)).collect();
     Sources {
         poses: [poses_a, poses_b],
@@ -733,7 +745,7 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     }
     let spans = [cycles_used(a, an_a), cycles_used(b, an_b)];
     let phase = phase(a, b, [an_a, an_b], [&spans[0], &spans[1]], w);
-    let mut src = sources(rig, &ch, [a, b], [an_a, an_b], &phase);
+    let mut src = sources(rig, &ch, [a, b], [an_a, an_b], &phase, w);
     // The sources' poses are mixed, then let go (the clean-up and the figures read their
     // positions): two copies of every frame fewer held through the clean-up.
     let [poses_a, poses_b] = std::mem::take(&mut src.poses);
