@@ -254,6 +254,54 @@ pub fn register(
 mod tests {
     use super::*;
 
+    /// A hip with a toe ahead of it (a BVH of one joint and its end), and `n` poses of it
+    /// walking 1 unit a frame while turning `degrees` a frame about +Y (left for positive).
+    fn turning(n: usize, degrees: f64) -> (Rig, Vec<Pose>) {
+        let text = "HIERARCHY\nROOT hip\n{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition \
+                    Zposition Zrotation Yrotation Xrotation\n\tEnd Site\n\t{\n\t\tOFFSET 0 -1 \
+                    0.3\n\t}\n}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 1 0 0 0 0\n";
+        let (rig, clip) = crate::blend::bvh::parse(text).unwrap();
+        let rest = clip.pose(&rig, 0.0);
+        let mut at = DVec3::new(0.0, 1.0, 0.0);
+        let poses = (0..n)
+            .map(|i| {
+                let yaw = (degrees * i as f64).to_radians();
+                let mut pose = rest.clone();
+                pose.local[rig.body].r = DQuat::from_rotation_y(yaw);
+                pose.local[rig.body].t = at;
+                at += DQuat::from_rotation_y(yaw + 0.5 * degrees.to_radians()) * DVec3::Z;
+                pose
+            })
+            .collect();
+        (rig, poses)
+    }
+
+    /// Clips that head alike are left where they are; a left and a right turn are both moved
+    /// onto one straight way at 0.5, each step as long as theirs, facing ahead.
+    #[test]
+    fn registered_turns_blend_by_their_turns() {
+        let (rig, a) = turning(60, 0.0);
+        let (mut x, mut y) = (a.clone(), a.clone());
+        register(&rig, [&mut x, &mut y], 0.3, DVec3::Z, 5, false);
+        for (p, q) in a.iter().zip(&x).chain(a.iter().zip(&y)) {
+            let (p, q) = (p.local[rig.body], q.local[rig.body]);
+            assert!(p.t.distance(q.t) < 1e-9 && p.r.angle_between(q.r) < 1e-9);
+        }
+        // Headings 354 degrees apart at the end.
+        let (_, mut left) = turning(60, 3.0);
+        let (_, mut right) = turning(60, -3.0);
+        register(&rig, [&mut left, &mut right], 0.5, DVec3::Z, 5, false);
+        for (i, (l, r)) in left.iter().zip(&right).enumerate() {
+            for pose in [l, r] {
+                let body = pose.local[rig.body];
+                let ahead = body.r * DVec3::Z;
+                assert!(ahead.distance(DVec3::Z) < 1e-6, "frame {i}: facing {ahead}");
+                let expect = DVec3::new(0.0, 1.0, i as f64);
+                assert!(body.t.distance(expect) < 1e-6, "frame {i}: at {}", body.t);
+            }
+        }
+    }
+
     #[test]
     fn recovers_a_known_floor_transform() {
         let truth = FloorTransform {
