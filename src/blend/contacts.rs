@@ -163,28 +163,27 @@ pub const SWING_LEAD_MIN: f64 = 1.0;
 /// then at most that far off, and a swing's lead along it at least 0.71 of its length.
 pub const TRAIL_AGREES: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
-/// Unflag frames where the foot, low and level enough for the test above, swings: it moves
-/// forward of its hip faster than [`SWING_LEAD`] times the speed at which the leg's flagged
-/// frames trail it on average (the body's speed over the ground), and than
-/// [`SWING_LEAD_MIN`]; forward is the opposite of that mean trail, unless it points farther
-/// from the way most flagged frames trail (their leads' [`geometric_median`]) than
-/// [`TRAIL_AGREES`] allows: where a swing is low enough to be flagged nearly throughout, the
-/// mean nears zero (a foot comes back to its hip once a cycle) and points anywhere. Bandai Namco's walk_not-confident blended with its run at 0.25 on a stride of its
-/// walk where 35 of 36 frames were flagged had the mean pointing backwards, and a swing
+/// Unflag frames where the foot, low and level enough for the test above, swings: it moves forward
+/// of its hip faster than [`SWING_LEAD`] times the speed at which the leg's flagged frames trail it
+/// on average (the body's speed over the ground), and than [`SWING_LEAD_MIN`]; forward is the
+/// opposite of that mean trail, unless it points farther from the way most flagged frames trail
+/// (their leads' [`geometric_median`]) than [`TRAIL_AGREES`] allows: where a swing is low enough to
+/// be flagged nearly throughout, the mean nears zero (a foot comes back to its hip once a cycle)
+/// and points anywhere. Bandai Namco's walk_not-confident blended with its run at 0.25 on a stride
+/// of its walk where 35 of 36 frames were flagged had the mean pointing backwards, and a swing
 /// leading its hip by 4.6 leg/s was kept planted; its walk-back_masculinity blended with its
-/// walk-back_normal at 0.5, the first clean-up pass's toe flagged on 124 of 127 frames, had
-/// it 0.016 leg/s long, at 88 degrees from the median's 0.87 leg/s: every swing was kept
-/// planted, the next pass pinned the toe from the first step to the last, and the jerk ratio
-/// was 4.05 (0.92 on the median). The median alone, where the two agree, moves the swings of capture
-/// blends whose swings are partly flagged: Bandai's walk_tired + run_tired went from a jerk
-/// ratio of 1.14 to 1.19 at 0.25. A planted foot trails its hip,
-/// on a treadmill as on still ground; a foot dragged low through the start of its swing
-/// leads it (CMU's start-walk-stop: a toe flagged for 0.15 s after lift-off, leading its hip
-/// by 2.7 leg/s where its contacts trail by 0.6-1.1; kevinxie4c's walk: 0.06-0.1 s fragments
-/// leading by about 5). Judged per frame, not on a run's mean: on a cleaned motion the foot
-/// released at lift-off and eased back to its path joins the slow frames after lift-off and
-/// the swing's fragment into one run of low mean lead, which the clean-up's next pass then
-/// pinned.
+/// walk-back_normal at 0.5, the first clean-up pass's toe flagged on 124 of 127 frames, had it
+/// 0.016 leg/s long, at 88 degrees from the median's 0.87 leg/s: every swing was kept planted, the
+/// next pass pinned the toe from the first step to the last, and the jerk ratio was 4.05 (0.92 on
+/// the median). The median alone, where the two agree, moves the swings of capture blends whose
+/// swings are partly flagged: Bandai's walk_tired + run_tired went from a jerk ratio of 1.14 to
+/// 1.19 at 0.25. A planted foot trails its hip, on a treadmill as on still ground; a foot dragged
+/// low through the start of its swing leads it (CMU's start-walk-stop: a toe flagged for 0.15 s
+/// after lift-off, leading its hip by 2.7 leg/s where its contacts trail by 0.6-1.1; kevinxie4c's
+/// walk: 0.06-0.1 s fragments leading by about 5). Judged per frame, not on a run's mean: on a
+/// cleaned motion the foot released at lift-off and eased back to its path joins the slow frames
+/// after lift-off and the swing's fragment into one run of low mean lead, which the clean-up's next
+/// pass then pinned.
 fn drop_swings(track: &Track, leg: &Leg, scale: f64, f: &mut [bool]) {
     let (e, hip) = (leg.end(), leg.top());
     let lead = |i: usize| {
@@ -417,6 +416,11 @@ mod tests {
                 vec![DVec3::new(0.0, 1.0, t), DVec3::new(0.02 * t, y, z)]
             })
             .collect();
+        open_track(dt, pos)
+    }
+
+    /// A track that does not loop, sampled every `dt` seconds.
+    fn open_track(dt: f64, pos: Vec<Vec<DVec3>>) -> Track {
         Track {
             start: 0.0,
             dt,
@@ -476,13 +480,7 @@ mod tests {
                 vec![DVec3::new(0.0, 1.0, i as f64 * dt), DVec3::new(0.0, y, z)]
             })
             .collect();
-        Track {
-            start: 0.0,
-            dt,
-            looping: false,
-            pos,
-            travel: DVec3::ZERO,
-        }
+        open_track(dt, pos)
     }
 
     /// A foot low on the floor but still moving over it at either end of its contact touches
