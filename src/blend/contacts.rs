@@ -8,8 +8,9 @@
 use super::legs::{self, Leg};
 use super::rig::flat;
 use super::track::Track;
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use serde::Serialize;
+use std::f64::consts::{PI, TAU};
 
 /// Height above the foot's lowest point, as a fraction of the leg scale.
 pub const HEIGHT_TOLERANCE: f64 = 0.06;
@@ -186,9 +187,13 @@ pub const TRAIL_AGREES: f64 = std::f64::consts::FRAC_1_SQRT_2;
 /// pass then pinned.
 fn drop_swings(track: &Track, leg: &Leg, scale: f64, f: &mut [bool]) {
     let (e, hip) = (leg.end(), leg.top());
+    let turns = turns(track, hip, scale);
     let lead = |i: usize| {
         let v = track.velocity(i, e) - track.velocity(i, hip);
-        DVec3::new(v.x, 0.0, v.z) / scale
+        let v = DVec3::new(v.x, 0.0, v.z) / scale;
+        turns
+            .as_ref()
+            .map_or(v, |t| DQuat::from_rotation_y(-t[i]) * v)
     };
     let flagged: Vec<usize> = (0..f.len()).filter(|&i| f[i]).collect();
     if flagged.is_empty() {
@@ -211,6 +216,50 @@ fn drop_swings(track: &Track, leg: &Leg, scale: f64, f: &mut [bool]) {
             f[i] = false;
         }
     }
+}
+
+/// Seconds either side of a frame over which the hip's velocity gives the way a clip heads
+/// there (see [`turns`]).
+pub const TURN_WINDOW: f64 = 1.0;
+/// A frame's hip speed counts in that average at most this many times its median over the clip.
+pub const TURN_SPIKE: f64 = 3.0;
+/// Least speed of the hip over such a window, in leg scales per second, for a clip to be judged
+/// by its heading frame by frame (a clip in place, or standing anywhere, heads one way).
+pub const TURN_SPEED: f64 = 0.3;
+
+/// How far (radians about +Y, unwrapped) the way `track` heads at each frame is turned from its
+/// mean way: the hip's horizontal velocity averaged over [`TURN_WINDOW`] either side. `None`
+/// where any window's is slower than [`TURN_SPEED`]: the clip heads one way. A turning walk's
+/// swing heads sideways where it turns; judged along one forward it hardly led its hip and
+/// was kept planted (Bandai Namco's walk-turn-left_feminine: touches of 0.05-0.1 s inside its
+/// swings, pinned by the clean-up: blended with itself, jerk ratio 1.88; 1.11 judged turn by
+/// turn).
+fn turns(track: &Track, hip: usize, scale: f64) -> Option<Vec<f64>> {
+    let n = track.len();
+    let half = (TURN_WINDOW / track.dt).round() as usize;
+    let v: Vec<DVec3> = (0..n)
+        .map(|i| flat(track.velocity(i, hip)) / scale)
+        .collect();
+    // A jump of the root (takes joined end to end) counts no more than a fast frame.
+    let cap = TURN_SPIKE * legs::median(v.iter().map(|v| v.length()).collect());
+    let mut sum = vec![DVec3::ZERO; n + 1];
+    for i in 0..n {
+        sum[i + 1] = sum[i] + v[i].clamp_length_max(cap);
+    }
+    let mean = sum[n] / n.max(1) as f64;
+    let base = mean.x.atan2(mean.z);
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let (lo, hi) = (i.saturating_sub(half), (i + half).min(n - 1));
+        let m = (sum[hi + 1] - sum[lo]) / (hi + 1 - lo) as f64;
+        if m.length() <= TURN_SPEED {
+            return None;
+        }
+        let a = m.x.atan2(m.z) - base;
+        let last = out.last().copied().unwrap_or(0.0);
+        out.push(last + (a - last + PI).rem_euclid(TAU) - PI);
+    }
+    Some(out)
 }
 
 /// The point of least summed distance to `points` (not empty; Weiszfeld's iteration from their
