@@ -236,6 +236,9 @@ pub const TURN_SPEED: f64 = 0.3;
 /// turn).
 fn turns(track: &Track, hip: usize, scale: f64) -> Option<Vec<f64>> {
     let n = track.len();
+    if n == 0 {
+        return None;
+    }
     let half = (TURN_WINDOW / track.dt).round() as usize;
     let v: Vec<DVec3> = (0..n)
         .map(|i| flat(track.velocity(i, hip)) / scale)
@@ -477,6 +480,36 @@ mod tests {
             pos,
             travel: DVec3::ZERO,
         }
+    }
+
+    /// A hip walking 1 leg/s round a circle (a quarter turn a second, 30 frames a second), one
+    /// walking straight that jumps back half way (takes joined end to end), and one standing:
+    /// the way the first heads turns by a quarter turn a second, the second's does not turn
+    /// (the jump counts as one fast frame), the standing one heads one way.
+    #[test]
+    fn a_turning_walk_heads_where_its_hip_goes() {
+        let dt = 1.0 / 30.0;
+        let rate = std::f64::consts::FRAC_PI_2;
+        let at = |i: usize| {
+            let a = rate * i as f64 * dt;
+            DVec3::new((1.0 - a.cos()) / rate, 1.0, a.sin() / rate)
+        };
+        let track = |pos: Vec<Vec<DVec3>>| open_track(dt, pos);
+        let walk: Vec<Vec<DVec3>> = (0..150).map(|i| vec![at(i)]).collect();
+        let t = turns(&track(walk), 0, 1.0).expect("it walks");
+        for i in [40, 75, 110] {
+            let slope = (t[i + 1] - t[i - 1]) / (2.0 * dt);
+            assert!((slope - rate).abs() < 0.02 * rate, "frame {i}: {slope}");
+        }
+        // Straight ahead at 1 leg/s, jumping back 2.5 legs every 75 frames.
+        let jumped: Vec<Vec<DVec3>> = (0..150)
+            .map(|i| vec![DVec3::new(0.0, 1.0, (i % 75) as f64 * dt)])
+            .collect();
+        let t = turns(&track(jumped), 0, 1.0).expect("it walks");
+        let most = t.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        assert!(most < 1e-9, "{most}");
+        let stands: Vec<Vec<DVec3>> = (0..150).map(|_| vec![DVec3::Y]).collect();
+        assert!(turns(&track(stands), 0, 1.0).is_none());
     }
 
     /// The mean lead of the flagged frames is short and points across the walk: forward is
