@@ -166,8 +166,7 @@ fn headings(
         let dir = body.transform_vector3(reference);
         let mut yaw = dir.x.atan2(dir.z);
         if let Some(&last) = raw.last() {
-            yaw = last + (yaw - last + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
-                - std::f64::consts::PI;
+            yaw = super::rig::unwrapped(last, yaw);
         }
         raw.push(yaw);
         let t = body.w_axis.truncate();

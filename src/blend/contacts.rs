@@ -10,7 +10,6 @@ use super::rig::flat;
 use super::track::Track;
 use glam::{DQuat, DVec3};
 use serde::Serialize;
-use std::f64::consts::{PI, TAU};
 
 /// Height above the foot's lowest point, as a fraction of the leg scale.
 pub const HEIGHT_TOLERANCE: f64 = 0.06;
@@ -190,7 +189,7 @@ fn drop_swings(track: &Track, leg: &Leg, scale: f64, f: &mut [bool]) {
     let turns = turns(track, hip, scale);
     let lead = |i: usize| {
         let v = track.velocity(i, e) - track.velocity(i, hip);
-        let v = DVec3::new(v.x, 0.0, v.z) / scale;
+        let v = flat(v) / scale;
         turns
             .as_ref()
             .map_or(v, |t| DQuat::from_rotation_y(-t[i]) * v)
@@ -260,7 +259,7 @@ fn turns(track: &Track, hip: usize, scale: f64) -> Option<Vec<f64>> {
         }
         let a = m.x.atan2(m.z) - base;
         let last = out.last().copied().unwrap_or(0.0);
-        out.push(last + (a - last + PI).rem_euclid(TAU) - PI);
+        out.push(super::rig::unwrapped(last, a));
     }
     Some(out)
 }

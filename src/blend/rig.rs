@@ -19,6 +19,13 @@ pub fn flat(v: DVec3) -> DVec3 {
     v - UP * v.dot(UP)
 }
 
+/// The angle `a` (radians) taken round by whole turns to within a half turn of `last`: a
+/// sequence of angles unwrapped.
+pub fn unwrapped(last: f64, a: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    last + (a - last + PI).rem_euclid(TAU) - PI
+}
+
 /// A local transform.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Trs {
