@@ -1659,6 +1659,34 @@ fn a_left_turn_and_a_right_turn_blend_into_a_walk_straight_ahead() {
         assert!(after <= 1e-3, "after clean-up {after}");
         assert!(before < naive, "before clean-up {before} >= naive {naive}");
     }
+    // Sides and cycles judged as each frame heads: along the left turn's mean way (its chord,
+    // 112 degrees off its first frame's heading) its left foot was on the right, and its
+    // strides along one forward gave cycles of 0.59 and 1.01 s (the walk's: 1.03, 0.98); a
+    // walk circling in 1.8 s (`circle`) had both feet in the middle and one cycle.
+    let circle = out("circle.bvh");
+    std::fs::write(&circle, bvh_bent(&walk, 200.0)).unwrap();
+    let circling = blend_bvh_report(&circle, &walk, "0.5", &out("circling.bvh"));
+    for r in [&turns[0], &circling] {
+        let sides: Vec<(&str, &str)> = (r["legs"].as_array().unwrap().iter())
+            .map(|l| (l["foot"].as_str().unwrap(), l["side"].as_str().unwrap()))
+            .collect();
+        assert_eq!(
+            sides,
+            [("LeftAnkle_end", "left"), ("RightAnkle_end", "right")]
+        );
+        for clip in r["clips"].as_array().unwrap() {
+            let periods: Vec<f64> = (clip["cycles"].as_array().unwrap().iter())
+                .map(|c| c["period"].as_f64().unwrap())
+                .collect();
+            eprintln!("{}: cycles {periods:?}", clip["name"]);
+            assert_eq!(periods.len(), 2, "{}", clip["name"]);
+            assert!(
+                periods.iter().all(|p| (0.8..=1.2).contains(p)),
+                "{}: {periods:?}",
+                clip["name"]
+            );
+        }
+    }
     let half = &turns.as_array().unwrap()[1];
     assert!(
         speed(half) >= 0.95 * speed(&straight),

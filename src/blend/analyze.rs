@@ -99,11 +99,17 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
             }
         })
         .collect();
-    let legs = legs::sided(legs, &tracks[0].pos[0], forwards[0], size);
+    // Each frame's way (a turning clip's turns), the sides judged at the first clip's first
+    // frame as it heads there: judged along a mean way, a walk turning 225 degrees had its left
+    // foot on the right.
+    let heads: Vec<Vec<DVec3>> = (tracks.iter().zip(&forwards))
+        .map(|(t, &f)| contacts::heads(t, rig.body, scale, f))
+        .collect();
+    let legs = legs::sided(legs, &tracks[0].pos[0], heads[0][0], size);
     let analyses = tracks
         .into_iter()
-        .zip(forwards.iter().zip(travels).zip(&flags))
-        .map(|(track, ((&forward, travel), flags))| {
+        .zip(forwards.iter().zip(travels).zip(flags.iter().zip(&heads)))
+        .map(|(track, ((&forward, travel), (flags, heads)))| {
             // The legs' flags in their sided order.
             let (touches, contacts) = legs
                 .iter()
@@ -120,16 +126,14 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
             let stride = legs
                 .iter()
                 .map(|l| {
-                    let along = track
-                        .pos
-                        .iter()
-                        .map(|p| (p[l.end()] - p[rig.body]).dot(forward) / scale);
+                    let along = (track.pos.iter().zip(heads))
+                        .map(|(p, h)| (p[l.end()] - p[rig.body]).dot(*h) / scale);
                     let (lo, hi) =
                         along.fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
                     (hi - lo).max(0.0)
                 })
                 .fold(0.0, f64::max);
-            let cycles = cycles::detect(method, &track, rig.body, &legs, forward, scale)
+            let cycles = cycles::detect(method, &track, rig.body, &legs, forward, heads, scale)
                 .filter(|_| stride >= cycles::MIN_STRIDE);
             Analysis {
                 track,

@@ -186,7 +186,7 @@ pub const TRAIL_AGREES: f64 = std::f64::consts::FRAC_1_SQRT_2;
 /// pass then pinned.
 fn drop_swings(track: &Track, leg: &Leg, scale: f64, f: &mut [bool]) {
     let (e, hip) = (leg.end(), leg.top());
-    let turns = turns(track, hip, scale);
+    let turns = turns(track, hip, scale, TURN_WINDOW);
     let lead = |i: usize| {
         let v = track.velocity(i, e) - track.velocity(i, hip);
         let v = flat(v) / scale;
@@ -226,19 +226,20 @@ pub const TURN_SPIKE: f64 = 3.0;
 /// by its heading frame by frame (a clip in place, or standing anywhere, heads one way).
 pub const TURN_SPEED: f64 = 0.3;
 
-/// How far (radians about +Y, unwrapped) the way `track` heads at each frame is turned from its
-/// mean way: the hip's horizontal velocity averaged over [`TURN_WINDOW`] either side. `None`
+/// The way `track` heads at each frame (radians about +Y from +Z, unwrapped): the hip's
+/// horizontal velocity averaged over `window` seconds either side ([`TURN_WINDOW`] for the swing
+/// test). `None`
 /// where any window's is slower than [`TURN_SPEED`]: the clip heads one way. A turning walk's
 /// swing heads sideways where it turns; judged along one forward it hardly led its hip and
 /// was kept planted (Bandai Namco's walk-turn-left_feminine: touches of 0.05-0.1 s inside its
 /// swings, pinned by the clean-up: blended with itself, jerk ratio 1.88; 1.11 judged turn by
 /// turn).
-fn turns(track: &Track, hip: usize, scale: f64) -> Option<Vec<f64>> {
+fn turns(track: &Track, hip: usize, scale: f64, window: f64) -> Option<Vec<f64>> {
     let n = track.len();
     if n == 0 {
         return None;
     }
-    let half = (TURN_WINDOW / track.dt).round() as usize;
+    let half = (window / track.dt).round() as usize;
     let v: Vec<DVec3> = (0..n)
         .map(|i| flat(track.velocity(i, hip)) / scale)
         .collect();
@@ -248,8 +249,6 @@ fn turns(track: &Track, hip: usize, scale: f64) -> Option<Vec<f64>> {
     for i in 0..n {
         sum[i + 1] = sum[i] + v[i].clamp_length_max(cap);
     }
-    let mean = sum[n] / n.max(1) as f64;
-    let base = mean.x.atan2(mean.z);
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
         let (lo, hi) = (i.saturating_sub(half), (i + half).min(n - 1));
@@ -257,11 +256,29 @@ fn turns(track: &Track, hip: usize, scale: f64) -> Option<Vec<f64>> {
         if m.length() <= TURN_SPEED {
             return None;
         }
-        let a = m.x.atan2(m.z) - base;
+        let a = m.x.atan2(m.z);
         let last = out.last().copied().unwrap_or(0.0);
         out.push(super::rig::unwrapped(last, a));
     }
     Some(out)
+}
+
+/// Seconds either side of a frame over which the hip's velocity gives the way a clip heads for
+/// its sides and strides (see [`heads`]): a walk's sway turns it by less than 10 degrees, and a
+/// walk circling in 2.5 s keeps 94% of its speed (over [`TURN_WINDOW`] it kept 10% and was
+/// judged along one way).
+pub const HEAD_WINDOW: f64 = 0.25;
+
+/// The way `track` heads at each frame ([`turns`] over [`HEAD_WINDOW`]), or `forward`
+/// throughout where it heads one way.
+pub fn heads(track: &Track, hip: usize, scale: f64, forward: DVec3) -> Vec<DVec3> {
+    match turns(track, hip, scale, HEAD_WINDOW) {
+        Some(t) => t
+            .iter()
+            .map(|&a| DVec3::new(a.sin(), 0.0, a.cos()))
+            .collect(),
+        None => vec![forward; track.len()],
+    }
 }
 
 /// The point of least summed distance to `points` (not empty; Weiszfeld's iteration from their
@@ -481,6 +498,37 @@ mod tests {
         }
     }
 
+    /// A hip circling once in 1.8 s at 1.5 leg/s, swaying 0.03 leg across its way once a
+    /// second (120 frames a second): the way it heads for its sides and strides ([`heads`])
+    /// stays within 10 degrees of the circle's tangent where its window fits in the clip, and
+    /// within 30 at the ends (a window cut short there heads along its chord, turned by half its
+    /// turn); over the swing test's window ([`TURN_WINDOW`]) it keeps too little of its speed
+    /// and heads one way.
+    #[test]
+    fn a_walk_circling_heads_round_its_circle() {
+        let dt = 1.0 / 120.0;
+        let (rate, speed) = (std::f64::consts::TAU / 1.8, 1.5);
+        let radius = speed / rate;
+        let at = |i: usize| {
+            let (t, a) = (i as f64 * dt, rate * i as f64 * dt);
+            let sway = 0.03 * (std::f64::consts::TAU * t).sin();
+            DVec3::new(-a.cos(), 0.0, a.sin()) * (radius + sway) + DVec3::Y
+        };
+        let track = open_track(dt, (0..360).map(|i| vec![at(i)]).collect());
+        assert!(turns(&track, 0, 1.0, TURN_WINDOW).is_none());
+        let heads = heads(&track, 0, 1.0, DVec3::Z);
+        for (i, h) in heads.iter().enumerate() {
+            let a = rate * i as f64 * dt;
+            let tangent = DVec3::new(a.sin(), 0.0, a.cos());
+            let off = h.angle_between(tangent).to_degrees();
+            let inside = (30..330).contains(&i);
+            assert!(
+                off < if inside { 10.0 } else { 30.0 },
+                "frame {i}: {off} degrees"
+            );
+        }
+    }
+
     /// A hip walking 1 leg/s round a circle (a quarter turn a second, 30 frames a second), one
     /// walking straight that jumps back half way (takes joined end to end), and one standing:
     /// the way the first heads turns by a quarter turn a second, the second's does not turn
@@ -495,7 +543,7 @@ mod tests {
         };
         let track = |pos: Vec<Vec<DVec3>>| open_track(dt, pos);
         let walk: Vec<Vec<DVec3>> = (0..150).map(|i| vec![at(i)]).collect();
-        let t = turns(&track(walk), 0, 1.0).expect("it walks");
+        let t = turns(&track(walk), 0, 1.0, TURN_WINDOW).expect("it walks");
         for i in [40, 75, 110] {
             let slope = (t[i + 1] - t[i - 1]) / (2.0 * dt);
             assert!((slope - rate).abs() < 0.02 * rate, "frame {i}: {slope}");
@@ -504,11 +552,11 @@ mod tests {
         let jumped: Vec<Vec<DVec3>> = (0..150)
             .map(|i| vec![DVec3::new(0.0, 1.0, (i % 75) as f64 * dt)])
             .collect();
-        let t = turns(&track(jumped), 0, 1.0).expect("it walks");
+        let t = turns(&track(jumped), 0, 1.0, TURN_WINDOW).expect("it walks");
         let most = t.iter().fold(0.0f64, |m, a| m.max(a.abs()));
         assert!(most < 1e-9, "{most}");
         let stands: Vec<Vec<DVec3>> = (0..150).map(|_| vec![DVec3::Y]).collect();
-        assert!(turns(&track(stands), 0, 1.0).is_none());
+        assert!(turns(&track(stands), 0, 1.0, TURN_WINDOW).is_none());
     }
 
     /// The mean lead of the flagged frames is short and points across the walk: forward is

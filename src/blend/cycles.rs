@@ -62,12 +62,16 @@ pub struct Cycles {
 }
 
 /// Find the cycles of `track` by `method`; `None` when no periodic leg motion is found.
+/// `forward` is the clip's forward direction, `heads` the way it heads at each frame (a turning
+/// clip's legs are judged along it: along one forward a quarter turn's strides fade into
+/// sideways steps).
 pub fn detect(
     method: CycleMethod,
     track: &Track,
     root: usize,
     legs: &[Leg],
     forward: DVec3,
+    heads: &[DVec3],
     scale: f64,
 ) -> Option<Cycles> {
     let signals: Vec<Vec<f64>> = match method {
@@ -75,10 +79,8 @@ pub fn detect(
         CycleMethod::Legs => legs
             .iter()
             .map(|l| {
-                track
-                    .pos
-                    .iter()
-                    .map(|p| (p[l.end()] - p[root]).dot(forward) / scale)
+                (track.pos.iter().zip(heads))
+                    .map(|(p, h)| (p[l.end()] - p[root]).dot(*h) / scale)
                     .collect()
             })
             .collect(),
@@ -90,12 +92,10 @@ pub fn detect(
                     .map_or([leg.chain[0], leg.chain[1]], |k| [k[0], k[1]])
             };
             let ([lh, lk], [rh, rk]) = (hk(l), hk(r));
-            vec![track
-                .pos
-                .iter()
-                .map(|p| {
+            vec![(track.pos.iter().zip(heads))
+                .map(|(p, h)| {
                     let angle = (p[lk] - p[lh]).angle_between(p[rk] - p[rh]);
-                    if (p[lk] - p[rk]).dot(forward) >= 0.0 {
+                    if (p[lk] - p[rk]).dot(*h) >= 0.0 {
                         angle
                     } else {
                         -angle
