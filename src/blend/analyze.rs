@@ -45,6 +45,9 @@ pub struct Analysis {
     /// How the clip travels (its heading, [`HEADS`], and how the blend matches the clips'
     /// travel come from it).
     pub travel: Travel,
+    /// Judged a loop, the clip is a capture whose ends meet by chance
+    /// ([`cycles::meet_by_chance`]): to be analysed again as it is, not looping.
+    pub meets_by_chance: bool,
 }
 
 impl Analysis {
@@ -63,10 +66,20 @@ impl Analysis {
 }
 
 pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, Vec<Analysis>) {
+    analyze_as(rig, clips, method, &vec![false; clips.len()])
+}
+
+/// [`analyze`], the clips marked in `open` taken as they are, not looping, whether or not their
+/// ends meet.
+pub fn analyze_as(
+    rig: &Rig,
+    clips: &[&Clip],
+    method: CycleMethod,
+    open: &[bool],
+) -> (Character, Vec<Analysis>) {
     let size = track::character_size(rig, clips);
-    let tracks: Vec<Track> = clips
-        .iter()
-        .map(|c| Track::new(rig, c, track::loops(rig, c, size)))
+    let tracks: Vec<Track> = (clips.iter().zip(open))
+        .map(|(c, &open)| Track::new(rig, c, !open && track::loops(rig, c, size)))
         .collect();
     let refs: Vec<&Track> = tracks.iter().collect();
     let legs = legs::find(rig, &refs, size);
@@ -135,6 +148,10 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
                 .fold(0.0, f64::max);
             let cycles = cycles::detect(method, &track, rig.body, &legs, forward, heads, scale)
                 .filter(|_| stride >= cycles::MIN_STRIDE);
+            let tolerance = track::LOOP_TOLERANCE * size;
+            let meets_by_chance = cycles.as_ref().is_some_and(|c| {
+                cycles::meet_by_chance(&track, c, rig.body, &legs, forward, scale, tolerance)
+            });
             Analysis {
                 track,
                 touches,
@@ -142,6 +159,7 @@ pub fn analyze(rig: &Rig, clips: &[&Clip], method: CycleMethod) -> (Character, V
                 cycles,
                 stride,
                 travel,
+                meets_by_chance,
             }
         })
         .collect();

@@ -43,6 +43,10 @@ pub const START_WINDOW: f64 = 0.25;
 /// (leg scales for `legs`, radians for `thigh`).
 pub const MIN_SWING: f64 = 0.15;
 
+/// Fewest strides a loop holds for [`meet_by_chance`] to ask that they repeat: a loop of two
+/// strides cut from a capture by hand (a pose and the same pose two strides on) stays a loop.
+pub const CHANCE_STRIDES: usize = 3;
+
 /// A foot is in stance while its horizontal speed over the ground is below this fraction of
 /// its fast swing speed (98th percentile) ...
 pub const STANCE_SPEED: f64 = 0.1;
@@ -134,21 +138,7 @@ pub fn detect(
         });
     }
     if method == CycleMethod::Legs {
-        let ground = ground_velocity(track, legs, forward);
-        let downs: Vec<Vec<f64>> = legs
-            .iter()
-            .map(|l| touchdowns(track, l.end(), ground, forward, scale))
-            .collect();
-        let spans: Vec<(f64, f64)> = downs[0]
-            .windows(2)
-            .map(|w| (w[0], w[1] - w[0]))
-            .filter(|&(s, p)| {
-                (MIN_PERIOD..=MAX_PERIOD).contains(&p)
-                    && downs[1..]
-                        .iter()
-                        .all(|d| d.iter().filter(|&&t| t > s && t < s + p).count() == 1)
-            })
-            .collect();
+        let spans = stepped(track, legs, forward, scale);
         if !spans.is_empty() {
             return Some(Cycles { spans });
         }
@@ -175,6 +165,73 @@ pub fn detect(
         .filter(|&(_, p)| (MIN_PERIOD..=MAX_PERIOD).contains(&p))
         .collect();
     (!spans.is_empty()).then_some(Cycles { spans })
+}
+
+/// Strides of a capture (start, period; seconds) from the first leg's touchdowns
+/// ([`touchdowns`]), each one where every other leg touches down once.
+fn stepped(track: &Track, legs: &[Leg], forward: DVec3, scale: f64) -> Vec<(f64, f64)> {
+    let ground = ground_velocity(track, legs, forward);
+    let downs: Vec<Vec<f64>> = legs
+        .iter()
+        .map(|l| touchdowns(track, l.end(), ground, forward, scale))
+        .collect();
+    downs[0]
+        .windows(2)
+        .map(|w| (w[0], w[1] - w[0]))
+        .filter(|&(s, p)| {
+            (MIN_PERIOD..=MAX_PERIOD).contains(&p)
+                && downs[1..]
+                    .iter()
+                    .all(|d| d.iter().filter(|&&t| t > s && t < s + p).count() == 1)
+        })
+        .collect()
+}
+
+/// Whether looping `track`, found to hold `cycles`, is a capture whose ends meet by chance
+/// rather than a loop: stepped as a capture ([`stepped`]) it shows as many strides from
+/// touchdown to touchdown as the loop holds or more (a loop of one stride shows none, one of
+/// `k` equal strides `k - 1`), or, holding [`CHANCE_STRIDES`] or more, a stride's legs (their
+/// joints relative to
+/// `root`) are more than `tolerance` (scene units) from the next stride's at the same phase
+/// somewhere. Bandai Namco's walks of 7-16 s whose last pose comes within a frame or two of
+/// their first were blended as loops of one stride cut from them, the seam a jump: the takes
+/// with each other at jerk ratios of 1.33-1.66 (0.91-0.94 as the captures they are); their
+/// strides part by 0.17-0.38 leg at the same phase, a loop's copies by nothing.
+pub fn meet_by_chance(
+    track: &Track,
+    cycles: &Cycles,
+    root: usize,
+    legs: &[Leg],
+    forward: DVec3,
+    scale: f64,
+    tolerance: f64,
+) -> bool {
+    let (n, k) = (track.len(), cycles.spans.len());
+    if !track.looping || n < 2 || legs.is_empty() {
+        return false;
+    }
+    if stepped(track, legs, forward, scale).len() >= k {
+        return true;
+    }
+    if k < CHANCE_STRIDES {
+        return false;
+    }
+    // A stride is `per` of the loop's `n` frames.
+    let per = n as f64 / k as f64;
+    let joints: Vec<usize> = legs.iter().flat_map(|l| l.chain.iter().copied()).collect();
+    let rel = |i: usize, j: usize| {
+        let p = &track.pos[i % n];
+        p[j] - p[root]
+    };
+    (0..n).any(|i| {
+        let x = i as f64 + per;
+        let lo = x.floor() as usize;
+        let f = x - lo as f64;
+        joints.iter().any(|&j| {
+            let next = rel(lo, j) * (1.0 - f) + rel(lo + 1, j) * f;
+            (rel(i, j) - next).length() > tolerance
+        })
+    })
 }
 
 /// Horizontal median of `points` (not empty), per axis of the clip's own frame (`forward` and
@@ -301,4 +358,74 @@ fn refine(s: &[f64], i: usize, track: &Track) -> f64 {
         return i as f64;
     }
     i as f64 + parabola(s[a], s[i], s[c])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An in-place loop of `strides.len()` strides at 120 frames a second, each stride 1 s and
+    /// its feet (joints 1 and 2, half a stride apart) reaching `strides[j]` legs ahead of the
+    /// hip (joint 0): back along the treadmill on the floor for 0.6 s, forward through the air
+    /// for 0.4 s.
+    fn treadmill_loop(strides: &[f64]) -> (Track, Vec<Leg>, Cycles) {
+        let per = 120;
+        let n = per * strides.len();
+        let foot = |i: usize, reach: f64| {
+            let u = (i % per) as f64 / per as f64;
+            if u < 0.6 {
+                DVec3::new(0.0, 0.0, reach * (1.0 - 2.0 * u / 0.6))
+            } else {
+                let v = (u - 0.6) / 0.4;
+                let lift = 0.2 * (std::f64::consts::PI * v).sin();
+                DVec3::new(0.0, lift, reach * (2.0 * v - 1.0))
+            }
+        };
+        let pos = (0..n)
+            .map(|i| {
+                let hip = DVec3::new(0.0, 1.0, 0.0);
+                let j = i / per;
+                let other = (i + n - per / 2) % n;
+                vec![
+                    hip,
+                    foot(i, strides[j]) + DVec3::X * 0.1,
+                    foot(other, strides[other / per]) - DVec3::X * 0.1,
+                ]
+            })
+            .collect();
+        let track = Track {
+            start: 0.0,
+            dt: 1.0 / per as f64,
+            looping: true,
+            pos,
+            travel: DVec3::ZERO,
+        };
+        let leg = |j: usize, side: Side| Leg {
+            chain: vec![j],
+            ik: None,
+            side,
+            length: 1.0,
+            name: format!("foot{j}"),
+        };
+        let legs = vec![leg(1, Side::Left), leg(2, Side::Right)];
+        let cycles = Cycles {
+            spans: (0..strides.len()).map(|j| (j as f64, 1.0)).collect(),
+        };
+        (track, legs, cycles)
+    }
+
+    /// A loop of four strides that repeat is a loop; four that part by 0.1 leg at the same
+    /// phase (a capture whose ends meet by chance) is not; two strides that part so (a loop
+    /// cut from a capture by hand) are still a loop.
+    #[test]
+    fn a_loop_of_strides_that_do_not_repeat_is_a_capture() {
+        let judge = |strides: &[f64]| {
+            let (track, legs, cycles) = treadmill_loop(strides);
+            meet_by_chance(&track, &cycles, 0, &legs, DVec3::Z, 1.0, 0.05)
+        };
+        assert!(!judge(&[0.5, 0.5, 0.5, 0.5]));
+        assert!(judge(&[0.5, 0.55, 0.5, 0.45]));
+        assert!(!judge(&[0.5, 0.55]));
+        assert!(!judge(&[0.5]));
+    }
 }

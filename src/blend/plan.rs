@@ -3,7 +3,7 @@
 //! and the figures of the report measured on the sources, a naive blend and the result.
 
 use super::align::{self, FloorTransform, MatchedTravel};
-use super::analyze::{analyze, Analysis, Character};
+use super::analyze::{analyze_as, Analysis, Character};
 use super::cleanup::{self, LegGoal};
 use super::contacts::Contact;
 use super::cycles::CycleMethod;
@@ -699,6 +699,38 @@ fn walks(clip: &Clip, an: &Analysis, ch: &Character) -> anyhow::Result<()> {
     )
 }
 
+/// `clips` analysed together, each closed into a loop where it stops short of one
+/// ([`track::close_open_loop`](super::track::close_open_loop)), and taken as it is, not
+/// looping, where its analysis finds a capture whose ends meet by chance
+/// ([`Analysis::meets_by_chance`]); the clips as analysed are returned with it.
+fn analysed(
+    rig: &Rig,
+    clips: &[&Clip],
+    size: f64,
+    method: CycleMethod,
+) -> (Vec<Clip>, Character, Vec<Analysis>) {
+    let mut open = vec![false; clips.len()];
+    loop {
+        let taken: Vec<Clip> = (clips.iter().zip(&open))
+            .map(|(&c, &open)| {
+                (!open)
+                    .then(|| super::track::close_open_loop(rig, c, size))
+                    .flatten()
+                    .unwrap_or_else(|| c.clone())
+            })
+            .collect();
+        let refs: Vec<&Clip> = taken.iter().collect();
+        let (ch, an) = analyze_as(rig, &refs, method, &open);
+        let chance: Vec<usize> = (0..an.len()).filter(|&i| an[i].meets_by_chance).collect();
+        if chance.is_empty() {
+            return (taken, ch, an);
+        }
+        for i in chance {
+            open[i] = true;
+        }
+    }
+}
+
 /// What `blend` finds in one clip alone (for `inspect`): the feet (their chains' end joints),
 /// how far they stride (leg lengths), and its stride cycles (start and period, seconds), or
 /// why blend refuses the clip.
@@ -713,10 +745,8 @@ pub struct Gait {
 pub fn gait(rig: &Rig, clip: &Clip) -> Gait {
     let size = super::track::character_size(rig, &[clip]);
     let rig = &rig.carried_by(&[clip], size);
-    let closed = super::track::close_open_loop(rig, clip, size);
-    let clip = closed.as_ref().unwrap_or(clip);
-    let (ch, an) = analyze(rig, &[clip], CycleMethod::Legs);
-    let an = &an[0];
+    let (clips, ch, an) = analysed(rig, &[clip], size, CycleMethod::Legs);
+    let (clip, an) = (&clips[0], &an[0]);
     Gait {
         feet: ch.legs.iter().map(|l| rig.names[l.end()].clone()).collect(),
         stride: an.stride,
@@ -731,12 +761,8 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     let w = opts.weight;
     let size = super::track::character_size(rig, &[a, b]);
     let rig = &rig.carried_by(&[a, b], size);
-    let closed = [a, b].map(|c| super::track::close_open_loop(rig, c, size));
-    let (a, b) = (
-        closed[0].as_ref().unwrap_or(a),
-        closed[1].as_ref().unwrap_or(b),
-    );
-    let (ch, an) = analyze(rig, &[a, b], opts.cycles);
+    let (clips, ch, an) = analysed(rig, &[a, b], size, opts.cycles);
+    let (a, b) = (&clips[0], &clips[1]);
     let (an_a, an_b) = (&an[0], &an[1]);
     if opts.cycles != CycleMethod::None {
         for (clip, an) in [(a, an_a), (b, an_b)] {
