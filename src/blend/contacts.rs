@@ -265,8 +265,8 @@ fn turns(track: &Track, hip: usize, scale: f64, window: f64) -> Option<Vec<f64>>
 
 /// Seconds either side of a frame over which the hip's velocity gives the way a clip heads for
 /// its sides and strides (see [`heads`]): a walk's sway turns it by less than 10 degrees, and a
-/// walk circling in 2.5 s keeps 94% of its speed (over [`TURN_WINDOW`] it kept 10% and was
-/// judged along one way).
+/// walk circling in 1.8 s keeps 88% of its speed over it (over [`TURN_WINDOW`] a tenth, pointing
+/// back).
 pub const HEAD_WINDOW: f64 = 0.25;
 
 /// The way `track` heads at each frame ([`turns`] over [`HEAD_WINDOW`]), or `forward`
