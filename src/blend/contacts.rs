@@ -62,7 +62,8 @@ pub fn planted_flags(track: &Track, leg: &Leg, scale: f64) -> Vec<bool> {
 /// 1.15 went from 28 to 2.
 ///
 /// A contact too short to settle (at most [`MIN_CONTACT`] and a sample) is dropped where its
-/// median velocity is off the ground under the foot's contacts together by as much: a toe
+/// median velocity is off the ground under the foot's contacts together (their geometric
+/// median) by more than that limit, their spread standing for its own: a toe
 /// skimming the floor as the heel lands, still moving 1 leg/s (Bandai Namco's walk_sad, a touch
 /// of 0.02 s 0.08 s before its stance, pinned by the clean-up for a frame: the walk's two takes
 /// blended at jerk ratios of 1.36 / 1.21 at 0.25 / 0.5).
