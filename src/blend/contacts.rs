@@ -254,12 +254,11 @@ pub const TURN_SPEED: f64 = 0.3;
 
 /// The way `track` heads at each frame (radians about +Y from +Z, unwrapped): the hip's
 /// horizontal velocity averaged over `window` seconds either side ([`TURN_WINDOW`] for the swing
-/// test). `None`
-/// where any window's is slower than [`TURN_SPEED`]: the clip heads one way. A turning walk's
-/// swing heads sideways where it turns; judged along one forward it hardly led its hip and
-/// was kept planted (Bandai Namco's walk-turn-left_feminine: touches of 0.05-0.1 s inside its
-/// swings, pinned by the clean-up: blended with itself, jerk ratio 1.88; 1.11 judged turn by
-/// turn).
+/// test). `None` where any window's is slower than [`TURN_SPEED`]: the clip heads one way. A
+/// turning walk's swing heads sideways where it turns; judged along one forward it hardly led
+/// its hip and was kept planted (Bandai Namco's walk-turn-left_feminine: touches of 0.05-0.1 s
+/// inside its swings, pinned by the clean-up: blended with itself, jerk ratio 1.88; 1.11 judged
+/// turn by turn).
 fn turns(track: &Track, hip: usize, scale: f64, window: f64) -> Option<Vec<f64>> {
     let n = track.len();
     if n == 0 {

@@ -699,28 +699,25 @@ fn walks(clip: &Clip, an: &Analysis, ch: &Character) -> anyhow::Result<()> {
     )
 }
 
-/// `clips` analysed together, each closed into a loop where it stops short of one
-/// ([`track::close_open_loop`](super::track::close_open_loop)), and taken as it is, not
-/// looping, where its analysis finds a capture whose ends meet by chance
+/// `clips` analysed together, each as `closed` closes it into a loop where it stops short of one
+/// ([`track::close_open_loop`](super::track::close_open_loop), once per clip), and as it is,
+/// not looping, where its analysis finds a capture whose ends meet by chance
 /// ([`Analysis::meets_by_chance`]); the clips as analysed are returned with it.
-fn analysed(
+fn analysed<'c>(
     rig: &Rig,
-    clips: &[&Clip],
-    size: f64,
+    clips: &[&'c Clip],
+    closed: &'c [Option<Clip>],
     method: CycleMethod,
-) -> (Vec<Clip>, Character, Vec<Analysis>) {
+) -> (Vec<&'c Clip>, Character, Vec<Analysis>) {
     let mut open = vec![false; clips.len()];
     loop {
-        let taken: Vec<Clip> = (clips.iter().zip(&open))
-            .map(|(&c, &open)| {
-                (!open)
-                    .then(|| super::track::close_open_loop(rig, c, size))
-                    .flatten()
-                    .unwrap_or_else(|| c.clone())
+        let taken: Vec<&Clip> = (clips.iter().zip(closed).zip(&open))
+            .map(|((&clip, closed), &open)| match closed {
+                Some(loop_) if !open => loop_,
+                _ => clip,
             })
             .collect();
-        let refs: Vec<&Clip> = taken.iter().collect();
-        let (ch, an) = analyze_as(rig, &refs, method, &open);
+        let (ch, an) = analyze_as(rig, &taken, method, &open);
         let chance: Vec<usize> = (0..an.len()).filter(|&i| an[i].meets_by_chance).collect();
         if chance.is_empty() {
             return (taken, ch, an);
@@ -745,8 +742,9 @@ pub struct Gait {
 pub fn gait(rig: &Rig, clip: &Clip) -> Gait {
     let size = super::track::character_size(rig, &[clip]);
     let rig = &rig.carried_by(&[clip], size);
-    let (clips, ch, an) = analysed(rig, &[clip], size, CycleMethod::Legs);
-    let (clip, an) = (&clips[0], &an[0]);
+    let closed = [super::track::close_open_loop(rig, clip, size)];
+    let (clips, ch, an) = analysed(rig, &[clip], &closed, CycleMethod::Legs);
+    let (clip, an) = (clips[0], &an[0]);
     Gait {
         feet: ch.legs.iter().map(|l| rig.names[l.end()].clone()).collect(),
         stride: an.stride,
@@ -761,8 +759,9 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     let w = opts.weight;
     let size = super::track::character_size(rig, &[a, b]);
     let rig = &rig.carried_by(&[a, b], size);
-    let (clips, ch, an) = analysed(rig, &[a, b], size, opts.cycles);
-    let (a, b) = (&clips[0], &clips[1]);
+    let closed = [a, b].map(|c| super::track::close_open_loop(rig, c, size));
+    let (clips, ch, an) = analysed(rig, &[a, b], &closed, opts.cycles);
+    let (a, b) = (clips[0], clips[1]);
     let (an_a, an_b) = (&an[0], &an[1]);
     if opts.cycles != CycleMethod::None {
         for (clip, an) in [(a, an_a), (b, an_b)] {
