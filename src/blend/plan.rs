@@ -769,6 +769,8 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
         }
     }
     let spans = [cycles_used(a, an_a), cycles_used(b, an_b)];
+    // Each clip as the blend plays it alone (at weight 0 for A, 1 for B): its figures.
+    let alone = [0.0, 1.0].map(|w| phase(a, b, [an_a, an_b], [&spans[0], &spans[1]], w));
     let phase = phase(a, b, [an_a, an_b], [&spans[0], &spans[1]], w);
     let mut src = sources(rig, &ch, [a, b], [an_a, an_b], &phase, w);
     // The sources' poses are mixed, then let go (the clean-up and the figures read their
@@ -827,10 +829,12 @@ pub fn blend(rig: &Rig, a: &Clip, b: &Clip, opts: &BlendOptions) -> anyhow::Resu
     let taken = [Taken::of(a, an_a, &spans[0]), Taken::of(b, an_b, &spans[1])];
     let naive = figures.naive(&taken, phase.looping, &vote);
     let after = figures.of(&positions_track(rig, &frames, dt, phase.looping), &voted);
-    let fig = [
-        figures.of(&figures.source(&taken[0]), &[]),
-        figures.of(&figures.source(&taken[1]), &[]),
-    ];
+    let fig = [0, 1].map(|k| {
+        figures.of(
+            &figures.source([a, b][k], an[k].looping(), &alone[k], k),
+            &[],
+        )
+    });
     let source_jerk = (1.0 - w) * fig[0].jerk + w * fig[1].jerk;
     let result = ResultReport {
         duration: phase.duration,
@@ -904,23 +908,20 @@ impl Measured<'_> {
         )
     }
 
-    /// A source clip resampled at the output rate over the part the blend takes, a looping
-    /// clip from where the blend's cycle starts on it ([`Taken::synced`]).
-    fn source(&self, t: &Taken) -> Track {
-        let length = t.length();
-        let n = ((length * self.fps).round() as usize).max(1);
-        let poses: Vec<Pose> = (0..=n)
-            .map(|i| {
-                let at = t.synced + i as f64 * length / n as f64;
-                pose_unwrapped(self.rig, t.clip, t.looping, at)
-            })
+    /// Source `k` (0: A, 1: B) of the blend as the blend plays it at weight `k` (`alone`, its
+    /// phase plan there: the clip on its own cycles, each resampled to a whole number of
+    /// output frames), so that the blend at weight 0 or 1 measures as its source. Sampled
+    /// uniformly over the part the blend takes, a capture of several cycles at 30 samples a
+    /// second measured 0.94-1.20 times its own jerk in its blend with itself at weight 0 (the
+    /// samples fall at another fraction of a key there, and resampling smooths a capture's
+    /// jitter by as much as a fifth: Bandai Namco's walk_sad 1.20); sampled from the clip's
+    /// start, RobotExpressive's blend at weight 0 had a jerk ratio of 0.71, Fox's run with
+    /// itself measured 1.11 where it is 1.20.
+    fn source(&self, clip: &Clip, looping: bool, alone: &Phase, k: usize) -> Track {
+        let poses: Vec<Pose> = (alone.frames.iter())
+            .map(|f| pose_unwrapped(self.rig, clip, looping, [f.1, f.2][k]))
             .collect();
-        positions_track(
-            self.rig,
-            &poses,
-            length.max(MIN_DURATION) / n as f64,
-            t.looping,
-        )
+        positions_track(self.rig, &poses, 1.0 / alone.fps, alone.looping)
     }
 
     /// The two clips blended at normalised time: no sync, no alignment, no clean-up; its
@@ -959,26 +960,16 @@ impl Measured<'_> {
     }
 }
 
-/// The part of a source clip the blend takes, which the figures it is compared with (the
-/// source's own, the naive blend's) are measured on: a looping clip whole, another (a capture)
-/// over the cycles the blend uses, so that its standing start and stop do not count (CMU's
-/// start-walk-stop blended with itself measured a jerk ratio of 0.80 at weight 0, where the
-/// blend is its cycle unchanged, and its naive blend there, the same cycle too, 0.0029 leg a
-/// frame of sliding against the blend's 0.0052).
+/// The part of a source clip the blend takes, which the naive blend it is compared with is
+/// made of: a looping clip whole, another (a capture) over its cycles, so that its standing
+/// start and stop do not count (CMU's start-walk-stop blended with itself measured a naive
+/// blend of 0.0029 leg a frame of sliding against the blend's 0.0052 over the whole capture,
+/// where both are the same cycle).
 struct Taken<'c> {
     clip: &'c Clip,
     /// Start and end on the clip's timeline (seconds).
     start: f64,
     end: f64,
-    looping: bool,
-    /// Where the blend's first cycle starts on the clip's timeline (a touchdown), from which
-    /// a looping clip's own figures are measured: sampled where the blend samples it, so that
-    /// the blend at weight 0 or 1 measures as its source. Sampled from the clip's start
-    /// instead (on its keys, where the blend falls between them and resampling smooths it),
-    /// the sources' jerk was up to a fifth higher than the same motion's in the blend:
-    /// RobotExpressive's blend at weight 0 had a jerk ratio of 0.71, Fox's run with itself
-    /// measured 1.11 where it is 1.20.
-    synced: f64,
 }
 
 impl<'c> Taken<'c> {
@@ -991,17 +982,7 @@ impl<'c> Taken<'c> {
             }
             _ => (clip.start, end),
         };
-        let synced = match (looping, spans.first()) {
-            (true, Some(&(first, _))) => first,
-            _ => start,
-        };
-        Taken {
-            clip,
-            start,
-            end,
-            looping,
-            synced,
-        }
+        Taken { clip, start, end }
     }
 
     fn length(&self) -> f64 {
