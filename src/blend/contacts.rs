@@ -193,11 +193,21 @@ pub const SWING_LEAD_MIN: f64 = 1.0;
 /// then at most that far off, and a swing's lead along it at least 0.71 of its length.
 pub const TRAIL_AGREES: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
+/// ... and where it is at least this long against their median lead: shorter, swings flagged
+/// for much of their length cancel it, and its direction is noise. Bandai Namco's
+/// walk-turn-left_elderly shuffles, its toe lifted under 1 cm through a swing: on its blend
+/// with itself at the output's 30 samples a second (the analysis' 120 smooth it less) the mean
+/// was 0.05 of the median's length at 40 degrees from it, the swing led its hip along it by
+/// 0.92 leg/s, under [`SWING_LEAD_MIN`], and the clean-up pinned the foot through two stances
+/// and the swing between them (a step erased, jerk ratio 1.33; 1.02 on the median).
+pub const TRAIL_LONG: f64 = 0.5;
+
 /// Unflag frames where the foot, low and level enough for the test above, swings: it moves forward
 /// of its hip faster than [`SWING_LEAD`] times the speed at which the leg's flagged frames trail it
 /// on average (the body's speed over the ground), and than [`SWING_LEAD_MIN`]; forward is the
 /// opposite of that mean trail, unless it points farther from the way most flagged frames trail
-/// (their leads' [`geometric_median`]) than [`TRAIL_AGREES`] allows: where a swing is low enough to
+/// (their leads' [`geometric_median`]) than [`TRAIL_AGREES`] allows or is shorter than
+/// [`TRAIL_LONG`] of it: where a swing is low enough to
 /// be flagged nearly throughout, the mean nears zero (a foot comes back to its hip once a cycle)
 /// and points anywhere. Bandai Namco's walk_not-confident blended with its run at 0.25 on a stride
 /// of its walk where 35 of 36 frames were flagged had the mean pointing backwards, and a swing
@@ -231,7 +241,9 @@ fn drop_swings(track: &Track, leg: &Leg, scale: f64, f: &mut [bool]) {
     let leads: Vec<DVec3> = flagged.iter().map(|&i| lead(i)).collect();
     let trail = leads.iter().sum::<DVec3>() / leads.len() as f64;
     let most = geometric_median(&leads);
-    let toward = if trail.dot(most) >= TRAIL_AGREES * trail.length() * most.length() {
+    let toward = if trail.dot(most) >= TRAIL_AGREES * trail.length() * most.length()
+        && trail.length() >= TRAIL_LONG * most.length()
+    {
         trail
     } else {
         most
@@ -594,6 +606,34 @@ mod tests {
     #[test]
     fn a_low_swing_whose_mean_lead_points_across_is_swinging() {
         let f = flags(&low_swings_drifting(), &one_leg(), 1.0);
+        for c in 0..4 {
+            let at = |k: usize| f[30 * c + k];
+            assert!((2..=16).all(at), "stride {c}: {f:?}");
+            assert!((20..=27).all(|k| !at(k)), "stride {c}: {f:?}");
+        }
+    }
+
+    /// Leg length 1, 30 frames a second, four strides of a second: the hip walks 1 leg/s along
+    /// Z; the foot stands 18 frames and swings 12 leading its hip by 1.2 leg/s only 0.02 above
+    /// the floor, sliding across the walk at 0.1 leg/s throughout. The flagged frames' mean
+    /// lead, (0.1, -0.12), is 0.16 of their median's length at 34 degrees from it: along it the
+    /// swings lead by 0.86 leg/s, under [`SWING_LEAD_MIN`], and were kept planted; along the
+    /// median by 1.18.
+    #[test]
+    fn a_low_swing_whose_mean_lead_is_short_is_swinging() {
+        let dt = 1.0 / 30.0;
+        let mut z = 0.0;
+        let pos = (0..120)
+            .map(|i| {
+                if i > 0 && (i - 1) % 30 >= 18 {
+                    z += 2.2 * dt;
+                }
+                let t = i as f64 * dt;
+                let y = if i % 30 >= 18 { 0.02 } else { 0.0 };
+                vec![DVec3::new(0.0, 1.0, t), DVec3::new(0.1 * t, y, z)]
+            })
+            .collect();
+        let f = flags(&open_track(dt, pos), &one_leg(), 1.0);
         for c in 0..4 {
             let at = |k: usize| f[30 * c + k];
             assert!((2..=16).all(at), "stride {c}: {f:?}");
