@@ -245,7 +245,7 @@ fn robot_packed_by_gltfpack_keeps_its_legs() {
 /// naive 0.0025 at 0.5, on fingers). Those nodes now mark no end, so the rigid shins get theirs
 /// where their meshes end, as when the nodes are dropped, and the walk and run blend on the
 /// shins, both clips planting both feet, sliding less than the naive blend before clean-up at
-/// 0.5 (at 0.25 and 0.75 not: issue 17's misses) and not at all after it.
+/// 0.25 and 0.5 (at 0.75 not: issue 17's miss) and not at all after it.
 #[test]
 fn end_nodes_written_on_their_joints_mark_no_end() {
     let Some((dir, _, mut json, bin)) = editable("RobotExpressive") else {
@@ -319,12 +319,13 @@ fn end_nodes_written_on_their_joints_mark_no_end() {
             let after = sliding(&r["result"]["after_cleanup"]);
             let jerk = r["result"]["jerk_ratio"].as_f64().unwrap();
             eprintln!("Robot, {case}: {before:.4} / naive {naive:.4} / after {after:.1e}, jerk ratio {jerk:.2}");
-            // Before clean-up below the naive blend at 0.5; not asserted where the run leads
-            // (0.75: its contacts rest on two or three frame steps, a miss as on the original
-            // rig, above) nor at 0.25, where these shins' ends slide 0.0452 against the naive
-            // 0.0451 (issue 17's misses, in README's "Packed characters"; with the run's right
-            // foot unplanted they measured 0.0428 and, at 0.75, 0 on one step).
-            if w == 0.5 {
+            // Before clean-up below the naive blend at 0.25 and 0.5 (at 0.25 0.0444 against
+            // 0.0451 since the time warp is a monotone cubic; 0.0452 while it was piecewise
+            // linear); not asserted where the run leads (0.75: its contacts rest on two or
+            // three frame steps, a miss as on the original rig, above; issue 17's miss, in
+            // README's "Packed characters"; with the run's right foot unplanted they measured
+            // 0.0428 at 0.25 and, at 0.75, 0 on one step).
+            if w < 0.75 {
                 assert!(before < naive, "{case}: {before} against naive {naive}");
             } else {
                 eprintln!("  not asserted: before clean-up {before:.5} vs naive {naive:.5}");
