@@ -62,6 +62,9 @@ pub fn events(contacts: &[Vec<Contact>], start: f64, period: f64, looping: bool)
 #[derive(Clone, Debug)]
 pub struct Warp {
     pub knots: Vec<[f64; 3]>,
+    /// Slopes of A's and B's phase at the cycle's start and end ([start, end], each [A, B]),
+    /// where the cycles round it set them (see [`Warp::join`]); else each end segment's own.
+    pub ends: [Option<[f64; 2]>; 2],
 }
 
 impl Warp {
@@ -112,11 +115,13 @@ impl Warp {
         knots.push([1.0, 1.0, 1.0]);
         Warp {
             knots: gentlest(&knots),
+            ends: [None; 2],
         }
     }
 
     /// Phases in A and B at blended phase `u` in [0, 1]: each a monotone cubic through the
-    /// knots (see [`monotone`]), so a clip's rate changes smoothly where a segment meets the next.
+    /// knots (see [`monotone`]), so a clip's rate changes smoothly where a segment meets the next
+    /// (and, [`Warp::join`]ed, where its cycle meets the next).
     pub fn map(&self, u: f64) -> (f64, f64) {
         let u = u.clamp(0.0, 1.0);
         let k = self
@@ -125,9 +130,36 @@ impl Warp {
             .position(|w| u <= w[1][0])
             .unwrap_or(self.knots.len() - 2);
         (
-            monotone(&self.knots, 1, k, u),
-            monotone(&self.knots, 2, k, u),
+            monotone(&self.knots, 1, k, u, self.ends.map(|e| e.map(|e| e[0]))),
+            monotone(&self.knots, 2, k, u, self.ends.map(|e| e.map(|e| e[1]))),
         )
+    }
+
+    /// Make the rates of A and B run on where `left`'s cycle ends and `right`'s begins: each
+    /// clip's rate there (its phase slope times its cycle's period over the blended one's,
+    /// `pl` and `pr` [A, B, blended] of each) the weighted harmonic mean of the two end
+    /// segments'.
+    pub fn join(left: &mut Warp, right: &mut Warp, pl: [f64; 3], pr: [f64; 3]) {
+        let (kl, kr) = (&left.knots, &right.knots);
+        let n = kl.len();
+        let mut end = [0.0; 2];
+        let mut start = [0.0; 2];
+        for c in 0..2 {
+            let wl = (kl[n - 1][0] - kl[n - 2][0]) * pl[2];
+            let wr = (kr[1][0] - kr[0][0]) * pr[2];
+            let rl = (kl[n - 1][c + 1] - kl[n - 2][c + 1]) * pl[c] / wl;
+            let rr = (kr[1][c + 1] - kr[0][c + 1]) * pr[c] / wr;
+            let m = if rl > 0.0 && rr > 0.0 {
+                let (w0, w1) = (2.0 * wr + wl, wr + 2.0 * wl);
+                (w0 + w1) / (w0 / rl + w1 / rr)
+            } else {
+                0.0
+            };
+            end[c] = m * pl[2] / pl[c];
+            start[c] = m * pr[2] / pr[c];
+        }
+        left.ends[1] = Some(end);
+        right.ends[0] = Some(start);
     }
 }
 
@@ -141,7 +173,7 @@ impl Warp {
 /// 0.952), each style's walk with its walk backwards (135) in 17 (8). The cost is where a
 /// segment is short between two long ones, its curve bends more than its line: Fox's Walk and
 /// Run through gltfpack (30 keys a second) 0.82 / 1.02 / 1.01 -> 0.94 / 1.08 / 1.03.
-fn monotone(knots: &[[f64; 3]], c: usize, k: usize, u: f64) -> f64 {
+fn monotone(knots: &[[f64; 3]], c: usize, k: usize, u: f64, ends: [Option<f64>; 2]) -> f64 {
     let n = knots.len();
     let width = |j: usize| knots[j + 1][0] - knots[j][0];
     let secant = |j: usize| {
@@ -154,10 +186,10 @@ fn monotone(knots: &[[f64; 3]], c: usize, k: usize, u: f64) -> f64 {
     };
     let slope = |j: usize| -> f64 {
         if j == 0 {
-            return secant(0);
+            return ends[0].unwrap_or_else(|| secant(0));
         }
         if j == n - 1 {
-            return secant(n - 2);
+            return ends[1].unwrap_or_else(|| secant(n - 2));
         }
         let (a, b) = (secant(j - 1), secant(j));
         if a <= 0.0 || b <= 0.0 {
@@ -307,6 +339,47 @@ mod tests {
             assert!(m.0 > last.0 && m.1 > last.1, "{i}: {m:?} after {last:?}");
             last = m;
         }
+    }
+
+    /// Joined, each clip's rate in seconds of clip per second of blend runs on from the end of
+    /// one cycle (A 1.0 s, B 0.8 s, blended 0.9 s) into the next (A 1.1 s, B 0.7 s, 0.9 s).
+    #[test]
+    fn joined_cycles_keep_each_clips_rate_across_their_seam() {
+        let mut left = Warp::new(
+            &[ev(0, Kind::Liftoff, 0.6)],
+            &[ev(0, Kind::Liftoff, 0.7)],
+            0.5,
+        );
+        let mut right = Warp::new(
+            &[ev(0, Kind::Liftoff, 0.3)],
+            &[ev(0, Kind::Liftoff, 0.2)],
+            0.5,
+        );
+        let (pl, pr) = ([1.0, 0.8, 0.9], [1.1, 0.7, 0.9]);
+        let h = 1e-6;
+        let rates = |l: &Warp, r: &Warp| {
+            let (e0, e1) = (l.map(1.0 - h), l.map(1.0));
+            let (s0, s1) = (r.map(0.0), r.map(h));
+            [
+                (
+                    (e1.0 - e0.0) * pl[0] / (h * pl[2]),
+                    (s1.0 - s0.0) * pr[0] / (h * pr[2]),
+                ),
+                (
+                    (e1.1 - e0.1) * pl[1] / (h * pl[2]),
+                    (s1.1 - s0.1) * pr[1] / (h * pr[2]),
+                ),
+            ]
+        };
+        let apart = rates(&left, &right);
+        assert!(apart.iter().all(|(a, b)| (a - b).abs() > 0.1), "{apart:?}");
+        Warp::join(&mut left, &mut right, pl, pr);
+        for (end, start) in rates(&left, &right) {
+            assert!((end - start).abs() < 1e-4, "{end} -> {start}");
+        }
+        // The knots are still passed through.
+        assert!((left.map(left.knots[1][0]).0 - 0.6).abs() < 1e-12);
+        assert!((right.map(right.knots[1][0]).1 - 0.2).abs() < 1e-12);
     }
 
     #[test]
