@@ -692,20 +692,20 @@ mod tests {
                 .map(|i| runs.iter().any(|r| r.contains(&i)))
                 .collect()
         };
-        let mut moving = flagged(&[1..=2, 8..=29]);
-        settle(&track, &leg, 1.0, &mut moving);
         // (Frame 29 moves off at 0.5 leg/s, its neighbour dragging: settled off either way.)
-        assert_eq!(moving, flagged(&[8..=28]));
-        let mut standing = flagged(&[12..=13, 20..=29]);
-        settle(&track, &leg, 1.0, &mut standing);
-        assert_eq!(standing, flagged(&[12..=13, 20..=28]));
-        // Four frames, long enough to settle, moving at 3 leg/s throughout: dropped whole.
-        let mut longer = flagged(&[0..=3, 8..=29]);
-        settle(&track, &leg, 1.0, &mut longer);
-        assert_eq!(longer, flagged(&[8..=28]));
-        let mut standing = flagged(&[10..=14, 20..=29]);
-        settle(&track, &leg, 1.0, &mut standing);
-        assert_eq!(standing, flagged(&[10..=14, 20..=28]));
+        let cases = [
+            // Two frames moving at 3 leg/s, too short to settle: dropped.
+            (vec![1..=2, 8..=29], vec![8..=28]),
+            (vec![12..=13, 20..=29], vec![12..=13, 20..=28]),
+            // Four frames, long enough to settle, moving at 3 leg/s throughout: dropped whole.
+            (vec![0..=3, 8..=29], vec![8..=28]),
+            (vec![10..=14, 20..=29], vec![10..=14, 20..=28]),
+        ];
+        for (touched, kept) in cases {
+            let mut f = flagged(&touched);
+            settle(&track, &leg, 1.0, &mut f);
+            assert_eq!(f, flagged(&kept), "{touched:?}");
+        }
     }
 
     /// A foot low on the floor but still moving over it at either end of its contact touches
