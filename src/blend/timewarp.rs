@@ -6,9 +6,11 @@
 
 use super::contacts::Contact;
 
-/// Steepest phase map allowed (unitless: phase of a source per blended phase): within a cycle
-/// no source plays faster than twice its cycle's rate nor slower than half, as registration
-/// curves bound their slope. Matching every contact event of a walk (long stances) with a run's
+/// Steepest phase map allowed (unitless: phase of a source per blended phase): between two
+/// matched events no source plays faster on average than twice its cycle's rate nor slower than
+/// half, as registration curves bound their slope (the monotone cubic through the events may
+/// pass it inside a segment whose ends turn slower: at most 2.75 where a segment at 2 has ends
+/// at 0.5). Matching every contact event of a walk (long stances) with a run's
 /// (stances of one or two frames) otherwise nearly freezes one clip and races the other: on
 /// RobotExpressive the rates ran from 0.05 to 3.6 and the blend's jerk was 1.5-2.0 times the
 /// sources'.
