@@ -192,10 +192,10 @@ fn stepped(track: &Track, legs: &[Leg], forward: DVec3, scale: f64) -> Vec<(f64,
 /// touchdown to touchdown as the loop holds or more (a loop of one stride shows none, one of
 /// `k` equal strides `k - 1`), or, holding [`CHANCE_STRIDES`] or more, a stride's legs (their
 /// joints relative to `root`) are more than `tolerance` (scene units) from the next stride's at
-/// the same phase somewhere. Bandai Namco's walks of 7-16 s whose last pose comes within a frame or two of
-/// their first were blended as loops of one stride cut from them, the seam a jump: the takes
-/// with each other at jerk ratios of 1.33-1.66 (0.91-0.94 as the captures they are); their
-/// strides part by 0.17-0.38 leg at the same phase, a loop's copies by nothing.
+/// the same phase somewhere. Bandai Namco's walks of 7-16 s whose last pose comes within a
+/// frame or two of their first were blended as loops of one stride cut from them, the seam a
+/// jump: the takes with each other at jerk ratios of 1.33-1.66 (0.91-0.94 as the captures they
+/// are); their strides part by 0.17-0.38 leg at the same phase, a loop's copies by nothing.
 pub fn meet_by_chance(
     track: &Track,
     cycles: &Cycles,

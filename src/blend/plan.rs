@@ -324,7 +324,6 @@ fn phase(a: &Clip, b: &Clip, an: [&Analysis; 2], spans: [&[(f64, f64)]; 2], w: f
     let fps = a.key_rate.max(b.key_rate);
     let mut frames: Vec<(f64, f64, f64)> = Vec::new();
     let mut periods = Vec::new();
-    let mut knots = 0;
     let mut offset = 0.0;
     let mut cycles: Vec<(Warp, [f64; 3], f64, f64)> = (0..count)
         .map(|k| {
@@ -349,9 +348,6 @@ fn phase(a: &Clip, b: &Clip, an: [&Analysis; 2], spans: [&[(f64, f64)]; 2], w: f
     }
     for (k, (warp, p, sa, sb)) in cycles.iter().enumerate() {
         let ([pa, pb, period], sa, sb) = (*p, *sa, *sb);
-        if k == 0 {
-            knots = warp.knots.len() - 2;
-        }
         let m = ((period * fps).round() as usize).max(2);
         let last = if k + 1 == count { m } else { m - 1 };
         for j in 0..=last {
@@ -365,7 +361,7 @@ fn phase(a: &Clip, b: &Clip, an: [&Analysis; 2], spans: [&[(f64, f64)]; 2], w: f
     Phase {
         frames,
         periods,
-        knots,
+        knots: cycles.first().map_or(0, |c| c.0.knots.len() - 2),
         duration: offset,
         fps,
         looping: an_a.looping() && an_b.looping(),

@@ -144,19 +144,15 @@ impl Warp {
     pub fn join(left: &mut Warp, right: &mut Warp, pl: [f64; 3], pr: [f64; 3]) {
         let (kl, kr) = (&left.knots, &right.knots);
         let n = kl.len();
+        // The end segments' lengths in seconds of blend.
+        let wl = (kl[n - 1][0] - kl[n - 2][0]) * pl[2];
+        let wr = (kr[1][0] - kr[0][0]) * pr[2];
         let mut end = [0.0; 2];
         let mut start = [0.0; 2];
         for c in 0..2 {
-            let wl = (kl[n - 1][0] - kl[n - 2][0]) * pl[2];
-            let wr = (kr[1][0] - kr[0][0]) * pr[2];
             let rl = (kl[n - 1][c + 1] - kl[n - 2][c + 1]) * pl[c] / wl;
             let rr = (kr[1][c + 1] - kr[0][c + 1]) * pr[c] / wr;
-            let m = if rl > 0.0 && rr > 0.0 {
-                let (w0, w1) = (2.0 * wr + wl, wr + 2.0 * wl);
-                (w0 + w1) / (w0 / rl + w1 / rr)
-            } else {
-                0.0
-            };
+            let m = knot_slope(rl, wl, rr, wr);
             end[c] = m * pl[2] / pl[c];
             start[c] = m * pr[2] / pr[c];
         }
@@ -194,13 +190,7 @@ fn monotone(knots: &[[f64; 3]], c: usize, k: usize, u: f64, ends: [Option<f64>; 
         if j == n - 1 {
             return ends[1].unwrap_or_else(|| secant(n - 2));
         }
-        let (a, b) = (secant(j - 1), secant(j));
-        if a <= 0.0 || b <= 0.0 {
-            return 0.0;
-        }
-        let (h0, h1) = (width(j - 1), width(j));
-        let (w0, w1) = (2.0 * h1 + h0, h1 + 2.0 * h0);
-        (w0 + w1) / (w0 / a + w1 / b)
+        knot_slope(secant(j - 1), width(j - 1), secant(j), width(j))
     };
     let h = width(k);
     if h <= 0.0 {
@@ -212,6 +202,17 @@ fn monotone(knots: &[[f64; 3]], c: usize, k: usize, u: f64, ends: [Option<f64>; 
         + slope(k) * h * (t3 - 2.0 * t2 + t)
         + knots[k + 1][c] * (3.0 * t2 - 2.0 * t3)
         + slope(k + 1) * h * (t3 - t2)
+}
+
+/// Slope at a knot between a segment of slope `a` and width `h0` and the next, of slope `b`
+/// and width `h1`: their harmonic mean weighted as Fritsch and Butland weigh it (monotone,
+/// between the two), or flat where either is not rising.
+fn knot_slope(a: f64, h0: f64, b: f64, h1: f64) -> f64 {
+    if a <= 0.0 || b <= 0.0 {
+        return 0.0;
+    }
+    let (w0, w1) = (2.0 * h1 + h0, h1 + 2.0 * h0);
+    (w0 + w1) / (w0 / a + w1 / b)
 }
 
 /// The most knots of `knots` (first and last kept) no segment between which plays a clip
